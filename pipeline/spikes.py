@@ -1,0 +1,78 @@
+"""Spike trains of a whole dataset, stored ragged.
+
+All trains of a dataset live in two flat event arrays (``times_s``, ``polarity``); train
+``(recording r, taxel t)`` is the slice ``start[r, t] : start[r, t] + count[r, t]``. Trains are
+laid out recording by recording, taxels in raster order, so ``start`` is the exclusive cumulative
+sum of ``count``. Times are float64 seconds from the first sample of the recording's common taxel
+time axis, non-decreasing within a train.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class SpikeTrains:
+    """Ragged spike trains of ``n_recordings x n_taxels`` taxels.
+
+    Attributes
+    ----------
+    times_s : float64 (n_events,)
+        Spike times in seconds from the first sample of each recording's taxel time axis.
+    polarity : int8 (n_events,)
+        +1 (signal rose by one threshold) or -1 (fell).
+    count : int64 (n_recordings, n_taxels)
+        Number of spikes per train.
+    duration_s : float64 (n_recordings,)
+        Length of each recording's common taxel time axis, ``(n_samples - 1) / fs_hz``.
+    """
+
+    times_s: np.ndarray
+    polarity: np.ndarray
+    count: np.ndarray
+    duration_s: np.ndarray
+
+    @property
+    def start(self) -> np.ndarray:
+        """int64 (n_recordings, n_taxels): index of each train's first event."""
+        flat = np.concatenate([[0], np.cumsum(self.count.ravel())[:-1]]).astype(np.int64)
+        return flat.reshape(self.count.shape)
+
+    @property
+    def n_recordings(self) -> int:
+        return self.count.shape[0]
+
+    @property
+    def n_taxels(self) -> int:
+        return self.count.shape[1]
+
+    def train(self, recording: int, taxel: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(times_s, polarity)`` of one train (views, not copies)."""
+        begin = int(self.start[recording, taxel])
+        end = begin + int(self.count[recording, taxel])
+        return self.times_s[begin:end], self.polarity[begin:end]
+
+    @classmethod
+    def concatenate(
+        cls,
+        trains: Sequence[tuple[np.ndarray, np.ndarray]],
+        n_taxels: int,
+        duration_s: np.ndarray,
+    ) -> SpikeTrains:
+        """Build from a flat sequence of ``(times_s, polarity)``, recording-major, raster order."""
+        counts = np.array([len(t) for t, _ in trains], dtype=np.int64)
+        if trains:
+            times = np.concatenate([t for t, _ in trains]).astype(np.float64, copy=False)
+            polarity = np.concatenate([p for _, p in trains]).astype(np.int8, copy=False)
+        else:
+            times, polarity = np.empty(0, np.float64), np.empty(0, np.int8)
+        return cls(
+            times_s=times,
+            polarity=polarity,
+            count=counts.reshape(-1, n_taxels),
+            duration_s=np.asarray(duration_s, dtype=np.float64),
+        )

@@ -1,0 +1,183 @@
+"""``eskin run``: the JSON contract, the summary, and one clear stderr line for each bad input."""
+
+import json
+import math
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from flows.cli import main
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def tiny_scene(tmp_path):
+    """A scene that runs in about a second: 4 recordings x 12 classes, 1.5 s, 4 folds, 3 epochs."""
+
+    def write(extra: str = "", name: str = "tiny.toml", folds: int = 4):
+        path = tmp_path / name
+        path.write_text(
+            "[dataset]\nkind = 'synthetic'\nrecordings_per_class = 4\nduration_s = 1.5\n"
+            "[array]\nrows = 2\ncols = 1\n"
+            f"[training]\nepochs = 3\nfolds = {folds}\n" + extra
+        )
+        return str(path)
+
+    return write
+
+
+def test_json_has_the_documented_keys(capsys, tiny_scene):
+    code, out, err = run_cli(capsys, "run", "--scene", tiny_scene(), "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    for model in ("ffnn", "cnn"):
+        acc = result["accuracy"][model]
+        assert 0.0 <= acc["mean"] <= 1.0 and acc["std"] >= 0.0
+        assert len(acc["folds"]) == 4
+    assert result["n_recordings"] == 48 and result["n_classes"] == 12
+    assert result["ssnr_db"] == "inf"  # ideal readout: REAL equals TRUE
+    assert math.isinf(float(result["ssnr_db"]))
+    assert result["ste_s2"] == 0.0
+    assert result["event_rate_hz"] > 0 and result["data_rate_bps"] > result["event_rate_hz"]
+    assert result["equivalent_bits"] == pytest.approx(math.log2(1 / 0.09))
+    stages = {"load", "front_end", "taxels", "readout", "metrics", "coding", "train_ffnn"}
+    assert stages | {"train_cnn"} == set(result["timings_s"])
+    assert all(v >= 0 for v in result["timings_s"].values())
+
+
+def test_noisy_scene_reports_finite_spike_metrics(capsys, tiny_scene):
+    extra = "[readout.effects]\namplifier_noise = { sigma_v = 0.02 }\n"
+    code, out, err = run_cli(capsys, "run", "--scene", tiny_scene(extra), "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    assert math.isfinite(result["ssnr_db"]) and result["ste_s2"] != 0.0
+
+
+def test_threshold_above_the_signal_range_trains_without_nan(capsys, tiny_scene):
+    extra = "[readout]\nthreshold_v = 0.99\n"
+    code, out, err = run_cli(capsys, "run", "--scene", tiny_scene(extra), "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["event_rate_hz"] == 0.0
+    for model in ("ffnn", "cnn"):
+        assert all(math.isfinite(a) for a in result["accuracy"][model]["folds"])
+
+
+def test_readable_summary(capsys, tiny_scene):
+    code, out, _ = run_cli(capsys, "run", "--scene", tiny_scene())
+    assert code == 0
+    assert re.search(r"FFNN +accuracy +\d+\.\d %", out)
+    assert re.search(r"CNN +accuracy +\d+\.\d %", out)
+    assert "seconds:" in out and "SSNR inf" in out
+
+
+def one_error_line(capsys, *argv):
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("eskin: error: ")
+    return lines[0]
+
+
+@pytest.mark.parametrize(
+    ("extra", "expected"),
+    [
+        ("[readout]\nthreshhold_v = 0.1\n", "readout.threshhold_v: unknown key"),
+        ("[readout]\nthreshold_v = 0.0\n", "readout.threshold_v: 0.0 is out of range"),
+        ("[readout]\nthreshold_v = -0.05\n", "readout.threshold_v: -0.05 is out of range"),
+        ("[coding]\nwindow_s = 10.0\n", "coding.window_s: 10.0 s is longer than"),
+        (
+            "[readout.effects]\namplifier_noise = { sigma_v = -0.1 }\n",
+            "readout.effects.amplifier_noise.sigma_v: -0.1 is out of range",
+        ),
+    ],
+)
+def test_bad_scene_values(capsys, tiny_scene, extra, expected):
+    assert expected in one_error_line(capsys, "run", "--scene", tiny_scene(extra), "--json")
+
+
+def test_zero_taxels(capsys, tmp_path):
+    path = tmp_path / "zero.toml"
+    path.write_text("[array]\nrows = 0\ncols = 3\n")
+    assert "array.rows: 0 is out of range" in one_error_line(capsys, "run", "--scene", str(path))
+
+
+def test_class_with_fewer_recordings_than_folds(capsys, tiny_scene):
+    # 4 recordings per class cannot fill 5 folds.
+    line = one_error_line(capsys, "run", "--scene", tiny_scene(folds=5))
+    assert "fewer" in line and "5" in line
+
+
+def test_unknown_scene_name(capsys):
+    assert "nope.toml" in one_error_line(capsys, "run", "--scene", "nope.toml")
+
+
+def test_missing_dataset_path(capsys, tmp_path):
+    line = one_error_line(capsys, "run", "--dataset", str(tmp_path / "absent"))
+    assert "absent" in line
+
+
+def make_folder_dataset(root, toml="sampling_rate_hz = 1000.0\n", files=None):
+    root.mkdir()
+    (root / "dataset.toml").write_text(toml)
+    rng = np.random.default_rng(0)
+    for cls in ("rough", "smooth"):
+        (root / cls).mkdir()
+        for i in range(3):
+            np.savetxt(root / cls / f"rec{i}.csv", rng.standard_normal(3000))
+    for name, text in (files or {}).items():
+        (root / name).write_text(text)
+    return root
+
+
+def test_malformed_dataset_toml(capsys, tmp_path):
+    root = make_folder_dataset(tmp_path / "data", toml="sampling_rate_hz = [\n")
+    assert "dataset.toml" in one_error_line(capsys, "run", "--dataset", str(root))
+
+
+def test_non_numeric_csv(capsys, tmp_path):
+    root = make_folder_dataset(tmp_path / "data", files={"rough/rec9.csv": "1.0\nhello\n"})
+    assert "rec9.csv" in one_error_line(capsys, "run", "--dataset", str(root))
+
+
+def test_empty_recording(capsys, tmp_path):
+    root = make_folder_dataset(tmp_path / "data", files={"smooth/empty.csv": ""})
+    assert "empty.csv" in one_error_line(capsys, "run", "--dataset", str(root))
+
+
+def test_folder_dataset_runs_and_small_classes_are_refused(capsys, tmp_path, tiny_scene):
+    root = make_folder_dataset(tmp_path / "data")
+    # 3 recordings per class cannot fill the scene's 4 folds.
+    line = one_error_line(capsys, "run", "--scene", tiny_scene(), "--dataset", str(root))
+    assert "rough" in line and "fewer" in line
+    three_folds = tiny_scene(folds=3)
+    code, out, err = run_cli(
+        capsys, "run", "--scene", three_folds, "--dataset", str(root), "--json"
+    )
+    assert code == 0, err
+    assert json.loads(out)["n_classes"] == 2
+
+
+def test_console_script_exit_status_and_stderr(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[readout]\nthreshold_v = -1\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "flows.cli", "run", "--scene", str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr.strip().count("\n") == 0
+    assert "readout.threshold_v" in proc.stderr
