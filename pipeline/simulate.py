@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pipeline.coding import frames, resolve_n_windows
-from pipeline.errors import DatasetError
 from pipeline.frontend import FrontEnd, fit_front_end
 from pipeline.metrics import (
     data_rate_bps,
@@ -33,7 +32,7 @@ from pipeline.metrics import (
 )
 from pipeline.readout import level_crossings, real_train
 from pipeline.recordings import Recordings, load_recordings
-from pipeline.scene import Model, Scene
+from pipeline.scene import DatasetSpec, Model, Scene
 from pipeline.spikes import SpikeTrains
 from pipeline.taxels import taxel_delays_s, taxel_signals
 from pipeline.training import CrossValidation, cross_validate
@@ -73,7 +72,7 @@ class SceneResult:
     timings_s: dict[str, float] = field(default_factory=dict)
 
 
-class _Stopwatch:
+class Stopwatch:
     """Accumulates wall seconds per stage and reports each stage the first time it starts."""
 
     def __init__(self, on_stage: Callable[[str], None] | None):
@@ -102,14 +101,14 @@ def encode(
     front_end: FrontEnd,
     scene: Scene,
     *,
-    stopwatch: _Stopwatch | None = None,
+    stopwatch: Stopwatch | None = None,
 ) -> Encoded:
     """TRUE and REAL spike trains of every taxel of every recording.
 
     Taxels that see the same signal share one TRUE train; an ideal readout returns the TRUE
     trains as the REAL ones without encoding again.
     """
-    watch = stopwatch or _Stopwatch(None)
+    watch = stopwatch or Stopwatch(None)
     delays = taxel_delays_s(scene.array)
     fs = recordings.fs_hz
     theta = scene.readout.threshold_v
@@ -154,9 +153,46 @@ def spike_metrics(encoded: Encoded, scene: Scene) -> SpikeMetrics:
     )
 
 
+def rate_frames(real: SpikeTrains, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Rate-coded frames of the REAL trains: ``counts`` int64 (n_rec, C, taxels, windows), and
+    ``dropped`` int64 (n_rec, taxels); the number of windows is resolved for these recordings."""
+    n_windows = resolve_n_windows(scene.coding, real.duration_s)
+    return frames(real, scene.coding.window_s, n_windows, scene.coding.polarity)
+
+
+def classify(
+    counts: np.ndarray,
+    labels: np.ndarray,
+    scene: Scene,
+    class_names: tuple[str, ...],
+    *,
+    stopwatch: Stopwatch | None = None,
+) -> dict[Model, CrossValidation]:
+    """Cross-validate every model the scene names on the same frames."""
+    watch = stopwatch or Stopwatch(None)
+    accuracy = {}
+    for model in scene.training.models:
+        with watch.stage(f"train_{model.value}"):
+            accuracy[model] = cross_validate(
+                counts, labels, model, scene.training, class_names=class_names
+            )
+    return accuracy
+
+
+def prepare(
+    dataset: DatasetSpec, full_scale_v: float, *, stopwatch: Stopwatch | None = None
+) -> tuple[Recordings, FrontEnd]:
+    """Load the recordings and fit their front end to ``full_scale_v``."""
+    watch = stopwatch or Stopwatch(None)
+    with watch.stage("load"):
+        recordings = load_recordings(dataset)
+    with watch.stage("front_end"):
+        front_end = fit_front_end(recordings, full_scale_v)
+    return recordings, front_end
+
+
 def run_scene(
     scene: Scene,
-    recordings: Recordings | None = None,
     *,
     on_stage: Callable[[str], None] | None = None,
 ) -> SceneResult:
@@ -166,38 +202,24 @@ def run_scene(
     ----------
     scene : Scene
         What to simulate.
-    recordings : Recordings, optional
-        Already loaded recordings; by default :func:`load_recordings` of ``scene.dataset``.
     on_stage : callable, optional
         Called with each stage name (:func:`stage_names`) as it starts, for progress display.
     """
-    watch = _Stopwatch(on_stage)
-    with watch.stage("load"):
-        if recordings is None:
-            recordings = load_recordings(scene.dataset)
-        if recordings.n_recordings == 0:
-            raise DatasetError(f"dataset {recordings.name!r} holds no recordings")
-    with watch.stage("front_end"):
-        front_end = fit_front_end(recordings, scene.readout.full_scale_v)
+    watch = Stopwatch(on_stage)
+    recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v, stopwatch=watch)
     encoded = encode(recordings, front_end, scene, stopwatch=watch)
     with watch.stage("metrics"):
         metrics = spike_metrics(encoded, scene)
     with watch.stage("coding"):
-        n_windows = resolve_n_windows(scene.coding, encoded.real.duration_s)
-        counts, dropped = frames(
-            encoded.real, scene.coding.window_s, n_windows, scene.coding.polarity
-        )
-    accuracy = {}
-    for model in scene.training.models:
-        with watch.stage(f"train_{model.value}"):
-            accuracy[model] = cross_validate(
-                counts, recordings.labels, model, scene.training, class_names=recordings.class_names
-            )
+        counts, dropped = rate_frames(encoded.real, scene)
+    accuracy = classify(
+        counts, recordings.labels, scene, recordings.class_names, stopwatch=watch
+    )
     return SceneResult(
         scene=scene,
         n_recordings=recordings.n_recordings,
         n_classes=recordings.n_classes,
-        n_windows=n_windows,
+        n_windows=counts.shape[-1],
         dropped_spikes=int(dropped.sum()),
         metrics=metrics,
         accuracy=accuracy,
