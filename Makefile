@@ -9,13 +9,17 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-# Stamps re-install when pyproject.toml changes.
+# Stamps re-install when pyproject.toml changes. The editable install puts the project folder on
+# sys.path ("compat" mode): Dask workers put their scratch folder, which holds a "storage" spill
+# folder, first on sys.path, and only a real path entry outranks that namespace folder.
+INSTALL := $(BIN)/python -m pip install --quiet --config-settings editable_mode=compat -e
+
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e .
+	$(INSTALL) .
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(INSTALL) '.[test]'
 	touch $@ $(VENV)/.installed
 
 run: $(VENV)/.installed

@@ -13,7 +13,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import time
+from pathlib import Path
 from typing import Any
 
 EXIT_USER_ERROR = 2
@@ -44,6 +47,47 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     run.set_defaults(handler=_run)
+
+    sweep = commands.add_parser(
+        "sweep",
+        help="sweep a grid of scenes on Dask and write labelled result cubes",
+        description="Run the Prefect flow 'sweep': compute the grid's cache misses on Dask "
+        "workers and write one xarray cube per sweep under the root.",
+    )
+    sweep.add_argument(
+        "--grid",
+        required=True,
+        metavar="NAME|FILE",
+        help="a built-in grid (paper, smoke) or a grid TOML file",
+    )
+    sweep.add_argument(
+        "--root", metavar="DIR", help="where the store goes (default: runs/<grid name>)"
+    )
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=int,
+        default=2,
+        metavar="N",
+        help="local Dask workers, 1 thread each (default 2)",
+    )
+    where.add_argument(
+        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
+    )
+    sweep.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    sweep.set_defaults(handler=_sweep)
+
+    serve = commands.add_parser(
+        "serve",
+        help="serve the 'sweep' flow as the deployment sweep/default on a Prefect server",
+        description="Serve the flow 'sweep' as deployment 'default' (needs PREFECT_API_URL). "
+        "Start sweeps with: prefect deployment run sweep/default --param grid=smoke "
+        "--param root=DIR",
+    )
+    serve.add_argument(
+        "--grid", default="smoke", metavar="NAME|FILE", help="default grid of the deployment"
+    )
+    serve.set_defaults(handler=_serve)
     return parser
 
 
@@ -81,6 +125,91 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(format_summary(summary))
     return 0
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from flows.cluster import probe_scheduler
+    from flows.environment import hermetic_environment
+    from pipeline.grid import load_grid
+    from storage import SweepStore
+
+    if args.workers < 1:
+        raise _usage_error(f"--workers {args.workers}: need at least 1")
+    grid = load_grid(args.grid)
+    # Every check runs before the store is created and Prefect imported: bad input writes nothing.
+    from flows.orchestrate import check_grid, default_root
+
+    check_grid(grid)
+    if args.address is not None:
+        probe_scheduler(args.address)
+    root = Path(args.root) if args.root else default_root(grid)
+    store = SweepStore.open_or_create(root)
+    hermetic_environment(store.root)
+    if args.json:
+        os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
+    from flows.sweep import sweep
+
+    start = time.perf_counter()
+    summary = sweep(
+        grid=args.grid,
+        root=str(store.root),
+        workers=args.workers,
+        address=args.address,
+        show_progress=not args.json,
+    )
+    # The whole sweep as the user waits for it, Prefect's temporary server included.
+    summary["seconds"] = time.perf_counter() - start
+    if args.json:
+        print(json.dumps(_json_safe(summary), indent=2))
+    else:
+        print(format_sweep_summary(summary))
+    return 0
+
+
+def format_sweep_summary(summary: dict[str, Any]) -> str:
+    from storage import open_results
+
+    cubes = open_results(summary["root"])
+    lines = [
+        f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
+        f"computed) in {summary['seconds']:.1f} s",
+        f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
+    ]
+    for name in summary["cubes"]:
+        cube = cubes[name]
+        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy"].dims[:-2])
+        mean = cube["accuracy"].mean("fold")
+        for model in cube["model"].values:
+            per_model = mean.sel(model=model)
+            best = per_model.where(per_model == per_model.max(), drop=True)
+            at = ", ".join(f"{d}={best[d].values.ravel()[0]:g}" for d in per_model.dims)
+            lines.append(
+                f"{name:12s} {dims:28s} {model:6s} {100 * float(per_model.max()):5.1f} % at {at}"
+            )
+    lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
+    lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
+    return "\n".join(lines)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    if not os.environ.get("PREFECT_API_URL"):
+        raise _usage_error(
+            "eskin serve needs a Prefect server: start one with 'prefect server start --host "
+            "127.0.0.1' and set PREFECT_API_URL=http://127.0.0.1:4200/api"
+        )
+    from pipeline.grid import load_grid
+
+    load_grid(args.grid)
+    from flows.sweep import sweep
+
+    sweep.serve(name="default", parameters={"grid": args.grid})
+    return 0
+
+
+def _usage_error(message: str) -> Exception:
+    from pipeline.errors import EskinError
+
+    return EskinError(message)
 
 
 class _StageProgress:

@@ -21,13 +21,15 @@ class SceneError(EskinError):
         One entry per problem, each of the form ``"<field>: <what is wrong>"``.
     source
         Where the description came from (a file path or ``"<dict>"``).
+    kind
+        What is described: ``"scene"`` or ``"grid"``.
     """
 
-    def __init__(self, problems: list[str], source: str = "<dict>"):
+    def __init__(self, problems: list[str], source: str = "<dict>", kind: str = "scene"):
         self.problems = list(problems)
         self.source = source
         n = len(self.problems)
-        head = f"invalid scene {source}" + (f" ({n} problems)" if n > 1 else "")
+        head = f"invalid {kind} {source}" + (f" ({n} problems)" if n > 1 else "")
         super().__init__(f"{head}: " + "; ".join(self.problems))
 
 

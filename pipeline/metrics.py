@@ -37,12 +37,26 @@ asynchronous bus.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Literal
 
 import numba
 import numpy as np
 
 from pipeline.spikes import SpikeTrains
+
+
+@dataclass(frozen=True, eq=False)
+class SpikeMetrics:
+    """Scene-level spike metrics; see :mod:`pipeline.metrics` for definitions and edge cases."""
+
+    ssnr_db: float
+    ste_s2: float
+    ste_sign_safe_s2: float
+    event_rate_hz: float
+    data_rate_bps: float
+    equivalent_bits: float
+
 
 SteVariant = Literal["paper", "sign_safe"]
 
@@ -150,3 +164,44 @@ def bits_per_event(n_taxels: int) -> int:
 def data_rate_bps(trains: SpikeTrains) -> float:
     """Bits per second of the array's address-event stream."""
     return event_rate_hz(trains) * bits_per_event(trains.n_taxels)
+
+
+CORRELATION_METHODS = ("pearson", "spearman")
+
+
+def correlate_with_accuracy(metric: np.ndarray, accuracy: np.ndarray) -> dict[str, tuple]:
+    """Pearson and Spearman correlation of a spike metric with accuracy across sweep points.
+
+    Points whose metric is not finite (an SSNR of +inf where REAL equals TRUE) are left out: a
+    rank or a line through infinity means nothing. With fewer than 3 usable points, or a
+    constant input, the correlation is undefined and reported as NaN with its reason.
+
+    Parameters
+    ----------
+    metric, accuracy : float64 (n_points,)
+        One value per sweep point (accuracy averaged over folds).
+
+    Returns
+    -------
+    dict
+        ``{method: (r, p_value, n_used, note)}`` for ``pearson`` and ``spearman``.
+    """
+    from scipy import stats
+
+    metric = np.asarray(metric, dtype=np.float64)
+    accuracy = np.asarray(accuracy, dtype=np.float64)
+    usable = np.isfinite(metric) & np.isfinite(accuracy)
+    x, y = metric[usable], accuracy[usable]
+    note = ""
+    if len(x) < 3:
+        note = f"undefined: {len(x)} points with a finite metric (3 needed)"
+    elif np.ptp(x) == 0 or np.ptp(y) == 0:
+        note = "undefined: constant input"
+    if note:
+        return {method: (math.nan, math.nan, len(x), note) for method in CORRELATION_METHODS}
+    pearson = stats.pearsonr(x, y)
+    spearman = stats.spearmanr(x, y)
+    return {
+        "pearson": (float(pearson.statistic), float(pearson.pvalue), len(x), ""),
+        "spearman": (float(spearman.statistic), float(spearman.pvalue), len(x), ""),
+    }

@@ -24,6 +24,7 @@ import numpy as np
 from pipeline.coding import frames, resolve_n_windows
 from pipeline.frontend import FrontEnd, fit_front_end
 from pipeline.metrics import (
+    SpikeMetrics,
     data_rate_bps,
     equivalent_bits,
     event_rate_hz,
@@ -33,29 +34,9 @@ from pipeline.metrics import (
 from pipeline.readout import level_crossings, real_train
 from pipeline.recordings import Recordings, load_recordings
 from pipeline.scene import DatasetSpec, Model, Scene
-from pipeline.spikes import SpikeTrains
+from pipeline.spikes import Encoded, SpikeTrains
 from pipeline.taxels import taxel_delays_s, taxel_signals
 from pipeline.training import CrossValidation, cross_validate
-
-
-@dataclass(frozen=True, eq=False)
-class Encoded:
-    """TRUE and REAL spike trains of a dataset (the same object when the readout is ideal)."""
-
-    true: SpikeTrains
-    real: SpikeTrains
-
-
-@dataclass(frozen=True, eq=False)
-class SpikeMetrics:
-    """Scene-level spike metrics; see :mod:`pipeline.metrics` for definitions and edge cases."""
-
-    ssnr_db: float
-    ste_s2: float
-    ste_sign_safe_s2: float
-    event_rate_hz: float
-    data_rate_bps: float
-    equivalent_bits: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,9 +193,7 @@ def run_scene(
         metrics = spike_metrics(encoded, scene)
     with watch.stage("coding"):
         counts, dropped = rate_frames(encoded.real, scene)
-    accuracy = classify(
-        counts, recordings.labels, scene, recordings.class_names, stopwatch=watch
-    )
+    accuracy = classify(counts, recordings.labels, scene, recordings.class_names, stopwatch=watch)
     return SceneResult(
         scene=scene,
         n_recordings=recordings.n_recordings,

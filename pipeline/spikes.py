@@ -76,3 +76,11 @@ class SpikeTrains:
             count=counts.reshape(-1, n_taxels),
             duration_s=np.asarray(duration_s, dtype=np.float64),
         )
+
+
+@dataclass(frozen=True, eq=False)
+class Encoded:
+    """TRUE and REAL spike trains of a dataset (the same object when the readout is ideal)."""
+
+    true: SpikeTrains
+    real: SpikeTrains

@@ -1,0 +1,23 @@
+"""Sweep store: cached stage outputs and result cubes of a run root (see :mod:`storage.store`)."""
+
+from storage.store import (
+    CorruptEntryError,
+    EntryKind,
+    RateEntry,
+    ResultEntry,
+    SpikeEntry,
+    StoreError,
+    SweepStore,
+    open_results,
+)
+
+__all__ = [
+    "CorruptEntryError",
+    "EntryKind",
+    "RateEntry",
+    "ResultEntry",
+    "SpikeEntry",
+    "StoreError",
+    "SweepStore",
+    "open_results",
+]

@@ -7,6 +7,7 @@ import pytest
 
 from pipeline.metrics import (
     bits_per_event,
+    correlate_with_accuracy,
     data_rate_bps,
     equivalent_bits,
     event_rate_hz,
@@ -101,3 +102,23 @@ def test_event_and_data_rates():
     assert bits_per_event(9) == 5  # 4 address bits + polarity
     assert bits_per_event(1024) == 11
     assert data_rate_bps(trains) == pytest.approx(15.0 * 2)
+
+
+def test_correlations_match_scipy_and_skip_infinite_points():
+    from scipy import stats
+
+    metric = np.array([math.inf, 30.0, 20.0, 12.0, 5.0, 1.0])
+    accuracy = np.array([0.9, 0.85, 0.7, 0.72, 0.4, 0.3])
+    result = correlate_with_accuracy(metric, accuracy)
+    r, p, n, note = result["pearson"]
+    expected = stats.pearsonr(metric[1:], accuracy[1:])
+    assert (r, p, n, note) == pytest.approx((expected.statistic, expected.pvalue, 5, ""))
+    assert result["spearman"][0] == pytest.approx(stats.spearmanr(metric[1:], accuracy[1:])[0])
+    assert r > 0.9
+
+
+def test_correlations_are_undefined_not_errors_for_too_few_or_constant_points():
+    few = correlate_with_accuracy(np.array([math.inf, 1.0, 2.0]), np.array([0.1, 0.2, 0.3]))
+    assert math.isnan(few["pearson"][0]) and "2 points" in few["pearson"][3]
+    flat = correlate_with_accuracy(np.array([1.0, 2.0, 3.0]), np.array([0.5, 0.5, 0.5]))
+    assert math.isnan(flat["spearman"][1]) and "constant" in flat["spearman"][3]

@@ -1,0 +1,77 @@
+"""Dask clusters for sweeps: a local one by default, or an existing scheduler by address.
+
+The local cluster runs ``workers`` processes with one thread each, every server on 127.0.0.1
+(the scheduler's HTTP server on a free port). An existing scheduler must answer within
+``timeout_s`` or the sweep stops with a clear error before any work is submitted.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from pipeline.errors import EskinError
+
+ADDRESS_PATTERN = re.compile(r"^tcp://[^\s:/]+:\d{1,5}$")
+CONNECT_TIMEOUT_S = 20.0
+
+
+class ClusterError(EskinError):
+    """The Dask scheduler cannot be used."""
+
+
+def check_address(address: str) -> None:
+    """Raise :class:`ClusterError` unless ``address`` looks like ``tcp://HOST:PORT``."""
+    if not ADDRESS_PATTERN.match(address):
+        raise ClusterError(f"--address {address!r}: expected tcp://HOST:PORT")
+
+
+def probe_scheduler(address: str, *, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
+    """Connect to the scheduler at ``address`` and disconnect; raise :class:`ClusterError`."""
+    with dask_client(address=address, timeout_s=timeout_s):
+        pass
+
+
+@contextmanager
+def dask_client(
+    workers: int = 2, address: str | None = None, *, timeout_s: float = CONNECT_TIMEOUT_S
+) -> Iterator[object]:
+    """A ``distributed.Client`` on a fresh local cluster, or on the scheduler at ``address``."""
+    from distributed import Client, LocalCluster
+
+    # Prefect's logging set-up shows every INFO line of the scheduler and nannies otherwise.
+    logging.getLogger("distributed").setLevel(logging.WARNING)
+    if address is not None:
+        check_address(address)
+        try:
+            client = Client(address, timeout=timeout_s, set_as_default=True)
+        except (OSError, TimeoutError) as exc:
+            raise ClusterError(
+                f"cannot reach the Dask scheduler at {address} within {timeout_s:.0f} s: "
+                f"{type(exc).__name__}"
+            ) from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    if workers < 1:
+        raise ClusterError(f"--workers {workers}: need at least 1")
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",  # its HTTP server always runs: loopback, free port
+        silence_logs=logging.ERROR,
+    )
+    try:
+        client = Client(cluster, set_as_default=True)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()

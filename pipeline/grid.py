@@ -1,0 +1,416 @@
+"""Grids: a base scene plus named sweeps over scene fields.
+
+A *sweep* varies one or more scene fields (its *axes*) around the base scene. Axes combine as a
+Cartesian product (``mode = "product"``, the default) or element by element (``mode = "zip"``,
+all axes the same length, one cube dimension named after the first axis). A sweep may also fix
+other fields for all its points (``set``) and ask for the correlation of spike metrics with
+accuracy along it (``correlate``). A grid's points are the union of its sweeps' points; points
+that are the same scene (equal result cache keys) are computed once.
+
+TOML layout::
+
+    name = "mine"
+    base = "paper"                       # a built-in scene name, a scene file, or a [base] table
+
+    [sweeps.threshold]
+    title = "Fig. 7a"
+    axes = { "readout.threshold_v" = [0.03, 0.09, 0.2] }
+
+    [sweeps.noise]
+    mode = "zip"
+    set = { "array.rows" = 1, "array.cols" = 1 }
+    axes = { "readout.effects.amplifier_noise.sigma_v" = [0.0, 0.01],
+             "readout.effects.comparator_noise.sigma_v" = [0.0, 0.01] }
+    correlate = true
+
+A cube dimension is named after the last part of its field (``threshold_v``); where two axes of a
+sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).
+
+Everything that can be checked without the recordings is checked when the grid loads, and every
+problem is reported at once: unknown fields, empty axes, duplicate values, zipped axes of unequal
+length, and values a scene refuses. :func:`check_fits` then checks the points against the
+recordings (windows longer than a recording, arrays whose delays eat it, classes smaller than
+the folds) before any work starts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import itertools
+import json
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from pipeline.coding import whole_windows
+from pipeline.errors import SceneError
+from pipeline.scene import EFFECT_TYPES, Effect, Scene, cache_key
+from pipeline.taxels import cut_samples, taxel_delays_s
+
+NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
+
+
+class SweepMode(enum.StrEnum):
+    """How a sweep combines its axes."""
+
+    PRODUCT = "product"
+    ZIP = "zip"
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """One swept scene field: dotted ``field`` path, cube dimension name ``dim``, ``values``."""
+
+    field: str
+    dim: str
+    values: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A named sweep: its axes, how they combine, fixed fields, and whether to correlate."""
+
+    name: str
+    axes: tuple[SweepAxis, ...]
+    mode: SweepMode = SweepMode.PRODUCT
+    fixed: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    correlate: bool = False
+    title: str = ""
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        """Cube dimensions (without ``model`` and ``fold``)."""
+        if self.mode == SweepMode.ZIP:
+            return (self.axes[0].dim,)
+        return tuple(axis.dim for axis in self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        if self.mode == SweepMode.ZIP:
+            return (len(self.axes[0].values),)
+        return tuple(len(axis.values) for axis in self.axes)
+
+    def index_values(self) -> list[tuple[tuple[int, ...], dict[str, Any]]]:
+        """Every point as ``(index in the cube, {field: value})``, in C order."""
+        if self.mode == SweepMode.ZIP:
+            return [
+                ((i,), {axis.field: axis.values[i] for axis in self.axes})
+                for i in range(len(self.axes[0].values))
+            ]
+        ranges = [range(len(axis.values)) for axis in self.axes]
+        return [
+            (index, {axis.field: axis.values[i] for axis, i in zip(self.axes, index, strict=True)})
+            for index in itertools.product(*ranges)
+        ]
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One point of a sweep: where it sits in the cube and the scene it simulates."""
+
+    sweep: str
+    index: tuple[int, ...]
+    scene: Scene
+
+    @property
+    def key(self) -> str:
+        return cache_key(self.scene, "results")
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A base scene and its sweeps; build with :func:`load_grid` or :meth:`from_dict`."""
+
+    name: str
+    base: Scene
+    sweeps: tuple[Sweep, ...]
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], source: str = "<dict>", base_dir: Path | None = None
+    ) -> Grid:
+        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem."""
+        problems: list[str] = []
+        grid = _read_grid(data, source, base_dir or Path.cwd(), problems)
+        if problems:
+            raise SceneError(problems, source, kind="grid")
+        return grid
+
+    def points(self) -> list[GridPoint]:
+        """Every point of every sweep (a point shared by two sweeps appears in both)."""
+        return [point for sweep in self.sweeps for point in sweep_points(self.base, sweep)]
+
+    def unique_points(self) -> dict[str, Scene]:
+        """Distinct scenes by result key, in first-seen order."""
+        unique: dict[str, Scene] = {}
+        for point in self.points():
+            unique.setdefault(point.key, point.scene)
+        return unique
+
+    def describe(self) -> dict[str, Any]:
+        """A JSON-able description (for provenance in cube attrs)."""
+        return {
+            "name": self.name,
+            "base": self.base.to_dict(),
+            "sweeps": {
+                s.name: {
+                    "mode": s.mode.value,
+                    "set": dict(s.fixed),
+                    "axes": {a.field: list(a.values) for a in s.axes},
+                    "correlate": s.correlate,
+                    "title": s.title,
+                }
+                for s in self.sweeps
+            },
+        }
+
+
+def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
+    """The scenes of one sweep (already validated when the grid loaded)."""
+    fixed = base.replace(**sweep.fixed) if sweep.fixed else base
+    return [
+        GridPoint(sweep.name, index, fixed.replace(**values))
+        for index, values in sweep.index_values()
+    ]
+
+
+def builtin_grid_names() -> tuple[str, ...]:
+    files = resources.files("pipeline.grids").iterdir()
+    return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
+
+
+def load_grid(name_or_path: str | Path) -> Grid:
+    """A built-in grid by name (``paper``, ``smoke``) or a grid TOML file by path."""
+    text = str(name_or_path)
+    if text in builtin_grid_names():
+        content = resources.files("pipeline.grids").joinpath(f"{text}.toml").read_text("utf-8")
+        data = tomllib.loads(content)
+        data.setdefault("name", text)
+        return Grid.from_dict(data, source=f"built-in {text!r}")
+    path = Path(text)
+    try:
+        content = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        known = ", ".join(builtin_grid_names())
+        raise SceneError(
+            [f"cannot read file: {exc.strerror} (built-in grids: {known})"], str(path), "grid"
+        ) from None
+    try:
+        data = tomllib.loads(content)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError([f"not valid TOML: {exc}"], str(path), "grid") from None
+    data.setdefault("name", path.stem)
+    return Grid.from_dict(data, source=str(path), base_dir=path.parent)
+
+
+@dataclass(frozen=True)
+class DatasetFacts:
+    """What :func:`check_fits` needs to know of a dataset."""
+
+    fs_hz: float
+    min_samples: int
+    min_class_size: int
+
+
+def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
+    """Check every point against its recordings; raise :class:`SceneError` listing all misfits.
+
+    Parameters
+    ----------
+    facts
+        For each dataset of the grid, keyed by ``cache_key(scene, "recordings")``.
+    """
+    problems: list[str] = []
+    for point in grid.points():
+        scene = point.scene
+        fact = facts[cache_key(scene, "recordings")]
+        where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
+        cut = cut_samples(taxel_delays_s(scene.array), fact.fs_hz)
+        usable_s = (fact.min_samples - cut - 1) / fact.fs_hz  # as SpikeTrains.duration_s
+        if fact.min_samples - cut < 2:
+            problems.append(
+                f"{where}: the delays of a {scene.array.rows}x{scene.array.cols} array "
+                f"({cut / fact.fs_hz:.3g} s) use up the shortest recording"
+            )
+            continue
+        fit = whole_windows(usable_s, scene.coding.window_s)
+        wanted = scene.coding.n_windows
+        if fit < 1 or (wanted != "auto" and wanted > fit):
+            n = 1 if wanted == "auto" else wanted
+            problems.append(
+                f"{where}: {n} window(s) of {scene.coding.window_s} s do not fit the shortest "
+                f"recording ({usable_s:.3g} s after taxel delays)"
+            )
+        if fact.min_class_size < scene.training.folds:
+            problems.append(
+                f"{where}: {scene.training.folds} folds need at least that many recordings per "
+                f"class; the smallest class has {fact.min_class_size}"
+            )
+    if problems:
+        raise SceneError(problems, repr(grid.name), "grid")
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading and validation
+
+
+def _read_grid(data: Any, source: str, base_dir: Path, problems: list[str]) -> Grid:
+    if not isinstance(data, Mapping):
+        problems.append(f"grid: must be a table, got {type(data).__name__}")
+        return Grid("grid", Scene(), ())
+    for key in data:
+        if key not in ("name", "base", "sweeps"):
+            problems.append(f"{key}: unknown key (known: name, base, sweeps)")
+    name = data.get("name", "grid")
+    if not _valid_name(name):
+        problems.append(f"name: {name!r} is not a valid grid name ({NAME_PATTERN})")
+        name = "grid"
+    base = _read_base(data.get("base", "paper"), base_dir, problems)
+    sweeps_data = data.get("sweeps", {})
+    if not isinstance(sweeps_data, Mapping) or not sweeps_data:
+        problems.append("sweeps: a grid needs at least one [sweeps.<name>] table")
+        sweeps_data = {}
+    sweeps = []
+    for sweep_name, sweep_data in sweeps_data.items():
+        sweep = _read_sweep(sweep_name, sweep_data, base, problems)
+        if sweep is not None:
+            sweeps.append(sweep)
+    return Grid(name, base, tuple(sweeps))
+
+
+def _read_base(value: Any, base_dir: Path, problems: list[str]) -> Scene:
+    try:
+        if isinstance(value, Mapping):
+            return Scene.from_dict(value, source="base")
+        if isinstance(value, str):
+            path = base_dir / value
+            return Scene.from_toml(path) if path.suffix == ".toml" else Scene.load(value)
+        problems.append(f"base: expected a scene name, a file or a table, got {value!r}")
+    except SceneError as exc:
+        problems.append(f"base: {exc}")
+    return Scene()
+
+
+def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep | None:
+    where = f"sweeps.{name}"
+    if not _valid_name(name):
+        problems.append(f"{where}: not a valid sweep name ({NAME_PATTERN})")
+        return None
+    if not isinstance(data, Mapping):
+        problems.append(f"{where}: must be a table")
+        return None
+    known = ("axes", "mode", "set", "correlate", "title")
+    for key in data:
+        if key not in known:
+            problems.append(f"{where}.{key}: unknown key (known: {', '.join(known)})")
+    count = len(problems)
+    try:
+        mode = SweepMode(data.get("mode", "product"))
+    except ValueError:
+        problems.append(f"{where}.mode: {data.get('mode')!r} is not 'product' or 'zip'")
+        mode = SweepMode.PRODUCT
+    fixed = data.get("set", {})
+    if not isinstance(fixed, Mapping):
+        problems.append(f"{where}.set: must be a table of field = value")
+        fixed = {}
+    for field in fixed:
+        _check_field(field, f"{where}.set", problems)
+    correlate = data.get("correlate", False)
+    if not isinstance(correlate, bool):
+        problems.append(f"{where}.correlate: expected true or false, got {correlate!r}")
+    title = data.get("title", "")
+    axes_data = data.get("axes")
+    if not isinstance(axes_data, Mapping) or not axes_data:
+        problems.append(f"{where}.axes: a sweep needs at least one axis (field = [values])")
+        return None
+    axes = []
+    for field, values in axes_data.items():
+        here = f"{where}.axes.{field}"
+        _check_field(field, f"{where}.axes", problems)
+        if field in fixed:
+            problems.append(f"{here}: also fixed in {where}.set")
+        if not isinstance(values, list) or not values:
+            problems.append(f"{here}: must be a non-empty list of values")
+            continue
+        canonical = [json.dumps(v, sort_keys=True) for v in values]
+        duplicates = sorted({v for v in canonical if canonical.count(v) > 1})
+        if duplicates:
+            problems.append(f"{here}: duplicate values {', '.join(duplicates)}")
+        axes.append((field, tuple(values)))
+    if mode == SweepMode.ZIP and len({len(v) for _, v in axes}) > 1:
+        lengths = ", ".join(f"{f} has {len(v)}" for f, v in axes)
+        problems.append(f"{where}.axes: zipped axes need equal lengths ({lengths})")
+    if len(problems) > count:
+        return None
+    sweep = Sweep(name, _name_dims(axes), mode, dict(fixed), bool(correlate), str(title))
+    try:
+        fixed_base = base.replace(**sweep.fixed) if sweep.fixed else base
+    except SceneError as exc:
+        problems.append(f"{where}.set: {'; '.join(exc.problems)}")
+        return None
+    for _, values in sweep.index_values():
+        try:
+            fixed_base.replace(**values)
+        except SceneError as exc:
+            at = ", ".join(f"{f} = {v!r}" for f, v in values.items())
+            problems.append(f"{where} at {at}: {'; '.join(exc.problems)}")
+    return sweep
+
+
+def _name_dims(axes: Sequence[tuple[str, tuple[Any, ...]]]) -> tuple[SweepAxis, ...]:
+    lasts = [field.split(".")[-1] for field, _ in axes]
+    named = []
+    for (field, values), last in zip(axes, lasts, strict=True):
+        dim = last if lasts.count(last) == 1 else "_".join(field.split(".")[-2:])
+        named.append(SweepAxis(field, dim, values))
+    return tuple(named)
+
+
+def _check_field(field: str, where: str, problems: list[str]) -> None:
+    """A dotted path must name a scene field (or an effect parameter)."""
+    parts = field.split(".")
+    scene_fields = {f.name: f for f in dataclasses.fields(Scene)}
+    head = parts[0]
+    if head not in scene_fields or head == "name":
+        problems.append(f"{where}: {field!r} is not a scene field")
+        return
+    if head == "seed":
+        if len(parts) != 1:
+            problems.append(f"{where}: {field!r} is not a scene field")
+        return
+    part_type = type(getattr(Scene(), head))
+    names = {f.name for f in dataclasses.fields(part_type)}
+    if len(parts) < 2 or parts[1] not in names:
+        problems.append(
+            f"{where}: {field!r} is not a scene field (known in {head}: {', '.join(sorted(names))})"
+        )
+        return
+    if parts[1] != "effects":
+        if len(parts) != 2:
+            problems.append(f"{where}: {field!r} is not a scene field")
+        return
+    if len(parts) == 2:
+        return
+    try:
+        effect = Effect(parts[2])
+    except ValueError:
+        problems.append(f"{where}: {field!r} names an unknown effect")
+        return
+    params = {f.name for f in dataclasses.fields(EFFECT_TYPES[effect])}
+    if len(parts) != 4 or parts[3] not in params:
+        problems.append(
+            f"{where}: {field!r} is not a parameter of {effect.value} "
+            f"(known: {', '.join(sorted(params))})"
+        )
+
+
+def _valid_name(name: Any) -> bool:
+    return (
+        isinstance(name, str)
+        and 0 < len(name) <= 64
+        and all(c.isascii() and (c.isalnum() or c in "_-") for c in name)
+    )

@@ -1,0 +1,958 @@
+"""The sweep store: cached stage outputs and result cubes of one run root, in one Zarr v3 store.
+
+On-disk layout (every node is a Zarr v3 group or array, written and read through xarray)::
+
+    <root>/                          the run root; may also hold our own .prefect/, logs/, ...
+      store.zarr/                    group, attrs {"eskin_sweep_store": 1}
+        spikes/<key>/                one SpikeEntry  (key: 32 hex chars, pipeline.scene.cache_key)
+        rates/<key>/                 one RateEntry
+        results/<key>/               one ResultEntry
+        cubes/<name>/                one result cube (name: [A-Za-z0-9_-]{1,64})
+        <kind>/.partial-<key>-<hex>/ an entry being written (or abandoned); never read
+
+Entry groups (dimension names in parentheses; all arrays little-endian)
+
+``spikes/<key>``
+    ``true_times_s`` float64 (true_event) s, ``true_polarity`` int8 (true_event) +-1,
+    ``true_start``/``true_count`` int64 (recording, taxel): train ``(r, t)`` is
+    ``true_times_s[true_start[r, t] : true_start[r, t] + true_count[r, t]]``; the same four
+    with ``real_`` on ``real_event`` unless attrs ``ideal`` is true (ideal readout: REAL *is*
+    TRUE, stored once, and reading gives an :class:`~pipeline.simulate.Encoded` whose
+    ``real is true``);
+    ``duration_s`` float64 (recording) s, shared by TRUE and REAL; one 0-d float64 variable per
+    :class:`~pipeline.metrics.SpikeMetrics` field (``ssnr_db``, ``ste_s2``, ...), because those may
+    be +-inf or NaN, which JSON attributes cannot hold.
+``rates/<key>``
+    ``counts`` int64 (recording, channel, taxel, window), ``dropped`` int64 (recording, taxel),
+    ``labels`` int64 (recording); attrs ``class_names`` (list of str).
+``results/<key>``
+    ``accuracy`` float64 (model, fold) with the string coordinate ``model``.
+``cubes/<name>``
+    any xarray Dataset, as the caller built it (units and provenance in its attrs).
+
+Every entry's attrs hold ``eskin_entry`` (its kind), ``seconds`` (stage name -> wall seconds,
+finite floats) and ``sha256``: one hex digest per variable, over its dtype, shape and raw bytes
+after the cast to its stored dtype, plus ``"@attrs"`` over the canonical JSON of the other attrs.
+Cubes carry ``eskin_sha256`` (digests of their variables; NaN payloads are canonicalized because
+xarray's CF decoding of cubes rewrites them), removed again on reading.
+
+Why this design
+---------------
+* **Consolidated metadata is off everywhere** (``consolidated=False`` on every ``to_zarr`` and
+  ``open_zarr``): many independent workers add entries concurrently, and consolidation keeps one
+  copy of all metadata at the root that every addition would have to rewrite globally (a
+  read-modify-write race between workers, and stale metadata for readers in between).
+* **Completeness by rename.** An entry is written in full under ``.partial-<key>-<uuid4 hex>``
+  beside its final place and then renamed to ``<key>`` (one ``os.rename`` of a directory, atomic
+  within a file system), so a killed worker never leaves an entry that :meth:`SweepStore.has`
+  reports. Two workers finishing the same key race harmlessly: the loser finds the name taken
+  and discards its copy (equal keys mean equal content). Nothing is fsynced (thousands of small
+  files), so this protects against killed processes, not power loss; a torn entry after a power
+  loss fails its checksum on reading instead (:class:`CorruptEntryError`) and can be discarded and
+  recomputed.
+* **Exact round trips.** Entries are written with ``write_empty_chunks=True`` (otherwise a chunk
+  equal to the fill value, e.g. all ``-0.0`` or a NaN with another payload, would not be written
+  and would read back as the canonical fill value) and read with ``decode_cf=False`` (no masking
+  of fill values). Strings are stored as Zarr's variable-length ``string`` type (specified in v3,
+  unlike fixed-width ``<U``) and read back as numpy ``<U`` arrays.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import dataclasses
+import enum
+import errno
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import tempfile
+import time
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+import xarray as xr
+import zarr
+
+from pipeline.errors import EskinError
+from pipeline.metrics import SpikeMetrics
+from pipeline.spikes import Encoded, SpikeTrains
+
+__all__ = [
+    "CorruptEntryError",
+    "EntryKind",
+    "RateEntry",
+    "ResultEntry",
+    "SpikeEntry",
+    "StoreError",
+    "SweepStore",
+    "open_results",
+]
+
+STORE_NAME = "store.zarr"
+MARKER = "eskin_sweep_store"
+VERSION = 1
+CUBES = "cubes"
+PARTIAL_PREFIX = ".partial-"
+# A new store is built here (inside the root, so the final rename stays on one file system).
+STORE_PARTIAL_PREFIX = ".store.zarr-partial-"
+CUBE_DIGESTS = "eskin_sha256"
+
+_T = TypeVar("_T")
+
+_KEY = re.compile(r"[0-9a-f]{32}")
+_CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
+_METRIC_UNITS = {
+    "ssnr_db": "dB",
+    "ste_s2": "s^2",
+    "ste_sign_safe_s2": "s^2",
+    "event_rate_hz": "Hz",
+    "data_rate_bps": "bit/s",
+    "equivalent_bits": "bit",
+}
+_METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
+_TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
+_OPEN_ZARR = {"consolidated": False, "zarr_format": 3, "chunks": None}
+
+
+class StoreError(EskinError):
+    """A run root is not (or cannot become) a sweep store, or an entry is missing.
+
+    The message is one line naming the root and, where there is one, the entry.
+    """
+
+
+class CorruptEntryError(StoreError):
+    """An entry's data fails its checksum or cannot be read; discard and recompute it."""
+
+
+class EntryKind(enum.StrEnum):
+    """Kinds of cached entries; the value is the name of the kind's group."""
+
+    SPIKES = "spikes"
+    RATES = "rates"
+    RESULTS = "results"
+
+
+@dataclass(frozen=True, eq=False)
+class SpikeEntry:
+    """Cached output of the readout and metrics stages.
+
+    Attributes
+    ----------
+    encoded : Encoded
+        TRUE and REAL trains; ``encoded.real is encoded.true`` for an ideal readout (kept so).
+        Both share ``duration_s`` float64 (n_recordings,) s.
+    metrics : SpikeMetrics
+        Scene-level metrics; any field may be +-inf or NaN and round trips bit for bit.
+    seconds : dict[str, float]
+        Wall seconds per stage (finite), e.g. ``{"taxels": 1.0, "readout": 2.5}``.
+    """
+
+    encoded: Encoded
+    metrics: SpikeMetrics
+    seconds: dict[str, float]
+
+
+@dataclass(frozen=True, eq=False)
+class RateEntry:
+    """Cached output of the coding stage.
+
+    Attributes
+    ----------
+    counts : int64 (n_recordings, channels, n_taxels, n_windows)
+        Spikes per window.
+    dropped : int64 (n_recordings, n_taxels)
+        Spikes outside every window.
+    labels : int64 (n_recordings,)
+        Class index of each recording, into ``class_names``.
+    class_names : tuple[str, ...]
+        Class names.
+    seconds : dict[str, float]
+        Wall seconds per stage (finite).
+    """
+
+    counts: np.ndarray
+    dropped: np.ndarray
+    labels: np.ndarray
+    class_names: tuple[str, ...]
+    seconds: dict[str, float]
+
+
+@dataclass(frozen=True, eq=False)
+class ResultEntry:
+    """Everything a result cube needs of one point: accuracy, spike metrics, stage seconds.
+
+    Attributes
+    ----------
+    fold_accuracy : dict[str, np.ndarray]
+        Model name (e.g. ``"ffnn"``) -> float64 (folds,) accuracy in [0, 1]; every model has
+        the same number of folds; insertion order is kept.
+    seconds : dict[str, float]
+        Wall seconds of every stage of the point (finite), as measured when each was computed,
+        e.g. ``{"load": 0.3, ..., "coding": 0.01, "train_ffnn": 1.2, "train_cnn": 5.0}``.
+    metrics : SpikeMetrics
+        The point's spike metrics (copied from its spike entry, so a cube reads results only).
+    """
+
+    fold_accuracy: dict[str, np.ndarray]
+    seconds: dict[str, float]
+    metrics: SpikeMetrics
+
+
+class SweepStore:
+    """One run root's sweep store; see the module docstring for the layout.
+
+    Build it with :meth:`open_or_create` or :meth:`open`, not the constructor (which checks
+    nothing). The object holds only paths, so it pickles cheaply to Dask workers; every method
+    opens what it needs and closes it again.
+
+    Attributes
+    ----------
+    root : Path
+        The run root; the Zarr store is ``root / "store.zarr"``.
+    """
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+
+    def __repr__(self) -> str:
+        return f"SweepStore({str(self.root)!r})"
+
+    @property
+    def path(self) -> Path:
+        """The Zarr store, ``root / "store.zarr"``."""
+        return self.root / STORE_NAME
+
+    # -----------------------------------------------------------------------------------------
+    # Opening
+
+    @classmethod
+    def open_or_create(cls, root: str | Path) -> SweepStore:
+        """Open the sweep store at ``root``, creating it if ``root`` is missing or empty.
+
+        ``root`` is acceptable when it does not exist (it is created, parents too), is an empty
+        directory, or contains ``store.zarr`` carrying the sweep-store marker (other files beside
+        it, e.g. ``.prefect/`` or ``logs/``, are fine then). Leftovers of our own interrupted
+        store creation (``.store.zarr-partial-*``) do not count as contents. Everything else is
+        refused before anything is written: a file, a non-empty directory without
+        ``store.zarr``, a foreign ``store.zarr``, or a directory we cannot write to.
+
+        Raises
+        ------
+        StoreError
+            ``root`` is refused; the message says why.
+        """
+        root = Path(root)
+        if root.exists() or root.is_symlink():
+            _check_store_root(root, need_store=False)
+        else:
+            try:
+                root.mkdir(parents=True, exist_ok=True)
+            except OSError as error:
+                raise StoreError(f"cannot create run root {root}: {_one_line(error)}") from error
+        _check_writable(root)
+        store = cls(root)
+        if not store.path.exists():
+            store._create()
+        else:
+            store._add_missing_kind_groups()
+        return store
+
+    @classmethod
+    def open(cls, root: str | Path) -> SweepStore:
+        """Open an existing sweep store without writing anything (``root`` may be read-only).
+
+        Raises
+        ------
+        StoreError
+            ``root`` is missing, not a directory, or holds no ``store.zarr`` with the marker.
+        """
+        root = Path(root)
+        if not root.exists():
+            raise StoreError(f"not a sweep store: {root} does not exist")
+        _check_store_root(root, need_store=True)
+        return cls(root)
+
+    def _create(self) -> None:
+        """Build the store under a temporary name in ``root`` and rename it into place."""
+        partial = self.root / f"{STORE_PARTIAL_PREFIX}{uuid.uuid4().hex}"
+        try:
+            group = zarr.open_group(
+                zarr.storage.LocalStore(partial),
+                mode="w-",
+                zarr_format=3,
+                attributes={MARKER: VERSION},
+            )
+            for name in _group_names():
+                group.create_group(name)
+            try:
+                os.rename(partial, self.path)
+            except OSError as error:
+                # Another process created the store first: use theirs (checked below).
+                if error.errno not in (errno.EEXIST, errno.ENOTEMPTY):
+                    raise
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)
+        _check_store_root(self.root, need_store=True)
+
+    def _add_missing_kind_groups(self) -> None:
+        # Stores are created complete; this only repairs a kind group someone deleted.
+        for name in _group_names():
+            if not (self.path / name / "zarr.json").is_file():
+                zarr.open_group(zarr.storage.LocalStore(self.path / name), mode="a", zarr_format=3)
+
+    # -----------------------------------------------------------------------------------------
+    # Entries
+
+    def has(self, kind: EntryKind | str, key: str) -> bool:
+        """True only if a complete entry ``kind/key`` exists (partial copies are invisible)."""
+        return (self._entry_path(EntryKind(kind), key) / "zarr.json").is_file()
+
+    def discard(self, kind: EntryKind | str, key: str) -> bool:
+        """Remove entry ``kind/key`` (e.g. a corrupt one, to recompute it).
+
+        It is first renamed to a partial name, so :meth:`has` turns false at once and never sees
+        a half-deleted entry. Returns whether there was an entry to remove.
+        """
+        kind = EntryKind(kind)
+        path = self._entry_path(kind, key)
+        doomed = path.parent / f"{PARTIAL_PREFIX}{key}-{uuid.uuid4().hex}"
+        try:
+            os.rename(path, doomed)
+        except FileNotFoundError:
+            return False
+        shutil.rmtree(doomed, ignore_errors=True)
+        return True
+
+    def clean_partials(self, *, older_than_s: float = 0.0) -> int:
+        """Remove leftover partial entries, cubes and store builds; return how many.
+
+        Parameters
+        ----------
+        older_than_s : float
+            Only remove partials whose directory was last modified at least this many seconds
+            ago. The default 0 removes every partial, including those of writers still running:
+            use it only when no writer is active, else a threshold well above the longest write.
+        """
+        now = time.time()
+        candidates = [p for p in self.root.glob(f"{STORE_PARTIAL_PREFIX}*") if p.is_dir()]
+        for name in _group_names():
+            folder = self.path / name
+            if folder.is_dir():
+                candidates += [p for p in folder.glob(f"{PARTIAL_PREFIX}*") if p.is_dir()]
+        removed = 0
+        for path in candidates:
+            try:
+                if now - path.stat().st_mtime < older_than_s:
+                    continue
+            except FileNotFoundError:  # finished or removed meanwhile
+                continue
+            shutil.rmtree(path, ignore_errors=True)
+            removed += 1
+        return removed
+
+    def write_spikes(self, key: str, entry: SpikeEntry) -> None:
+        """Store the spike trains and metrics of ``key``; see the module docstring for layout.
+
+        Raises
+        ------
+        ValueError
+            Inconsistent trains (counts not matching the event arrays, TRUE and REAL of different
+            shapes or durations), values that do not fit the stored dtypes, non-finite seconds.
+        """
+        path = self._entry_path(EntryKind.SPIKES, key)
+        encoded = entry.encoded
+        ideal = encoded.real is encoded.true
+        variables = _train_variables("true", encoded.true)
+        duration = _cast(encoded.true.duration_s, np.float64, "duration_s")
+        n_recordings, _ = variables["true_count"][1].shape
+        if duration.shape != (n_recordings,):
+            raise ValueError(f"duration_s: shape {duration.shape}, expected ({n_recordings},)")
+        if not ideal:
+            variables |= _train_variables("real", encoded.real)
+            if variables["real_count"][1].shape != variables["true_count"][1].shape:
+                raise ValueError("REAL and TRUE trains differ in (recording, taxel) shape")
+            real_duration = _cast(encoded.real.duration_s, np.float64, "real duration_s")
+            if real_duration.tobytes() != duration.tobytes():
+                raise ValueError("REAL and TRUE trains differ in duration_s")
+        variables["duration_s"] = (("recording",), duration, {"units": "s"})
+        variables |= _metric_variables(entry.metrics)
+        attrs = {"ideal": ideal, "seconds": _seconds(entry.seconds)}
+        self._write_entry(EntryKind.SPIKES, path, variables, attrs)
+
+    def read_spikes(self, key: str) -> SpikeEntry:
+        """The spike entry ``key``, bit for bit as written (``real is true`` if ideal).
+
+        Raises
+        ------
+        StoreError
+            No complete entry ``key``.
+        CorruptEntryError
+            The entry fails its checksum or cannot be read.
+        """
+
+        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> SpikeEntry:
+            duration = _variable(ds, "duration_s", ("recording",), np.float64)
+            true = _read_trains(ds, "true", duration)
+            ideal = attrs["ideal"]
+            if not isinstance(ideal, bool):
+                raise TypeError("attribute 'ideal' is not a bool")
+            real = true if ideal else _read_trains(ds, "real", duration)
+            return SpikeEntry(Encoded(true, real), _read_metrics(ds), _read_seconds(attrs))
+
+        return self._read_entry(EntryKind.SPIKES, key, build)
+
+    def write_rates(self, key: str, entry: RateEntry) -> None:
+        """Store the rate-coded counts of ``key``.
+
+        Raises
+        ------
+        ValueError
+            Arrays of the wrong rank or inconsistent shapes, values that do not fit int64,
+            non-finite seconds.
+        """
+        path = self._entry_path(EntryKind.RATES, key)
+        counts = _cast(entry.counts, np.int64, "counts")
+        dropped = _cast(entry.dropped, np.int64, "dropped")
+        labels = _cast(entry.labels, np.int64, "labels")
+        if counts.ndim != 4:
+            raise ValueError(f"counts: {counts.ndim} dimensions, expected 4")
+        n_recordings, _, n_taxels, _ = counts.shape
+        if dropped.shape != (n_recordings, n_taxels):
+            raise ValueError(f"dropped: shape {dropped.shape}, expected {(n_recordings, n_taxels)}")
+        if labels.shape != (n_recordings,):
+            raise ValueError(f"labels: shape {labels.shape}, expected ({n_recordings},)")
+        class_names = list(entry.class_names)
+        if not all(isinstance(name, str) for name in class_names):
+            raise ValueError("class_names: every name must be a str")
+        variables = {
+            "counts": (("recording", "channel", "taxel", "window"), counts, {"units": "spikes"}),
+            "dropped": (("recording", "taxel"), dropped, {"units": "spikes"}),
+            "labels": (("recording",), labels, {}),
+        }
+        attrs = {"class_names": class_names, "seconds": _seconds(entry.seconds)}
+        self._write_entry(EntryKind.RATES, path, variables, attrs)
+
+    def read_rates(self, key: str) -> RateEntry:
+        """The rate entry ``key`` as written.
+
+        Raises
+        ------
+        StoreError
+            No complete entry ``key``.
+        CorruptEntryError
+            The entry fails its checksum or cannot be read.
+        """
+
+        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> RateEntry:
+            names = attrs["class_names"]
+            if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+                raise TypeError("attribute 'class_names' is not a list of str")
+            return RateEntry(
+                counts=_variable(
+                    ds, "counts", ("recording", "channel", "taxel", "window"), np.int64
+                ),
+                dropped=_variable(ds, "dropped", ("recording", "taxel"), np.int64),
+                labels=_variable(ds, "labels", ("recording",), np.int64),
+                class_names=tuple(names),
+                seconds=_read_seconds(attrs),
+            )
+
+        return self._read_entry(EntryKind.RATES, key, build)
+
+    def write_result(self, key: str, entry: ResultEntry) -> None:
+        """Store the per-fold accuracy of every model of ``key``.
+
+        Raises
+        ------
+        ValueError
+            No model, models with different fold counts, non-finite seconds.
+        """
+        path = self._entry_path(EntryKind.RESULTS, key)
+        if not entry.fold_accuracy:
+            raise ValueError("fold_accuracy: no model")
+        models = [str(model) for model in entry.fold_accuracy]
+        rows = [
+            _cast(values, np.float64, f"fold_accuracy[{model!r}]")
+            for model, values in zip(models, entry.fold_accuracy.values(), strict=True)
+        ]
+        if any(row.ndim != 1 or row.shape != rows[0].shape for row in rows):
+            shapes = {m: r.shape for m, r in zip(models, rows, strict=True)}
+            raise ValueError(f"fold_accuracy: every model needs the same (folds,) shape: {shapes}")
+        variables = {
+            "accuracy": (("model", "fold"), np.stack(rows), {"units": "1"}),
+            "model": (("model",), np.array(models, dtype=object), {}),
+            **_metric_variables(entry.metrics),
+        }
+        self._write_entry(EntryKind.RESULTS, path, variables, {"seconds": _seconds(entry.seconds)})
+
+    def read_result(self, key: str) -> ResultEntry:
+        """The result entry ``key`` as written (models in their original order).
+
+        Raises
+        ------
+        StoreError
+            No complete entry ``key``.
+        CorruptEntryError
+            The entry fails its checksum or cannot be read.
+        """
+
+        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> ResultEntry:
+            accuracy = _variable(ds, "accuracy", ("model", "fold"), np.float64)
+            models = _strings(ds.variables["model"].values).tolist()
+            if len(models) != accuracy.shape[0]:
+                raise ValueError("model coordinate does not match accuracy")
+            fold_accuracy = {m: accuracy[i].copy() for i, m in enumerate(models)}
+            return ResultEntry(fold_accuracy, _read_seconds(attrs), _read_metrics(ds))
+
+        return self._read_entry(EntryKind.RESULTS, key, build)
+
+    # -----------------------------------------------------------------------------------------
+    # Cubes
+
+    def write_cube(self, name: str, cube: xr.Dataset) -> None:
+        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically.
+
+        The new cube is written in full under a partial name, then swapped in with one
+        ``renameat2(RENAME_EXCHANGE)`` (Linux), so the name always refers to a complete cube,
+        old or new, never a mix; where the exchange is unavailable the old cube is moved aside
+        first and the name is briefly missing. A reader in the middle of reading the old cube at
+        the swap may fail (its files are then deleted) and should retry. The cube is computed
+        first if it is Dask-backed, and its variables' encodings are dropped (a cube read from
+        another store would otherwise carry that store's chunking and codecs); ``cube`` itself is
+        not modified.
+
+        Raises
+        ------
+        ValueError
+            ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses the reserved attribute
+            ``eskin_sha256``.
+        """
+        path = self._cube_path(name)
+        if not isinstance(cube, xr.Dataset):
+            raise TypeError(f"cube {name!r}: expected an xarray.Dataset, got {type(cube)}")
+        if CUBE_DIGESTS in cube.attrs:
+            raise ValueError(f"cube {name!r}: attribute {CUBE_DIGESTS!r} is reserved")
+        cube = cube.compute().drop_encoding()
+        digests = {str(n): _digest(v.values, canonical_nan=True) for n, v in cube.variables.items()}
+        cube = _strings_to_objects(cube)
+        cube.attrs = {**cube.attrs, CUBE_DIGESTS: digests}
+        partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
+        try:
+            cube.to_zarr(str(partial), mode="w-", **_TO_ZARR)
+            _replace_dir(partial, path)
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)
+
+    def cube_names(self) -> list[str]:
+        """Names of the stored cubes, sorted."""
+        folder = self.path / CUBES
+        if not folder.is_dir():
+            return []
+        return sorted(
+            p.name
+            for p in folder.iterdir()
+            if _CUBE_NAME.fullmatch(p.name) and (p / "zarr.json").is_file()
+        )
+
+    def read_cube(self, name: str) -> xr.Dataset:
+        """The cube ``name``, loaded into memory (not lazy), string variables as ``<U``.
+
+        Raises
+        ------
+        StoreError
+            No cube ``name``.
+        CorruptEntryError
+            The cube fails its checksum or cannot be read.
+        """
+        path = self._cube_path(name)
+        if not (path / "zarr.json").is_file():
+            raise StoreError(f"no cube {name!r} in {self.root}")
+        where = f"cube {name} in {self.root}"
+        try:
+            with xr.open_zarr(str(path), **_OPEN_ZARR) as lazy:
+                cube = _objects_to_strings(lazy.load())
+            digests = cube.attrs.pop(CUBE_DIGESTS)
+            if not isinstance(digests, dict) or set(digests) != {str(n) for n in cube.variables}:
+                raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
+            for var, variable in cube.variables.items():
+                if _digest(variable.values, canonical_nan=True) != digests[str(var)]:
+                    raise CorruptEntryError(f"corrupt {where}: variable {var!r} fails its sha256")
+        except StoreError:
+            raise
+        except Exception as error:
+            raise CorruptEntryError(f"corrupt {where}: {_one_line(error)}") from error
+        return cube
+
+    # -----------------------------------------------------------------------------------------
+    # Internals
+
+    def _entry_path(self, kind: EntryKind, key: str) -> Path:
+        if not isinstance(key, str) or not _KEY.fullmatch(key):
+            raise ValueError(f"invalid {kind} key {key!r}: expected 32 lowercase hex characters")
+        return self.path / kind.value / key
+
+    def _cube_path(self, name: str) -> Path:
+        if not isinstance(name, str) or not _CUBE_NAME.fullmatch(name):
+            raise ValueError(f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}")
+        return self.path / CUBES / name
+
+    def _write_entry(
+        self,
+        kind: EntryKind,
+        path: Path,
+        variables: dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]],
+        attrs: dict[str, Any],
+    ) -> None:
+        """Write one entry under a partial name, then rename it to ``path``."""
+        attrs = {"eskin_entry": kind.value, **attrs}
+        digests = {name: _digest(values) for name, (_, values, _) in variables.items()}
+        digests["@attrs"] = _attrs_digest(attrs)
+        data = {name: xr.Variable(*spec) for name, spec in variables.items()}
+        ds = xr.Dataset(data, attrs={**attrs, "sha256": digests})
+        partial = path.parent / f"{PARTIAL_PREFIX}{path.name}-{uuid.uuid4().hex}"
+        try:
+            ds.to_zarr(str(partial), mode="w-", **_TO_ZARR)
+            try:
+                os.rename(partial, path)
+            except OSError as error:
+                # Another worker finished the same key first; keep its (equal) entry.
+                if error.errno not in (errno.EEXIST, errno.ENOTEMPTY) or not path.is_dir():
+                    raise
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)
+
+    def _read_entry(
+        self, kind: EntryKind, key: str, build: Callable[[xr.Dataset, dict[str, Any]], _T]
+    ) -> _T:
+        """Open, verify and convert one entry; every failure but a missing entry is corruption."""
+        path = self._entry_path(kind, key)
+        if not (path / "zarr.json").is_file():
+            raise StoreError(f"no {kind} entry {key} in {self.root}")
+        where = f"{kind} entry {key} in {self.root}"
+        try:
+            with xr.open_zarr(str(path), decode_cf=False, **_OPEN_ZARR) as lazy:
+                ds = lazy.load()
+            attrs = dict(ds.attrs)
+            digests = attrs.pop("sha256")
+            if attrs.get("eskin_entry") != kind.value:
+                raise CorruptEntryError(f"corrupt {where}: it is not a {kind} entry")
+            if not isinstance(digests, dict) or set(digests) != {*map(str, ds.variables), "@attrs"}:
+                raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
+            if _attrs_digest(attrs) != digests["@attrs"]:
+                raise CorruptEntryError(f"corrupt {where}: attributes fail their sha256")
+            for name, variable in ds.variables.items():
+                if _digest(variable.values) != digests[str(name)]:
+                    raise CorruptEntryError(f"corrupt {where}: variable {name!r} fails its sha256")
+            return build(ds, attrs)
+        except StoreError:
+            raise
+        except Exception as error:
+            raise CorruptEntryError(f"corrupt {where}: {_one_line(error)}") from error
+
+
+def open_results(root: str | Path) -> dict[str, xr.Dataset]:
+    """Every result cube of the run root ``root``, by sweep name, loaded into memory.
+
+    Raises
+    ------
+    StoreError
+        ``root`` is not a sweep store.
+    CorruptEntryError
+        A cube fails its checksum or cannot be read.
+    """
+    store = SweepStore.open(root)
+    return {name: store.read_cube(name) for name in store.cube_names()}
+
+
+# ---------------------------------------------------------------------------------------------
+# Root validation
+
+
+def _group_names() -> tuple[str, ...]:
+    return (*(kind.value for kind in EntryKind), CUBES)
+
+
+def _check_store_root(root: Path, *, need_store: bool) -> None:
+    """Refuse ``root`` unless it is a directory that is empty (if allowed) or a sweep store."""
+    if not root.is_dir():
+        what = "a file" if root.is_file() else "not a directory"
+        raise StoreError(f"run root {root} is {what}")
+    store = root / STORE_NAME
+    if not store.exists():
+        try:
+            contents = [p.name for p in root.iterdir()]
+        except OSError as error:
+            raise StoreError(f"cannot list run root {root}: {_one_line(error)}") from error
+        contents = [n for n in contents if not n.startswith(STORE_PARTIAL_PREFIX)]
+        if need_store:
+            raise StoreError(f"not a sweep store: {root} has no {STORE_NAME}")
+        if contents:
+            shown = ", ".join(sorted(contents)[:3]) + (", ..." if len(contents) > 3 else "")
+            raise StoreError(
+                f"refusing run root {root}: not empty and holds no {STORE_NAME} ({shown})"
+            )
+        return
+    metadata = store / "zarr.json"
+    try:
+        with open(metadata, encoding="utf-8") as file:
+            meta = json.load(file)
+    except (OSError, ValueError) as error:
+        raise StoreError(
+            f"not a sweep store: cannot read {metadata}: {_one_line(error)}"
+        ) from error
+    if (
+        not isinstance(meta, dict)
+        or meta.get("zarr_format") != 3
+        or meta.get("node_type") != "group"
+    ):
+        raise StoreError(f"not a sweep store: {store} is not a Zarr v3 group")
+    attributes = meta.get("attributes")
+    version = attributes.get(MARKER) if isinstance(attributes, dict) else None
+    if version is None:
+        raise StoreError(f"not a sweep store: {store} lacks the {MARKER!r} marker (foreign store)")
+    if version != VERSION:
+        raise StoreError(f"unsupported sweep store version {version!r} in {store}")
+
+
+def _check_writable(root: Path) -> None:
+    """Refuse a root we cannot write to, without leaving anything behind."""
+    if not os.access(root, os.W_OK | os.X_OK):
+        raise StoreError(f"run root {root} is not writable")
+    # os.access says yes to root whatever the mode bits or mount flags (e.g. a read-only file
+    # system), so also try it.
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".eskin-probe-", dir=root)
+    except OSError as error:
+        raise StoreError(f"run root {root} is not writable: {_one_line(error)}") from error
+    os.close(fd)
+    os.unlink(probe)
+
+
+# ---------------------------------------------------------------------------------------------
+# Encoding helpers
+
+
+def _cast(value: Any, dtype: type, what: str) -> np.ndarray:
+    """``value`` as a contiguous little-endian ``dtype`` array.
+
+    Refuses casts across kinds (float to int) and integer casts that change values.
+    """
+    array = np.asarray(value)
+    target = np.dtype(dtype).newbyteorder("<")
+    if not np.can_cast(array.dtype, target, "same_kind"):
+        raise ValueError(f"{what}: cannot store {array.dtype} values as {target}")
+    cast = np.asarray(array, dtype=target, order="C")  # keeps 0-d arrays 0-d
+    if target.kind in "iu" and not np.array_equal(cast, array):
+        raise ValueError(f"{what}: values do not fit {target}")
+    return cast
+
+
+def _train_variables(
+    prefix: str, trains: SpikeTrains
+) -> dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]:
+    """Flat variables of one set of ragged trains, checked for consistency."""
+    times = _cast(trains.times_s, np.float64, f"{prefix} times_s")
+    polarity = _cast(trains.polarity, np.int8, f"{prefix} polarity")
+    count = _cast(trains.count, np.int64, f"{prefix} count")
+    if count.ndim != 2:
+        raise ValueError(f"{prefix} count: {count.ndim} dimensions, expected (recording, taxel)")
+    if times.ndim != 1 or polarity.shape != times.shape:
+        raise ValueError(f"{prefix} times_s and polarity must be 1-D of equal length")
+    if (count < 0).any() or int(count.sum()) != times.size:
+        raise ValueError(f"{prefix} count: must be >= 0 and sum to the {times.size} events")
+    flat = count.ravel()
+    # Exclusive cumulative sum, which unlike SpikeTrains.start also works for 0 recordings.
+    start = (np.cumsum(flat) - flat).reshape(count.shape)
+    event = f"{prefix}_event"
+    return {
+        f"{prefix}_times_s": ((event,), times, {"units": "s"}),
+        f"{prefix}_polarity": ((event,), polarity, {}),
+        f"{prefix}_start": (("recording", "taxel"), start, {}),
+        f"{prefix}_count": (("recording", "taxel"), count, {}),
+    }
+
+
+def _read_trains(ds: xr.Dataset, prefix: str, duration: np.ndarray) -> SpikeTrains:
+    event = (f"{prefix}_event",)
+    times = _variable(ds, f"{prefix}_times_s", event, np.float64)
+    polarity = _variable(ds, f"{prefix}_polarity", event, np.int8)
+    count = _variable(ds, f"{prefix}_count", ("recording", "taxel"), np.int64)
+    start = _variable(ds, f"{prefix}_start", ("recording", "taxel"), np.int64)
+    flat = count.ravel()
+    if (flat < 0).any() or int(flat.sum()) != times.size:
+        raise ValueError(f"{prefix}_count does not match {prefix}_times_s")
+    if not np.array_equal(start.ravel(), np.cumsum(flat) - flat):
+        raise ValueError(f"{prefix}_start is not the running sum of {prefix}_count")
+    return SpikeTrains(times_s=times, polarity=polarity, count=count, duration_s=duration)
+
+
+def _variable(ds: xr.Dataset, name: str, dims: tuple[str, ...], dtype: type) -> np.ndarray:
+    """A stored variable's values, checked against the dims and dtype this module writes."""
+    variable = ds.variables[name]
+    if variable.dims != dims or variable.dtype != np.dtype(dtype):
+        raise TypeError(f"variable {name!r} is {variable.dtype} {variable.dims}, not {dims}")
+    return np.asarray(variable.values)
+
+
+def _seconds(seconds: Mapping[str, float]) -> dict[str, float]:
+    out = {str(stage): float(value) for stage, value in seconds.items()}
+    bad = [stage for stage, value in out.items() if not math.isfinite(value)]
+    if bad:
+        raise ValueError(f"seconds: not finite for {bad} (JSON attributes cannot hold them)")
+    return out
+
+
+def _metric_variables(metrics: SpikeMetrics) -> dict[str, tuple]:
+    """One 0-d float64 variable per metric: attrs are JSON, which cannot hold +-inf."""
+    return {
+        name: (
+            (),
+            _cast(getattr(metrics, name), np.float64, name),
+            {"units": _METRIC_UNITS.get(name, "")},
+        )
+        for name in _METRICS
+    }
+
+
+def _read_metrics(ds: xr.Dataset) -> SpikeMetrics:
+    return SpikeMetrics(**{name: float(_variable(ds, name, (), np.float64)) for name in _METRICS})
+
+
+def _read_seconds(attrs: dict[str, Any]) -> dict[str, float]:
+    seconds = attrs["seconds"]
+    if not isinstance(seconds, dict):
+        raise TypeError("attribute 'seconds' is not a mapping")
+    return {str(stage): float(value) for stage, value in seconds.items()}
+
+
+def _digest(values: np.ndarray, *, canonical_nan: bool = False) -> str:
+    """sha256 hex of dtype, shape and little-endian bytes; strings by value, not by width."""
+    values = np.asarray(values)
+    hasher = hashlib.sha256()
+    if values.dtype.kind in "OTUS":
+        # <U, object and StringDType hold the same strings in different widths/layouts.
+        hasher.update(f"str{values.shape}".encode())
+        hasher.update(json.dumps([str(v) for v in values.ravel().tolist()]).encode())
+        return hasher.hexdigest()
+    values = np.asarray(values, dtype=values.dtype.newbyteorder("<"), order="C")
+    if canonical_nan and values.dtype.kind in "fc":
+        values = values.copy()
+        values[np.isnan(values)] = np.nan
+    hasher.update(f"{values.dtype.str}{values.shape}".encode())
+    hasher.update(values.tobytes())
+    return hasher.hexdigest()
+
+
+def _attrs_digest(attrs: Mapping[str, Any]) -> str:
+    text = json.dumps(attrs, sort_keys=True, allow_nan=False, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _strings(values: np.ndarray) -> np.ndarray:
+    """Object or StringDType strings as a numpy ``<U`` array."""
+    return np.array([str(v) for v in np.asarray(values).ravel().tolist()], dtype=str).reshape(
+        np.shape(values)
+    )
+
+
+def _strings_to_objects(ds: xr.Dataset) -> xr.Dataset:
+    """``<U`` variables as object arrays, which Zarr v3 stores as its specified ``string`` type."""
+    names = [name for name, v in ds.variables.items() if v.dtype.kind == "U"]
+    return _convert(ds, names, lambda v: v.astype(object))
+
+
+def _objects_to_strings(ds: xr.Dataset) -> xr.Dataset:
+    """Read-back strings (StringDType or object) as ``<U``, the dtype cubes are built with."""
+    names = [name for name, v in ds.variables.items() if v.dtype.kind in "OT"]
+    return _convert(
+        ds, names, lambda v: xr.Variable(v.dims, _strings(v.values), v.attrs, v.encoding)
+    )
+
+
+def _convert(
+    ds: xr.Dataset, names: list[Any], convert: Callable[[xr.Variable], xr.Variable]
+) -> xr.Dataset:
+    coords = {n: convert(ds.variables[n]) for n in names if n in ds.coords}
+    data = {n: convert(ds.variables[n]) for n in names if n not in ds.coords}
+    return ds.assign_coords(coords).assign(data)
+
+
+# ---------------------------------------------------------------------------------------------
+# Filesystem helpers
+
+_AT_FDCWD = -100
+_RENAME_EXCHANGE = 2
+
+
+def _renameat2() -> Callable[..., int] | None:
+    """glibc's ``renameat2``, or None where it does not exist (not Linux, old glibc)."""
+    try:
+        return ctypes.CDLL(None, use_errno=True).renameat2
+    except (AttributeError, OSError):
+        return None
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Atomically swap two directories; False where the platform cannot."""
+    renameat2 = _renameat2()
+    if renameat2 is None:
+        return False
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):  # file system cannot exchange
+        return False
+    raise OSError(code, os.strerror(code), str(b))
+
+
+def _replace_dir(new: Path, final: Path) -> None:
+    """Put directory ``new`` at ``final``, replacing what is there; ``new`` is gone afterwards."""
+    for _ in range(100):  # only concurrent writers of the same name make this loop
+        if not final.exists():
+            try:
+                os.rename(new, final)
+                return
+            except OSError as error:
+                if error.errno not in (errno.EEXIST, errno.ENOTEMPTY):
+                    raise
+                continue
+        try:
+            swapped = _exchange(new, final)
+        except FileNotFoundError:  # final vanished between the check and the swap
+            continue
+        if swapped:
+            shutil.rmtree(new, ignore_errors=True)  # now the old directory
+            return
+        # No atomic exchange: move the old one aside, then the new one in.
+        old = final.parent / f"{PARTIAL_PREFIX}{final.name}-{uuid.uuid4().hex}"
+        try:
+            os.rename(final, old)
+        except FileNotFoundError:
+            continue
+        try:
+            os.rename(new, final)
+        except OSError as error:
+            if error.errno in (errno.EEXIST, errno.ENOTEMPTY):  # another writer's cube came in
+                shutil.rmtree(old, ignore_errors=True)
+                continue
+            with contextlib.suppress(OSError):  # keep the old cube rather than none
+                os.rename(old, final)
+            raise
+        shutil.rmtree(old, ignore_errors=True)
+        return
+    raise StoreError(f"could not replace {final}: too many concurrent writers")
+
+
+def _one_line(error: BaseException) -> str:
+    text = " ".join(str(error).split()) or type(error).__name__
+    return f"{type(error).__name__}: {text}"

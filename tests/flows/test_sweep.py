@@ -1,0 +1,183 @@
+"""``eskin sweep`` end to end on a local two-worker Dask cluster: caches, cubes, bad input."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from flows.cli import main
+from storage import open_results
+from tests.flows.helpers import eskin
+
+SMOKE_SWEEPS = {"threshold", "window", "noise"}
+
+
+def test_cold_run_summary(smoke_sweep):
+    root, summary, _ = smoke_sweep
+    assert set(summary) == {"root", "cubes", "points", "cache_hits", "computed", "seconds"}
+    assert summary["points"] == 7  # 8 grid points, the operating point shared by two sweeps
+    assert summary["cache_hits"] == 0 and summary["computed"] == 7
+    assert set(summary["cubes"]) == SMOKE_SWEEPS
+    assert summary["root"] == str(root.resolve())
+
+
+def test_cubes_are_labelled(smoke_sweep):
+    cubes = open_results(smoke_sweep[0])
+    assert set(cubes) == SMOKE_SWEEPS
+    threshold = cubes["threshold"]
+    assert threshold["accuracy"].dims == ("threshold_v", "model", "fold")
+    assert list(threshold["threshold_v"].values) == [0.05, 0.09]
+    assert threshold["threshold_v"].attrs == {"field": "readout.threshold_v", "units": "V"}
+    assert list(threshold["model"].values) == ["ffnn", "cnn"]
+    assert threshold.sizes["fold"] == 4
+    acc = threshold["accuracy"].values
+    assert np.all((acc >= 0) & (acc <= 1))
+    for name in ("ssnr_db", "ste_s2", "event_rate_hz", "data_rate_bps", "equivalent_bits"):
+        assert threshold[name].dims == ("threshold_v",) and "units" in threshold[name].attrs
+    assert threshold["seconds"].dims == ("threshold_v", "stage")
+    assert np.all(threshold["seconds"].values >= 0)
+    assert threshold.attrs["grid"] == "smoke" and threshold.attrs["sweep"] == "threshold"
+    assert "package_version" in threshold.attrs and "base_scene" in threshold.attrs
+    np.testing.assert_allclose(
+        threshold["equivalent_bits"].values, np.log2(1 / np.array([0.05, 0.09]))
+    )
+
+
+def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
+    noise = open_results(smoke_sweep[0])["noise"]
+    assert noise["accuracy"].dims == ("amplifier_noise_sigma_v", "model", "fold")
+    assert "comparator_noise_sigma_v" in noise.coords
+    assert noise["correlation_r"].dims == ("model", "metric", "method")
+    assert list(noise["metric"].values) == ["ssnr_db", "ste_s2"]
+    assert list(noise["method"].values) == ["pearson", "spearman"]
+    assert np.all(np.isfinite(noise["ssnr_db"].values))  # noisy points: REAL differs from TRUE
+    r = noise["correlation_r"].values
+    assert np.all(np.isfinite(r) & (np.abs(r) <= 1))
+    assert np.all(noise["correlation_n"].values == 4)
+    # SSNR falls as the noise rises.
+    assert np.all(np.diff(noise["ssnr_db"].values) < 0)
+
+
+def test_xarray_queries_from_the_readme(smoke_sweep):
+    cubes = open_results(smoke_sweep[0])
+    mean = cubes["threshold"]["accuracy"].mean("fold")
+    best = mean.sel(model="ffnn").idxmax("threshold_v")
+    assert float(best) in (0.05, 0.09)
+    window = cubes["window"].sel(window_s=0.2)["accuracy"]
+    assert window.dims == ("model", "fold")
+
+
+def test_window_sweep_reuses_spike_trains(smoke_sweep):
+    spikes = [p for p in (smoke_sweep[0] / "store.zarr" / "spikes").iterdir() if p.is_dir()]
+    # thresholds 0.05 and 0.09 (shared by both windows) and four noise levels.
+    assert len([p for p in spikes if not p.name.startswith(".")]) == 6
+
+
+def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep):
+    root, _, env = smoke_sweep
+    before = open_results(root)
+    proc = eskin("sweep", "--grid", "smoke", "--root", str(root), env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "7 points (7 cached, 0 computed)" in proc.stdout
+    assert "best accuracy" in proc.stdout and "open_results" in proc.stdout
+    after = open_results(root)
+    for name in SMOKE_SWEEPS:
+        xr.testing.assert_identical(before[name], after[name])
+
+
+def test_extending_a_grid_computes_only_new_points(smoke_sweep, tmp_path):
+    root, _, env = smoke_sweep
+    grid = tmp_path / "extended.toml"
+    grid.write_text(
+        'name = "extended"\nbase = "smoke"\n'
+        '[sweeps.threshold]\naxes = { "readout.threshold_v" = [0.05, 0.09, 0.13] }\n'
+    )
+    proc = eskin("sweep", "--grid", str(grid), "--root", str(root), "--json", env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads(proc.stdout)
+    assert (summary["points"], summary["cache_hits"], summary["computed"]) == (3, 2, 1)
+
+
+# -- bad input: one line on stderr, exit 2, nothing written -------------------------------------
+
+
+def listing(path):
+    """What is at ``path``: its entries, a file's bytes, or None if absent."""
+    if path.is_dir():
+        return sorted(os.listdir(path))
+    return path.read_bytes() if path.exists() else None
+
+
+def refused(capsys, tmp_path, *argv, root=None):
+    root = root or tmp_path / "root"
+    before = listing(root)
+    code = main(["sweep", *argv, "--root", str(root)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and err.startswith("eskin: error: ")
+    assert listing(root) == before, "something was written under the root"
+    return err
+
+
+def grid_file(tmp_path, sweeps: str) -> str:
+    path = tmp_path / "grid.toml"
+    path.write_text('base = "smoke"\n' + sweeps)
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("sweeps", "expected"),
+    [
+        ('[sweeps.a]\naxes = { "readout.treshold_v" = [0.1] }\n', "not a scene field"),
+        ('[sweeps.a]\naxes = { "coding.window_s" = [] }\n', "must be a non-empty list"),
+        ('[sweeps.a]\naxes = { "coding.window_s" = [0.1, 0.1] }\n', "duplicate values 0.1"),
+        ('[sweeps.a]\naxes = { "coding.window_s" = [0.1, 9.0] }\n', "do not fit the shortest"),
+    ],
+)
+def test_bad_grids_are_refused_before_any_work(capsys, tmp_path, sweeps, expected):
+    assert expected in refused(capsys, tmp_path, "--grid", grid_file(tmp_path, sweeps))
+
+
+def test_all_grid_problems_are_listed_at_once(capsys, tmp_path):
+    sweeps = (
+        '[sweeps.a]\naxes = { "readout.treshold_v" = [0.1] }\n'
+        '[sweeps.b]\naxes = { "coding.window_s" = [0.1, 0.1] }\n'
+    )
+    err = refused(capsys, tmp_path, "--grid", grid_file(tmp_path, sweeps))
+    assert "2 problems" in err and "treshold_v" in err and "duplicate" in err
+
+
+def test_unknown_grid_name(capsys, tmp_path):
+    assert "built-in grids: paper, smoke" in refused(capsys, tmp_path, "--grid", "nope")
+
+
+def test_a_root_that_is_a_file_is_refused(capsys, tmp_path):
+    root = tmp_path / "file"
+    root.write_text("mine")
+    err = refused(capsys, tmp_path, "--grid", "smoke", root=root)
+    assert str(root) in err
+    assert root.read_text() == "mine"
+
+
+def test_a_foreign_directory_is_refused_and_left_alone(capsys, tmp_path):
+    root = tmp_path / "thesis"
+    root.mkdir()
+    (root / "chapter1.tex").write_text("precious")
+    assert str(root) in refused(capsys, tmp_path, "--grid", "smoke", root=root)
+    assert (root / "chapter1.tex").read_text() == "precious"
+
+
+def test_unreachable_scheduler_fails_fast_with_a_clear_message(capsys, tmp_path):
+    import time
+
+    start = time.monotonic()
+    err = refused(capsys, tmp_path, "--grid", "smoke", "--address", "tcp://127.0.0.1:9")
+    assert time.monotonic() - start < 30
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err
+
+
+def test_malformed_address(capsys, tmp_path):
+    err = refused(capsys, tmp_path, "--grid", "smoke", "--address", "127.0.0.1:8786")
+    assert "expected tcp://HOST:PORT" in err
