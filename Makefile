@@ -23,7 +23,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 run: $(VENV)/.installed
-	$(BIN)/eskin run --scene paper
+	$(BIN)/eskin sweep --grid paper
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q

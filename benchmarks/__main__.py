@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 import platform
+import sys
 
-from benchmarks import encoder, training
+from benchmarks import encoder, sweep, training
 
 
 def main() -> None:
-    rows = encoder.run() + training.run()
+    quick = "--quick" in sys.argv  # skips the paper-grid sweeps (about 20 minutes)
+    rows = encoder.run() + training.run() + ([] if quick else sweep.run())
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     )

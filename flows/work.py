@@ -14,13 +14,17 @@ from __future__ import annotations
 import functools
 import json
 import warnings
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from pipeline.frontend import FrontEnd
-from pipeline.recordings import Recordings
 from pipeline.scene import Scene, cache_key
-from pipeline.simulate import Stopwatch, classify, encode, prepare, rate_frames, spike_metrics
 from storage import CorruptEntryError, EntryKind, RateEntry, ResultEntry, SpikeEntry, SweepStore
+
+if TYPE_CHECKING:
+    from pipeline.frontend import FrontEnd
+    from pipeline.recordings import Recordings
+
+# pipeline.simulate (torch, scikit-learn) is imported inside the functions: the coordinator
+# imports this module only to name the functions it submits, and never trains anything.
 
 
 @functools.lru_cache(maxsize=4)
@@ -28,6 +32,8 @@ def _prepared(
     dataset_json: str, full_scale_v: float
 ) -> tuple[Recordings, FrontEnd, dict[str, float]]:
     """Recordings and front end of a dataset, kept per worker process (they are immutable)."""
+    from pipeline.simulate import Stopwatch, prepare
+
     dataset = Scene.from_dict({"dataset": json.loads(dataset_json)}).dataset
     watch = Stopwatch(None)
     recordings, front_end = prepare(dataset, full_scale_v, stopwatch=watch)
@@ -47,6 +53,8 @@ def compute_spikes(root: str, scene_data: dict[str, Any]) -> str:
     key = cache_key(scene, "spikes")
     if store.has(EntryKind.SPIKES, key):
         return key
+    from pipeline.simulate import Stopwatch, encode, spike_metrics
+
     recordings, front_end, seconds = _recordings(scene)
     watch = Stopwatch(None)
     watch.seconds.update(seconds)
@@ -65,6 +73,8 @@ def compute_point(root: str, scene_data: dict[str, Any], *after: Any) -> str:
     spike metrics and the seconds of every stage (as measured when each was computed).
     """
     import torch
+
+    from pipeline.simulate import Stopwatch, classify, rate_frames
 
     torch.set_num_threads(1)
     scene = Scene.from_dict(scene_data)

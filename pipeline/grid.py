@@ -19,9 +19,11 @@ TOML layout::
     [sweeps.noise]
     mode = "zip"
     set = { "array.rows" = 1, "array.cols" = 1 }
-    axes = { "readout.effects.amplifier_noise.sigma_v" = [0.0, 0.01],
-             "readout.effects.comparator_noise.sigma_v" = [0.0, 0.01] }
     correlate = true
+
+    [sweeps.noise.axes]
+    "readout.effects.amplifier_noise.sigma_v" = [0.0, 0.01]
+    "readout.effects.comparator_noise.sigma_v" = [0.0, 0.01]
 
 A cube dimension is named after the last part of its field (``threshold_v``); where two axes of a
 sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).

@@ -13,9 +13,9 @@ with the other axes as coordinates along it), plus ``model`` and ``fold`` for ac
 ``equivalent_bits``   (axes...)               ``log2(full_scale_v / threshold_v)``
 ``seconds``           (axes..., stage)        wall seconds each stage took when it was computed
 
-A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model, metric,
-method) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of SSNR and STE
-with fold-averaged accuracy across the sweep's points (points with an infinite metric left out).
+A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
+metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of
+SSNR and STE with fold-averaged accuracy across the sweep's points (infinite metrics left out).
 
 Accuracy of a model or fold a point did not train is NaN. Every variable but ``seconds`` is a
 deterministic function of the grid and its seeds; ``seconds`` are measurements. Units are in
@@ -128,14 +128,14 @@ def _correlations(cube: xr.Dataset, models: list[str]) -> xr.Dataset:
                 r[i, j, k], p[i, j, k], n[i, j], note = result[method]
                 if note:
                     notes.append(f"{model}/{metric}/{method}: {note}")
-    dims = ("model", "metric", "method")
+    dims = ("model", "metric", "coefficient")
     return xr.Dataset(
         {
             "correlation_r": (dims, r),
             "correlation_p": (dims, p),
             "correlation_n": (dims[:2], n),
         },
-        coords={"metric": list(CORRELATED_METRICS), "method": list(CORRELATION_METHODS)},
+        coords={"metric": list(CORRELATED_METRICS), "coefficient": list(CORRELATION_METHODS)},
         attrs={"correlation_notes": "; ".join(notes)} if notes else {},
     )
 

@@ -49,9 +49,9 @@ def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
     noise = open_results(smoke_sweep[0])["noise"]
     assert noise["accuracy"].dims == ("amplifier_noise_sigma_v", "model", "fold")
     assert "comparator_noise_sigma_v" in noise.coords
-    assert noise["correlation_r"].dims == ("model", "metric", "method")
+    assert noise["correlation_r"].dims == ("model", "metric", "coefficient")
     assert list(noise["metric"].values) == ["ssnr_db", "ste_s2"]
-    assert list(noise["method"].values) == ["pearson", "spearman"]
+    assert list(noise["coefficient"].values) == ["pearson", "spearman"]
     assert np.all(np.isfinite(noise["ssnr_db"].values))  # noisy points: REAL differs from TRUE
     r = noise["correlation_r"].values
     assert np.all(np.isfinite(r) & (np.abs(r) <= 1))
