@@ -5,6 +5,7 @@ import math
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -181,3 +182,22 @@ def test_console_script_exit_status_and_stderr(tmp_path):
     assert proc.stdout == ""
     assert proc.stderr.strip().count("\n") == 0
     assert "readout.threshold_v" in proc.stderr
+
+
+VIBTAC12 = Path(__file__).resolve().parents[3] / "shared" / "datasets" / "vibtac12"
+
+
+@pytest.mark.skipif(
+    not (VIBTAC12 / "Z.csv").is_file(), reason=f"the VibTac-12 copy is absent at {VIBTAC12}"
+)
+def test_run_on_the_vibtac12_copy(capsys, tiny_scene):
+    code, out, err = run_cli(
+        capsys, "run", "--scene", tiny_scene(), "--dataset", str(VIBTAC12), "--json"
+    )
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["dataset"] == "vibtac12"
+    assert (result["n_recordings"], result["n_classes"]) == (120, 12)
+    assert result["n_windows"] >= 15  # 399-sample segments at 200 Hz hold about 19 windows
+    for model in ("ffnn", "cnn"):
+        assert len(result["accuracy"][model]["folds"]) == 4
