@@ -181,3 +181,16 @@ def test_unreachable_scheduler_fails_fast_with_a_clear_message(capsys, tmp_path)
 def test_malformed_address(capsys, tmp_path):
     err = refused(capsys, tmp_path, "--grid", "smoke", "--address", "127.0.0.1:8786")
     assert "expected tcp://HOST:PORT" in err
+
+
+def test_the_readme_queries_run_on_a_sweep(smoke_sweep):
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = next(
+        b for b in re.findall(r"```python\n(.*?)```", readme, flags=re.S) if "open_results" in b
+    )
+    namespace: dict = {}
+    exec(block.replace('"runs/paper"', repr(str(smoke_sweep[0]))), namespace)
+    assert set(namespace["cubes"]) == SMOKE_SWEEPS
