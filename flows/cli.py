@@ -19,6 +19,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from pipeline.errors import EskinError
+
 EXIT_USER_ERROR = 2
 
 
@@ -92,8 +94,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from pipeline.errors import EskinError
-
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
@@ -134,7 +134,7 @@ def _sweep(args: argparse.Namespace) -> int:
     from storage import SweepStore
 
     if args.workers < 1:
-        raise _usage_error(f"--workers {args.workers}: need at least 1")
+        raise EskinError(f"--workers {args.workers}: need at least 1")
     grid = load_grid(args.grid)
     # Every check runs before the store is created and Prefect imported: bad input writes nothing.
     from flows.orchestrate import check_grid, default_root
@@ -193,7 +193,7 @@ def format_sweep_summary(summary: dict[str, Any]) -> str:
 
 def _serve(args: argparse.Namespace) -> int:
     if not os.environ.get("PREFECT_API_URL"):
-        raise _usage_error(
+        raise EskinError(
             "eskin serve needs a Prefect server: start one with 'prefect server start --host "
             "127.0.0.1' and set PREFECT_API_URL=http://127.0.0.1:4200/api"
         )
@@ -204,12 +204,6 @@ def _serve(args: argparse.Namespace) -> int:
 
     sweep.serve(name="default", parameters={"grid": args.grid})
     return 0
-
-
-def _usage_error(message: str) -> Exception:
-    from pipeline.errors import EskinError
-
-    return EskinError(message)
 
 
 class _StageProgress:

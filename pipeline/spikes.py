@@ -15,6 +15,15 @@ from dataclasses import dataclass
 import numpy as np
 
 
+def train_starts(count: np.ndarray) -> np.ndarray:
+    """int64, ``count``'s shape: index of each train's first event (exclusive cumulative sum).
+
+    Works for any number of trains, none included.
+    """
+    flat = np.asarray(count, dtype=np.int64).ravel()
+    return (np.cumsum(flat) - flat).reshape(np.shape(count))
+
+
 @dataclass(frozen=True, eq=False)
 class SpikeTrains:
     """Ragged spike trains of ``n_recordings x n_taxels`` taxels.
@@ -39,8 +48,7 @@ class SpikeTrains:
     @property
     def start(self) -> np.ndarray:
         """int64 (n_recordings, n_taxels): index of each train's first event."""
-        flat = np.concatenate([[0], np.cumsum(self.count.ravel())[:-1]]).astype(np.int64)
-        return flat.reshape(self.count.shape)
+        return train_starts(self.count)
 
     @property
     def n_recordings(self) -> int:

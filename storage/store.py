@@ -84,7 +84,7 @@ import zarr
 
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
-from pipeline.spikes import Encoded, SpikeTrains
+from pipeline.spikes import Encoded, SpikeTrains, train_starts
 
 __all__ = [
     "CorruptEntryError",
@@ -770,9 +770,7 @@ def _train_variables(
         raise ValueError(f"{prefix} times_s and polarity must be 1-D of equal length")
     if (count < 0).any() or int(count.sum()) != times.size:
         raise ValueError(f"{prefix} count: must be >= 0 and sum to the {times.size} events")
-    flat = count.ravel()
-    # Exclusive cumulative sum, which unlike SpikeTrains.start also works for 0 recordings.
-    start = (np.cumsum(flat) - flat).reshape(count.shape)
+    start = train_starts(count)
     event = f"{prefix}_event"
     return {
         f"{prefix}_times_s": ((event,), times, {"units": "s"}),
@@ -791,7 +789,7 @@ def _read_trains(ds: xr.Dataset, prefix: str, duration: np.ndarray) -> SpikeTrai
     flat = count.ravel()
     if (flat < 0).any() or int(flat.sum()) != times.size:
         raise ValueError(f"{prefix}_count does not match {prefix}_times_s")
-    if not np.array_equal(start.ravel(), np.cumsum(flat) - flat):
+    if not np.array_equal(start, train_starts(count)):
         raise ValueError(f"{prefix}_start is not the running sum of {prefix}_count")
     return SpikeTrains(times_s=times, polarity=polarity, count=count, duration_s=duration)
 

@@ -23,8 +23,8 @@ def run_cli(capsys, *argv):
 def tiny_scene(tmp_path):
     """A scene that runs in about a second: 4 recordings x 12 classes, 1.5 s, 4 folds, 3 epochs."""
 
-    def write(extra: str = "", name: str = "tiny.toml", folds: int = 4):
-        path = tmp_path / name
+    def write(extra: str = "", folds: int = 4):
+        path = tmp_path / "tiny.toml"
         path.write_text(
             "[dataset]\nkind = 'synthetic'\nrecordings_per_class = 4\nduration_s = 1.5\n"
             "[array]\nrows = 2\ncols = 1\n"
