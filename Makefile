@@ -22,8 +22,10 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(INSTALL) '.[test]'
 	touch $@ $(VENV)/.installed
 
+# Ends with the report of the paper sweep; `eskin report` prints its path.
 run: $(VENV)/.installed
-	$(BIN)/eskin sweep --grid paper
+	$(BIN)/eskin sweep --grid paper --root runs/paper
+	$(BIN)/eskin report --root runs/paper
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q

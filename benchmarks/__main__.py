@@ -6,12 +6,17 @@ import os
 import platform
 import sys
 
-from benchmarks import encoder, sweep, training
+from tqdm import tqdm
+
+from benchmarks import coding, encoder, scale, sweep, training
 
 
 def main() -> None:
-    quick = "--quick" in sys.argv  # skips the paper-grid sweeps (about 20 minutes)
-    rows = encoder.run() + training.run() + ([] if quick else sweep.run())
+    quick = "--quick" in sys.argv  # skips the scale runs and the paper-grid sweeps (~25 minutes)
+    suites = [encoder, coding, training] + ([] if quick else [scale, sweep])
+    rows = []
+    for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
+        rows += suite.run()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     )

@@ -14,18 +14,26 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from pipeline.errors import EskinError
 
 EXIT_USER_ERROR = 2
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the command line's error format: one line on stderr, exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USER_ERROR, f"eskin: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="eskin",
         description="Neuromorphic e-skin design sweeps: spiking taxel readout to texture accuracy.",
     )
@@ -90,6 +98,31 @@ def build_parser() -> argparse.ArgumentParser:
         "--grid", default="smoke", metavar="NAME|FILE", help="default grid of the deployment"
     )
     serve.set_defaults(handler=_serve)
+
+    report = commands.add_parser(
+        "report",
+        help="turn a sweep's cubes into the paper's figures and Table I, and the cost of accuracy",
+        description="Write figures (PNG, SVG), report.md and a self-contained report.html from "
+        "the result cubes of a run root, and print the path of report.html.",
+    )
+    report.add_argument("--root", required=True, metavar="DIR", help="the run root of a sweep")
+    report.add_argument(
+        "--out", metavar="DIR", help="the report folder (default: <root>/report; replaced whole)"
+    )
+    report.add_argument(
+        "--adc-bits",
+        type=int,
+        default=12,
+        metavar="N",
+        help="resolution of the frame-based ADC readout Table I compares with (default 12)",
+    )
+    report.add_argument(
+        "--adc-rate-hz",
+        type=float,
+        metavar="HZ",
+        help="its frame rate per taxel (default: the recordings' sampling rate)",
+    )
+    report.set_defaults(handler=_report)
     return parser
 
 
@@ -106,10 +139,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from flows.environment import tune_allocator
     from pipeline.recordings import resolve_dataset_argument
     from pipeline.scene import Scene
     from pipeline.simulate import run_scene, stage_names
 
+    tune_allocator()
     scene = Scene.load(args.scene)
     if args.dataset is not None:
         override = resolve_dataset_argument(args.dataset)
@@ -144,26 +179,37 @@ def _sweep(args: argparse.Namespace) -> int:
         probe_scheduler(args.address)
     root = Path(args.root) if args.root else default_root(grid)
     store = SweepStore.open_or_create(root)
-    hermetic_environment(store.root)
-    if args.json:
-        os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
-    from flows.sweep import sweep
-
+    # SIGTERM unwinds like Ctrl-C, so the local Dask cluster and Prefect's temporary server
+    # are stopped (the default action would kill this process alone and orphan the server).
+    signal.signal(signal.SIGTERM, _interrupt)
     start = time.perf_counter()
-    summary = sweep(
-        grid=args.grid,
-        root=str(store.root),
-        workers=args.workers,
-        address=args.address,
-        show_progress=not args.json,
-    )
+    # Refuse a second sweep on this root before Prefect starts; the flow's own lock nests in it.
+    with store.lock():
+        hermetic_environment(store.root)
+        if args.json:
+            os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
+        from flows.sweep import guard_temporary_server, sweep
+
+        guard_temporary_server()
+        summary = sweep(
+            grid=args.grid,
+            root=str(store.root),
+            workers=args.workers,
+            address=args.address,
+            show_progress=not args.json,
+        )
     # The whole sweep as the user waits for it, Prefect's temporary server included.
     summary["seconds"] = time.perf_counter() - start
+    _log_sweep(store.root, {**summary, "grid": grid.name})
     if args.json:
         print(json.dumps(_json_safe(summary), indent=2))
     else:
         print(format_sweep_summary(summary))
     return 0
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
 
 
 def format_sweep_summary(summary: dict[str, Any]) -> str:
@@ -189,6 +235,55 @@ def format_sweep_summary(summary: dict[str, Any]) -> str:
     lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
     lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
     return "\n".join(lines)
+
+
+def _log_sweep(root: Path, summary: dict[str, Any]) -> None:
+    """Record the sweep's cache hits and wall time for ``eskin report``; never fail the sweep."""
+    from storage.runlog import append_sweep_run
+
+    try:
+        append_sweep_run(root, summary)
+    except OSError as error:
+        print(f"eskin: warning: sweep not logged in {root}: {error}", file=sys.stderr)
+
+
+def _report(args: argparse.Namespace) -> int:
+    from contextlib import suppress
+
+    from flows.environment import hermetic_environment
+    from storage import SweepStore, open_results
+
+    problems = []
+    if args.adc_bits < 1:
+        problems.append(f"--adc-bits {args.adc_bits}: need at least 1")
+    if args.adc_rate_hz is not None and not (
+        math.isfinite(args.adc_rate_hz) and args.adc_rate_hz > 0
+    ):
+        problems.append(f"--adc-rate-hz {args.adc_rate_hz:g}: need a number > 0")
+    if problems:
+        raise EskinError("; ".join(problems))
+    store = SweepStore.open(args.root)
+    cubes = open_results(store.root)
+    if not cubes:
+        raise EskinError(f"no result cubes in {store.root}: run 'eskin sweep' on it first")
+    with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
+        hermetic_environment(store.root, prefect=False)
+    from pipeline.figures import draw_report
+    from pipeline.report import FrameReadout, build_report, recording_facts
+    from storage.report import write_report
+    from storage.runlog import read_sweep_runs
+
+    try:
+        facts = recording_facts(next(iter(cubes.values())))
+    except (EskinError, OSError) as error:
+        print(f"eskin: warning: recordings not readable, classes unknown: {error}", file=sys.stderr)
+        facts = None
+    rate_hz = args.adc_rate_hz or (facts.fs_hz if facts else None)
+    frame = FrameReadout(args.adc_bits, rate_hz) if rate_hz else None
+    report = build_report(cubes, facts=facts, frame=frame, runs=read_sweep_runs(store.root))
+    out = Path(args.out) if args.out else store.root / "report"
+    print(write_report(out, report, draw_report(report), show_progress=True))
+    return 0
 
 
 def _serve(args: argparse.Namespace) -> int:

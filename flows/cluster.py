@@ -39,6 +39,7 @@ def dask_client(
     workers: int = 2, address: str | None = None, *, timeout_s: float = CONNECT_TIMEOUT_S
 ) -> Iterator[object]:
     """A ``distributed.Client`` on a fresh local cluster, or on the scheduler at ``address``."""
+    import dask
     from distributed import Client, LocalCluster
 
     # Prefect's logging set-up shows every INFO line of the scheduler and nannies otherwise.
@@ -59,14 +60,21 @@ def dask_client(
         return
     if workers < 1:
         raise ClusterError(f"--workers {workers}: need at least 1")
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        dashboard_address="127.0.0.1:0",  # its HTTP server always runs: loopback, free port
-        silence_logs=logging.ERROR,
-    )
+    # Workers allocate from one glibc arena, whose heap can keep training's large tensors (see
+    # flows.environment.tune_allocator); Dask's own MALLOC_TRIM_THRESHOLD_ would return them to
+    # the kernel after every step. A variable the user set wins.
+    allocator = {"MALLOC_ARENA_MAX": 1, "MALLOC_TRIM_THRESHOLD_": None}
+    with dask.config.set(
+        {f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in allocator.items()}
+    ):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address="127.0.0.1:0",  # its HTTP server always runs: loopback, free port
+            silence_logs=logging.ERROR,
+        )
     try:
         client = Client(cluster, set_as_default=True)
         try:

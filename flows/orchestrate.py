@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from flows.work import compute_point, compute_spikes
+from pipeline.coding import MAX_AUTO_WINDOWS
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import load_recordings
@@ -66,13 +67,24 @@ def check_grid(grid: Grid) -> None:
     check_fits(grid, facts)
 
 
-def plan_sweep(grid_ref: str, root: str | None) -> SweepPlan:
-    """Load and check the grid, open (or create) the store, and find the cached points."""
+def open_root(grid_ref: str, root: str | None) -> SweepStore:
+    """The store at ``root`` (default ``runs/<grid name>``), created if need be."""
+    return SweepStore.open_or_create(root or default_root(load_grid(grid_ref)))
+
+
+def plan_sweep(grid_ref: str, root: str) -> SweepPlan:
+    """Load and check the grid, tidy the store, and find the cached points.
+
+    Call it holding the root's lock (:meth:`storage.SweepStore.lock`): no other sweep writes to
+    the root then, so every partial entry is a leftover of a killed run and is removed. A
+    cached result that fails its checksum is discarded (with a warning) and planned again.
+    """
     grid = load_grid(grid_ref)
     check_grid(grid)
-    store = SweepStore.open_or_create(root or default_root(grid))
+    store = SweepStore.open(root)
+    store.clean_partials()
     scenes = grid.unique_points()
-    cached = frozenset(k for k in scenes if store.has(EntryKind.RESULTS, k))
+    cached = frozenset(k for k in scenes if store.read_valid(EntryKind.RESULTS, k) is not None)
     return SweepPlan(grid, str(store.root), scenes, cached)
 
 
@@ -83,17 +95,32 @@ def compute_missing(plan: SweepPlan, client: Any, *, show_progress: bool) -> int
     store = SweepStore.open(plan.root)
     spike_futures: dict[str, Any] = {}
     point_futures = []
-    for key in plan.missing:
+    # Largest points first, so that no long point starts last while the other workers idle.
+    for key in sorted(plan.missing, key=lambda k: -training_cost(plan.scenes[k])):
         scene = plan.scenes[key]
         data = scene.to_dict()
+        priority = training_cost(scene)
         spikes_key = cache_key(scene, "spikes")
         if spikes_key not in spike_futures and not store.has(EntryKind.SPIKES, spikes_key):
             spike_futures[spikes_key] = client.submit(
-                compute_spikes, plan.root, data, key=f"spikes-{spikes_key}", pure=False
+                compute_spikes,
+                plan.root,
+                data,
+                key=f"spikes-{spikes_key}",
+                pure=False,
+                priority=priority + 1,
             )
         after = [spike_futures[spikes_key]] if spikes_key in spike_futures else []
         point_futures.append(
-            client.submit(compute_point, plan.root, data, *after, key=f"point-{key}", pure=False)
+            client.submit(
+                compute_point,
+                plan.root,
+                data,
+                *after,
+                key=f"point-{key}",
+                pure=False,
+                priority=priority,
+            )
         )
     failures = []
     with tqdm(
@@ -116,6 +143,17 @@ def compute_missing(plan: SweepPlan, client: Any, *, show_progress: bool) -> int
             f"{plan.root}): {shown}"
         )
     return len(point_futures)
+
+
+def training_cost(scene: Scene) -> int:
+    """A point's relative cost: the size of its frames (taxels x windows) per model trained.
+
+    Training dominates a point, and its cost grows with the frame size; ``auto`` windows count
+    as the most they can be. Only the order of points depends on it, never a result.
+    """
+    n_windows = scene.coding.n_windows
+    windows = MAX_AUTO_WINDOWS if n_windows == "auto" else n_windows
+    return scene.array.n_taxels * windows * len(scene.training.models)
 
 
 def _completed(client: Any, futures: list[Any]) -> Iterator[Any]:

@@ -7,6 +7,8 @@ did would each start their own temporary Prefect server on one SQLite file).
 
 from __future__ import annotations
 
+import atexit
+import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -14,13 +16,42 @@ from typing import Any
 from prefect import flow, task
 from prefect.cache_policies import NO_CACHE
 
+from flows import watchdog
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
-from flows.orchestrate import SweepPlan, assemble_cubes, compute_missing, plan_sweep
+from flows.orchestrate import SweepPlan, assemble_cubes, compute_missing, open_root, plan_sweep
+
+
+def guard_temporary_server() -> None:
+    """Start Prefect's temporary server (when no server is configured) under a watchdog.
+
+    Prefect starts that server as a plain subprocess and stops it at interpreter exit; a sweep
+    killed by SIGKILL would leave it running, holding the root's Prefect database. Starting it
+    here first (Prefect's client then reuses it) gives its PID to :mod:`flows.watchdog`, which
+    stops it as soon as this process is gone. On a normal exit Prefect stops it first, after
+    flushing its logs and events; the watchdog then finds it gone.
+    """
+    from prefect.settings import PREFECT_API_URL
+
+    if PREFECT_API_URL.value():
+        return
+    from prefect.server.api.server import SubprocessASGIServer
+
+    guards: list[subprocess.Popen] = []
+    atexit.register(_release, guards)  # atexit runs last-in first-out: after Prefect's stop
+    server = SubprocessASGIServer()
+    server.start()
+    guards.append(watchdog.start(server.server_process.pid, "prefect.server.api.server:create_app"))
+
+
+def _release(guards: list[subprocess.Popen]) -> None:
+    for guard in guards:
+        guard.stdin.close()  # end of file: the watchdog stops the server if it still runs
+        guard.wait()
 
 
 @task(name="plan", cache_policy=NO_CACHE)
-def plan_task(grid: str, root: str | None) -> SweepPlan:
+def plan_task(grid: str, root: str) -> SweepPlan:
     return plan_sweep(grid, root)
 
 
@@ -50,9 +81,13 @@ def sweep(
     existing Dask scheduler instead of a local cluster of ``workers`` processes.
     """
     start = time.perf_counter()
-    plan = plan_task(grid, root)
-    computed = compute_task(plan, workers, address, show_progress) if plan.missing else 0
-    cubes = assemble_task(plan)
+    store = open_root(grid, root)
+    # One sweep per root: a second one is refused here (the command line takes the lock before
+    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
+    with store.lock():
+        plan = plan_task(grid, str(store.root))
+        computed = compute_task(plan, workers, address, show_progress) if plan.missing else 0
+        cubes = assemble_task(plan)
     return {
         "root": plan.root,
         "cubes": cubes,

@@ -6,18 +6,19 @@ stage cache keys, so two points that share a spike train (a window sweep at one 
 it, and a worker that dies mid-task leaves nothing a later run trusts.
 
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
-oversubscribing two cores made training 37x slower.
+oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
+the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
 """
 
 from __future__ import annotations
 
 import functools
 import json
-import warnings
 from typing import TYPE_CHECKING, Any
 
+from flows.environment import tune_allocator
 from pipeline.scene import Scene, cache_key
-from storage import CorruptEntryError, EntryKind, RateEntry, ResultEntry, SpikeEntry, SweepStore
+from storage import EntryKind, RateEntry, ResultEntry, SpikeEntry, SweepStore
 
 if TYPE_CHECKING:
     from pipeline.frontend import FrontEnd
@@ -77,18 +78,19 @@ def compute_point(root: str, scene_data: dict[str, Any], *after: Any) -> str:
     from pipeline.simulate import Stopwatch, classify, rate_frames
 
     torch.set_num_threads(1)
+    tune_allocator()
     scene = Scene.from_dict(scene_data)
     store = SweepStore.open(root)
     result_key = cache_key(scene, "results")
     if store.has(EntryKind.RESULTS, result_key):
         return result_key
     spikes_key = cache_key(scene, "spikes")
-    spikes = _read(store, EntryKind.SPIKES, spikes_key)
+    spikes = store.read_valid(EntryKind.SPIKES, spikes_key)
     if spikes is None:
         compute_spikes(root, scene_data)
         spikes = store.read_spikes(spikes_key)
     rates_key = cache_key(scene, "rates")
-    rates = _read(store, EntryKind.RATES, rates_key)
+    rates = store.read_valid(EntryKind.RATES, rates_key)
     if rates is None:
         recordings, _, _ = _recordings(scene)
         watch = Stopwatch(None)
@@ -109,20 +111,3 @@ def compute_point(root: str, scene_data: dict[str, Any], *after: Any) -> str:
         ),
     )
     return result_key
-
-
-def _read(store: SweepStore, kind: EntryKind, key: str) -> Any:
-    """The entry, or None when absent; a corrupt entry is discarded (with a warning) and None."""
-    if not store.has(kind, key):
-        return None
-    reader = {
-        EntryKind.SPIKES: store.read_spikes,
-        EntryKind.RATES: store.read_rates,
-        EntryKind.RESULTS: store.read_result,
-    }[kind]
-    try:
-        return reader(key)
-    except CorruptEntryError as exc:
-        warnings.warn(f"{exc}; recomputing it", RuntimeWarning, stacklevel=2)
-        store.discard(kind, key)
-        return None

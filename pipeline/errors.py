@@ -30,7 +30,9 @@ class SceneError(EskinError):
         self.source = source
         n = len(self.problems)
         head = f"invalid {kind} {source}" + (f" ({n} problems)" if n > 1 else "")
-        super().__init__(f"{head}: " + "; ".join(self.problems))
+        text = f"{head}: " + "; ".join(self.problems)
+        # Keys and values come from user files and may hold line breaks; the message is one line.
+        super().__init__(text.replace("\r", "\\r").replace("\n", "\\n"))
 
 
 class DatasetError(EskinError):

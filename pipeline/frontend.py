@@ -9,7 +9,9 @@ recordings and textures survive. Over all samples ``x`` of all recordings of the
     v      = gain * (x - offset)                      (V)
 
 so 99.9 % of the samples fall within ``+-full_scale_v / 2`` and the rest beyond it. The mean is
-sample-weighted: a longer recording counts more. Clipping at the rails is *not* done here; it is
+sample-weighted: a longer recording counts more. The fit streams over the recordings (the
+percentile is selected exactly, bit for bit as ``np.percentile`` of the concatenation), so its
+memory is that of one recording, not of the dataset. Clipping at the rails is *not* done here; it is
 the ``saturation`` readout effect.
 
 Degenerate datasets, never a division by zero or a NaN:
@@ -30,10 +32,13 @@ import numpy as np
 from pipeline.errors import DatasetError
 from pipeline.recordings import Recordings
 
-__all__ = ["PERCENTILE", "FrontEnd", "fit_front_end"]
+__all__ = ["PERCENTILE", "FrontEnd", "fit_front_end", "streaming_percentile"]
 
 #: Percentile of the absolute deviation that maps to half the full scale.
 PERCENTILE = 99.9
+
+#: Histogram bins that narrow the percentile down before the exact selection.
+_SELECTION_BINS = 4096
 
 
 @dataclass(frozen=True)
@@ -100,15 +105,17 @@ def fit_front_end(recordings: Recordings, full_scale_v: float) -> FrontEnd:
     full_scale_v = float(full_scale_v)
     if not (math.isfinite(full_scale_v) and full_scale_v > 0):
         raise ValueError(f"full_scale_v must be a finite number > 0, got {full_scale_v!r}")
-    samples = np.concatenate(recordings.signals)
-    low, high = float(samples.min()), float(samples.max())
+    signals = [np.asarray(signal, dtype=np.float64) for signal in recordings.signals]
+    low = min(float(signal.min()) for signal in signals)
+    high = max(float(signal.max()) for signal in signals)
     if low == high:
         return FrontEnd(offset=low, gain_v_per_unit=1.0)
-    offset = float(samples.mean())
-    deviation = np.abs(samples - offset)
-    reference = float(np.percentile(deviation, PERCENTILE))
+    n_samples = sum(signal.size for signal in signals)
+    offset = math.fsum(float(signal.sum()) for signal in signals) / n_samples
+    largest = max(float(np.abs(signal - offset).max()) for signal in signals)
+    reference = streaming_percentile(signals, offset, PERCENTILE, largest)
     if reference == 0.0:
-        reference = float(deviation.max())
+        reference = largest
     gain = (full_scale_v / 2.0) / reference
     if not math.isfinite(gain):
         raise DatasetError(
@@ -116,3 +123,57 @@ def fit_front_end(recordings: Recordings, full_scale_v: float) -> FrontEnd:
             f"{recordings.units} are too small to scale to {full_scale_v} V"
         )
     return FrontEnd(offset=offset, gain_v_per_unit=gain)
+
+
+def streaming_percentile(
+    signals: list[np.ndarray], offset: float, percentile: float, largest: float
+) -> float:
+    """``np.percentile(|concatenate(signals) - offset|, percentile)``, bit for bit, without
+    concatenating: memory stays that of one recording however large the dataset.
+
+    One pass histograms the deviations on ``[0, largest]`` to find the bins holding the two
+    order statistics that numpy's linear interpolation needs; a second pass gathers just the
+    deviations in those bins and selects them exactly.
+
+    Parameters
+    ----------
+    signals
+        1-D float64 arrays (recording units), at least one sample in all.
+    offset
+        Subtracted before taking the absolute value (recording units).
+    percentile
+        In ``[0, 100]``.
+    largest
+        ``max |signal - offset|`` over all signals, finite.
+    """
+    n = sum(signal.size for signal in signals)
+    # numpy's "linear" method: virtual index (n - 1) * q, neighbours floor() and floor() + 1.
+    position = (n - 1) * np.true_divide(percentile, 100)
+    below = int(np.floor(position))
+    ranks = (below, min(below + 1, n - 1))
+    if largest == 0.0:
+        return 0.0
+    edges = np.linspace(0.0, largest, _SELECTION_BINS + 1)  # as np.histogram makes them
+    counts = np.zeros(_SELECTION_BINS, dtype=np.int64)
+    for signal in signals:
+        counts += np.histogram(np.abs(signal - offset), bins=_SELECTION_BINS, range=(0.0, largest))[
+            0
+        ]
+    cumulative = np.cumsum(counts)
+    first, last = (int(np.searchsorted(cumulative, rank, side="right")) for rank in ranks)
+    lower, upper = edges[first], edges[last + 1]
+    gathered = []
+    for signal in signals:
+        deviation = np.abs(signal - offset)
+        inside = (deviation >= lower) & (
+            (deviation <= upper) if last == _SELECTION_BINS - 1 else (deviation < upper)
+        )
+        gathered.append(deviation[inside])
+    candidates = np.sort(np.concatenate(gathered))
+    skipped = int(cumulative[first - 1]) if first > 0 else 0
+    a, b = candidates[ranks[0] - skipped], candidates[ranks[1] - skipped]
+    gamma = position - below
+    # numpy's _lerp, so the result is the same float
+    difference = b - a
+    value = b - difference * (1 - gamma) if gamma >= 0.5 else a + difference * gamma
+    return float(value)

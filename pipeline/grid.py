@@ -25,6 +25,11 @@ TOML layout::
     "readout.effects.amplifier_noise.sigma_v" = [0.0, 0.01]
     "readout.effects.comparator_noise.sigma_v" = [0.0, 0.01]
 
+A relative ``dataset.path`` in the base scene (a file or a ``[base]`` table) is taken from the
+folder of the file that names it. Grid and sweep names are letters, digits, ``_`` and ``-``
+only: they become folder names (``runs/<grid>``, ``cubes/<sweep>``) and so cannot leave the
+run root.
+
 A cube dimension is named after the last part of its field (``threshold_v``); where two axes of a
 sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).
 
@@ -50,7 +55,7 @@ from typing import Any
 
 from pipeline.coding import whole_windows
 from pipeline.errors import SceneError
-from pipeline.scene import EFFECT_TYPES, Effect, Scene, cache_key
+from pipeline.scene import EFFECT_TYPES, Effect, Scene, cache_key, with_dataset_path_from
 from pipeline.taxels import cut_samples, taxel_delays_s
 
 NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
@@ -201,6 +206,8 @@ def load_grid(name_or_path: str | Path) -> Grid:
         raise SceneError(
             [f"cannot read file: {exc.strerror} (built-in grids: {known})"], str(path), "grid"
         ) from None
+    except UnicodeDecodeError as exc:
+        raise SceneError([f"not UTF-8 text (byte {exc.start})"], str(path), "grid") from None
     try:
         data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as exc:
@@ -287,7 +294,7 @@ def _read_grid(data: Any, source: str, base_dir: Path, problems: list[str]) -> G
 def _read_base(value: Any, base_dir: Path, problems: list[str]) -> Scene:
     try:
         if isinstance(value, Mapping):
-            return Scene.from_dict(value, source="base")
+            return Scene.from_dict(with_dataset_path_from(value, base_dir), source="base")
         if isinstance(value, str):
             path = base_dir / value
             return Scene.from_toml(path) if path.suffix == ".toml" else Scene.load(value)

@@ -27,6 +27,13 @@ folds 20 ms, :func:`torch.func.vmap` over ``conv2d`` 27 ms (vmap cannot use ``ch
 NCHW max-pooling alone costs 4.8 ms per call on this CPU). Summing the folds' losses gives every
 fold exactly its own gradient.
 
+Measured at one thread on the paper's frames (issue 6): one training step of ten folds costs
+about 6 ms, of which the two convolutions (oneDNN, forward and backward) take about 55 % and
+max-pooling, ReLU and the zero-filled pooling gradients most of the rest; the FLOP rate of the
+second convolution is already close to the CPU's. Tried and dropped, being no faster: an
+im2col + ``bmm`` convolution (3x slower), per-fold convolutions in a loop, the second ReLU after
+the flatten, :func:`torch.compile` (20 s to compile one shape, then 2x slower per step).
+
 Initialization is PyTorch's default for ``Linear``/``Conv2d`` (``kaiming_uniform_(a=sqrt(5))``
 for weights, which is ``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``, and the same bound for biases),
 drawn per fold from that fold's own :class:`torch.Generator`: fold ``f`` gets the same initial
@@ -194,9 +201,14 @@ class FoldCNN(_FoldModel):
         """
         self._check(x)
         n_folds, batch, c, h, w = x.shape
-        # Fold F into channels: (B, F*C, H, W); group f of every conv sees fold f only.
-        z = x.transpose(0, 1).reshape(batch, n_folds * c, h, w)
-        z = z.contiguous(memory_format=torch.channels_last)
+        # Fold F into channels: (B, F*C, H, W); group f of every conv sees fold f only. Copied
+        # into a tensor allocated channels_last, which has channel stride 1 even when F*C == 1
+        # (``.contiguous(memory_format=channels_last)`` leaves such a tensor in NCHW strides, the
+        # convolutions then take the NCHW path and max-pooling is ~10x slower).
+        z = torch.empty(
+            (batch, n_folds * c, h, w), dtype=x.dtype, memory_format=torch.channels_last
+        )
+        z.copy_(x.transpose(0, 1).reshape(batch, n_folds * c, h, w))
         z = F.conv2d(
             z,
             self.conv1_w.reshape(-1, c, 3, 3),

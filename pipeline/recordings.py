@@ -50,6 +50,7 @@ from pipeline.errors import DatasetError
 from pipeline.scene import Axis, DatasetKind, DatasetSpec
 
 __all__ = [
+    "MAX_ABS_SAMPLE",
     "MAX_LISTED",
     "VIBTAC12_PADDING",
     "VIBTAC12_ROWS",
@@ -62,6 +63,10 @@ __all__ = [
 
 #: At most this many problems are spelled out in one error message.
 MAX_LISTED = 10
+#: Largest accepted sample magnitude. No sensor's reading is this large in any unit; such values
+#: come from corrupt or misread files, and their squares (signal power, noise budgets) overflow
+#: float64.
+MAX_ABS_SAMPLE = 1e100
 #: Leading start-up samples of every VibTac-12 row, dropped.
 VIBTAC12_PADDING = 3
 #: Rows (textures) of a VibTac-12 file.
@@ -212,6 +217,25 @@ def _signal_problem(
     return None
 
 
+def _check_magnitudes(recordings: Recordings) -> Recordings:
+    """``recordings`` unchanged, or a DatasetError naming every recording beyond MAX_ABS_SAMPLE.
+
+    The readers themselves load any finite value exactly; this guards the simulation.
+    """
+    problems = []
+    for name, signal in zip(recordings.names, recordings.signals, strict=True):
+        huge = np.abs(signal) > MAX_ABS_SAMPLE
+        if huge.any():
+            first = int(np.argmax(huge))
+            problems.append(
+                f"{name}: absurd magnitude {signal[first]!r} at sample {first} (more than "
+                f"{MAX_ABS_SAMPLE:g} in any unit: a corrupt or misread file)"
+            )
+    if problems:
+        raise DatasetError(_message(f"dataset {recordings.name}", problems))
+    return recordings
+
+
 def _message(head: str, problems: Sequence[str]) -> str:
     """One line: ``head: p1; p2; ...; and N more`` (newlines in names escaped)."""
     n = len(problems)
@@ -251,7 +275,9 @@ def load_recordings(spec: DatasetSpec) -> Recordings:
     Raises
     ------
     DatasetError
-        The dataset is missing or unusable (one line naming what and where).
+        The dataset is missing or unusable (one line naming what and where), or a sample's
+        magnitude exceeds :data:`MAX_ABS_SAMPLE` (the readers load any finite value; the
+        simulation refuses absurd ones).
     """
     kind = DatasetKind(spec.kind)
     if kind is DatasetKind.SYNTHETIC:
@@ -266,13 +292,15 @@ def load_recordings(spec: DatasetSpec) -> Recordings:
     if not spec.path:
         raise DatasetError(f"dataset of kind {kind.value!r} needs a path (dataset.path)")
     if kind is DatasetKind.VIBTAC12:
-        return load_vibtac12(
-            spec.path,
-            sampling_rate_hz=spec.sampling_rate_hz or VIBTAC12_DEFAULT_RATE_HZ,
-            axis=spec.axis,
-            segments=spec.segments,
+        return _check_magnitudes(
+            load_vibtac12(
+                spec.path,
+                sampling_rate_hz=spec.sampling_rate_hz or VIBTAC12_DEFAULT_RATE_HZ,
+                axis=spec.axis,
+                segments=spec.segments,
+            )
         )
-    recordings = load_folder(spec.path)
+    recordings = _check_magnitudes(load_folder(spec.path))
     if spec.sampling_rate_hz is not None and spec.sampling_rate_hz != recordings.fs_hz:
         raise DatasetError(
             f"folder dataset {spec.path}: dataset.sampling_rate_hz = {spec.sampling_rate_hz} Hz "

@@ -265,12 +265,14 @@ class Scene:
             text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise SceneError([f"cannot read file: {exc.strerror}"], str(path)) from None
+        except UnicodeDecodeError as exc:
+            raise SceneError([f"not UTF-8 text (byte {exc.start})"], str(path)) from None
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise SceneError([f"not valid TOML: {exc}"], str(path)) from None
         data.setdefault("name", path.stem)
-        return cls.from_dict(data, source=str(path))
+        return cls.from_dict(with_dataset_path_from(data, path.parent), source=str(path))
 
     @classmethod
     def builtin(cls, name: str) -> Scene:
@@ -339,6 +341,24 @@ def cache_key(scene: Scene, stage: Stage) -> str:
     """SHA-256 (hex, 32 chars) of the canonical form of exactly the fields ``stage`` uses."""
     text = f"{stage}:" + scene.canonical(stage_fields(scene, stage))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:
+    """``data`` with a relative ``dataset.path`` made absolute against ``folder``.
+
+    A scene file's dataset path means the same folder whatever directory the command runs in:
+    a relative path is taken from the folder of the file that names it (``~`` is expanded).
+    Anything but a string path is left for validation to report.
+    """
+    dataset = data.get("dataset")
+    if not isinstance(dataset, Mapping) or not isinstance(dataset.get("path"), str):
+        return data
+    if not dataset["path"]:
+        return data
+    path = Path(dataset["path"]).expanduser()
+    if not path.is_absolute():
+        path = Path(folder).absolute() / path
+    return {**data, "dataset": {**dataset, "path": str(path)}}
 
 
 def builtin_scene_names() -> tuple[str, ...]:

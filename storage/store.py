@@ -2,7 +2,8 @@
 
 On-disk layout (every node is a Zarr v3 group or array, written and read through xarray)::
 
-    <root>/                          the run root; may also hold our own .prefect/, logs/, ...
+    <root>/                          the run root; may also hold our own .state/, ...
+      store.lock                     the sweep lock (see :meth:`SweepStore.lock`)
       store.zarr/                    group, attrs {"eskin_sweep_store": 1}
         spikes/<key>/                one SpikeEntry  (key: 32 hex chars, pipeline.scene.cache_key)
         rates/<key>/                 one RateEntry
@@ -49,7 +50,15 @@ Why this design
   and discards its copy (equal keys mean equal content). Nothing is fsynced (thousands of small
   files), so this protects against killed processes, not power loss; a torn entry after a power
   loss fails its checksum on reading instead (:class:`CorruptEntryError`) and can be discarded and
-  recomputed.
+  recomputed. A directory left at an entry's final name without its ``zarr.json`` (a writer
+  killed while the partial copy was being removed under it) is junk: the next writer of that
+  key replaces it.
+* **One sweep per root.** :meth:`SweepStore.lock` takes an exclusive ``fcntl.flock`` on
+  ``<root>/store.lock`` for a sweep's whole life. The kernel drops the lock when its process
+  ends, however it ends (SIGKILL included), so a killed sweep never blocks the next one, and
+  the next one may then remove every partial entry (:meth:`SweepStore.clean_partials`): no
+  other writer of that root can be running. ``flock`` is advisory and, on network file
+  systems, only as good as the file system's support for it.
 * **Exact round trips.** Entries are written with ``write_empty_chunks=True`` (otherwise a chunk
   equal to the fill value, e.g. all ``-0.0`` or a NaN with another payload, would not be written
   and would read back as the canonical fill value) and read with ``decode_cf=False`` (no masking
@@ -64,16 +73,20 @@ import ctypes
 import dataclasses
 import enum
 import errno
+import fcntl
 import hashlib
 import json
 import math
 import os
 import re
 import shutil
+import socket
 import tempfile
+import threading
 import time
 import uuid
-from collections.abc import Callable, Mapping
+import warnings
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -92,12 +105,14 @@ __all__ = [
     "RateEntry",
     "ResultEntry",
     "SpikeEntry",
+    "StoreBusyError",
     "StoreError",
     "SweepStore",
     "open_results",
 ]
 
 STORE_NAME = "store.zarr"
+LOCK_NAME = "store.lock"
 MARKER = "eskin_sweep_store"
 VERSION = 1
 CUBES = "cubes"
@@ -132,6 +147,10 @@ class StoreError(EskinError):
 
 class CorruptEntryError(StoreError):
     """An entry's data fails its checksum or cannot be read; discard and recompute it."""
+
+
+class StoreBusyError(StoreError):
+    """Another sweep holds the run root's lock."""
 
 
 class EntryKind(enum.StrEnum):
@@ -311,7 +330,65 @@ class SweepStore:
                 zarr.open_group(zarr.storage.LocalStore(self.path / name), mode="a", zarr_format=3)
 
     # -----------------------------------------------------------------------------------------
+    # The sweep lock
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold the root's exclusive sweep lock for the ``with`` block; refuse if taken.
+
+        The lock is ``fcntl.flock(LOCK_EX | LOCK_NB)`` on ``<root>/store.lock``, which then holds
+        the holder's PID and host (for the message a refused sweep prints). The kernel releases
+        it when the holding process ends, even by SIGKILL. Taking it again in the process that
+        holds it (the command line, then the flow it runs) nests: only the outermost release
+        unlocks. File descriptors are not inherited by child processes (Python opens them
+        non-inheritable), so a Dask worker or server left behind never keeps a root locked.
+
+        Raises
+        ------
+        StoreBusyError
+            Another process holds the lock; the message names the root and the holder's PID.
+        """
+        path = self.root / LOCK_NAME
+        name = str(path.resolve())
+        with _LOCKS_GUARD:
+            held = _LOCKS.get(name)
+            if held is not None:
+                held[1] += 1
+            else:
+                _LOCKS[name] = [_acquire(path, self.root), 1]
+        try:
+            yield
+        finally:
+            with _LOCKS_GUARD:
+                held = _LOCKS[name]
+                held[1] -= 1
+                if held[1] == 0:
+                    del _LOCKS[name]
+                    os.close(held[0])  # closing the last descriptor releases the flock
+
+    # -----------------------------------------------------------------------------------------
     # Entries
+
+    def read_valid(self, kind: EntryKind | str, key: str) -> Any:
+        """The entry ``kind/key``, or None if absent or corrupt (then discarded, with a warning).
+
+        A corrupt entry (checksum mismatch, truncated or unreadable chunk) emits one
+        ``RuntimeWarning`` naming it and is removed, so that the caller recomputes it.
+        """
+        kind = EntryKind(kind)
+        if not self.has(kind, key):
+            return None
+        reader = {
+            EntryKind.SPIKES: self.read_spikes,
+            EntryKind.RATES: self.read_rates,
+            EntryKind.RESULTS: self.read_result,
+        }[kind]
+        try:
+            return reader(key)
+        except CorruptEntryError as exc:
+            warnings.warn(f"{exc}; recomputing it", RuntimeWarning, stacklevel=2)
+            self.discard(kind, key)
+            return None
 
     def has(self, kind: EntryKind | str, key: str) -> bool:
         """True only if a complete entry ``kind/key`` exists (partial copies are invisible)."""
@@ -622,12 +699,16 @@ class SweepStore:
         partial = path.parent / f"{PARTIAL_PREFIX}{path.name}-{uuid.uuid4().hex}"
         try:
             ds.to_zarr(str(partial), mode="w-", **_TO_ZARR)
-            try:
-                os.rename(partial, path)
-            except OSError as error:
-                # Another worker finished the same key first; keep its (equal) entry.
-                if error.errno not in (errno.EEXIST, errno.ENOTEMPTY) or not path.is_dir():
-                    raise
+            for _ in range(2):
+                try:
+                    os.rename(partial, path)
+                    break
+                except OSError as error:
+                    if error.errno not in (errno.EEXIST, errno.ENOTEMPTY) or not path.is_dir():
+                        raise
+                    if (path / "zarr.json").is_file():
+                        break  # another worker finished the same key first; keep its equal entry
+                    self.discard(kind, path.name)  # junk without metadata: replace it
         finally:
             shutil.rmtree(partial, ignore_errors=True)
 
@@ -672,6 +753,39 @@ def open_results(root: str | Path) -> dict[str, xr.Dataset]:
     """
     store = SweepStore.open(root)
     return {name: store.read_cube(name) for name in store.cube_names()}
+
+
+# ---------------------------------------------------------------------------------------------
+# Locking
+
+# Locks this process holds: resolved lock path -> [file descriptor, nesting depth].
+_LOCKS: dict[str, list[int]] = {}
+_LOCKS_GUARD = threading.Lock()
+
+
+def _acquire(path: Path, root: Path) -> int:
+    """Open ``path`` and take its exclusive flock without waiting; return the descriptor."""
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as error:
+        raise StoreError(f"cannot open the lock of run root {root}: {_one_line(error)}") from error
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as error:
+        os.close(fd)
+        if error.errno not in (errno.EAGAIN, errno.EACCES):
+            raise StoreError(f"cannot lock run root {root}: {_one_line(error)}") from error
+        try:
+            holder = path.read_text(encoding="utf-8").strip() or "unknown"
+        except (OSError, UnicodeDecodeError):
+            holder = "unknown"
+        raise StoreBusyError(
+            f"run root {root} is in use by another sweep (PID {holder[:80]}); wait for it to "
+            "finish or give another --root"
+        ) from None
+    os.ftruncate(fd, 0)
+    os.write(fd, f"{os.getpid()} on {socket.gethostname()}\n".encode())
+    return fd
 
 
 # ---------------------------------------------------------------------------------------------

@@ -7,6 +7,10 @@ import sys
 import time
 from pathlib import Path
 
+import xarray as xr
+
+from storage import open_results
+
 BIN = Path(sys.executable).parent
 
 
@@ -64,3 +68,12 @@ def wait_for(predicate, timeout: float, what: str, interval: float = 0.5) -> Non
             return
         time.sleep(interval)
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def assert_same_cubes(root_a: Path, root_b: Path) -> None:
+    """The cubes of two roots are identical but for the measured wall times (``seconds``)."""
+    a, b = open_results(root_a), open_results(root_b)
+    assert a and set(a) == set(b)
+    for name in a:
+        # Everything but the measured seconds is a function of the grid and its seeds.
+        xr.testing.assert_identical(a[name].drop_vars("seconds"), b[name].drop_vars("seconds"))

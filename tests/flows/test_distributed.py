@@ -5,18 +5,15 @@ import json
 import subprocess
 import urllib.request
 
-import xarray as xr
-
-from storage import open_results
-from tests.flows.helpers import BIN, eskin, free_port, hermetic_env, stop, wait_for
-
-
-def assert_same_cubes(root_a, root_b):
-    a, b = open_results(root_a), open_results(root_b)
-    assert set(a) == set(b)
-    for name in a:
-        # Everything but the measured seconds is a function of the grid and its seeds.
-        xr.testing.assert_identical(a[name].drop_vars("seconds"), b[name].drop_vars("seconds"))
+from tests.flows.helpers import (
+    BIN,
+    assert_same_cubes,
+    eskin,
+    free_port,
+    hermetic_env,
+    stop,
+    wait_for,
+)
 
 
 def test_existing_scheduler_and_workers_give_identical_cubes(smoke_sweep, tmp_path):

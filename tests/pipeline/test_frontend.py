@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.frontend import FrontEnd, fit_front_end
+from pipeline.frontend import FrontEnd, fit_front_end, streaming_percentile
 from pipeline.recordings import Recordings
 
 
@@ -113,3 +113,25 @@ def test_scaling_the_raw_data_leaves_the_volts_unchanged(seed, scale, shift):
         np.testing.assert_allclose(
             scaled.apply(scale * x), reference.apply(x), rtol=1e-9, atol=1e-9 * 0.5
         )
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    lengths=st.lists(st.integers(1, 400), min_size=1, max_size=5),
+    scale=st.sampled_from([1e-6, 1.0, 1e9]),
+    rounded=st.booleans(),
+    percentile=st.sampled_from([0.0, 12.5, 50.0, 99.9, 100.0]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_streaming_percentile_equals_numpy_on_the_concatenation(
+    lengths, scale, rounded, percentile, seed
+):
+    rng = np.random.default_rng(seed)
+    signals = [rng.standard_normal(n) * scale for n in lengths]
+    if rounded:  # many ties
+        signals = [np.round(s / scale) for s in signals]
+    samples = np.concatenate(signals)
+    offset = float(samples.mean())
+    deviation = np.abs(samples - offset)
+    expected = np.percentile(deviation, percentile)
+    assert streaming_percentile(signals, offset, percentile, float(deviation.max())) == expected

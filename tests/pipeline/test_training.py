@@ -3,7 +3,11 @@ equal to fold-by-fold training, learning, degenerate inputs and errors."""
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -134,6 +138,26 @@ def test_fold_adam_skipped_fold_is_untouched_and_others_unaffected():
     assert torch.equal(both[0][1], alone[0][0])
 
 
+def test_fold_adam_moves_parameters_into_its_buffer_and_steps_them_in_place():
+    net = build_model(
+        Model.CNN, (1, 3, 8), 4, 4, 3, [fold_generator(0, f, "init") for f in range(3)]
+    )
+    params = list(net.parameters())
+    before = [p.detach().clone() for p in params]
+    optimizer = FoldAdam(params, lr=0.01)
+    assert all(p is q for p, q in zip(params, net.parameters(), strict=True))
+    for p, b in zip(params, before, strict=True):
+        assert torch.equal(p, b)  # same values and shape, now a view of the buffer
+    x = torch.randn(3, 2, 1, 3, 8, generator=torch.Generator().manual_seed(0))
+    grads = torch.autograd.grad(net(x).square().sum(), params)
+    optimizer.step(grads, [True, False, True])
+    for p, b in zip(params, before, strict=True):
+        assert torch.equal(p[1], b[1])  # the skipped fold
+        assert not torch.equal(p[0], b[0]) and not torch.equal(p[2], b[2])
+        # Adam's first step moves every element with a non-zero gradient by lr.
+        torch.testing.assert_close((p - b)[0].abs().max(), torch.tensor(0.01), rtol=1e-4, atol=0)
+
+
 # --------------------------------------------------------------------------------------------
 # cross-validation
 
@@ -198,6 +222,45 @@ def test_same_seed_same_result_other_seed_other_result():
     np.testing.assert_array_equal(a.train_loss, b.train_loss)
     c = cross_validate(frames, labels, Model.FFNN, TrainingSpec(**{**vars(spec), "seed": 12}))
     assert not np.array_equal(a.train_loss, c.train_loss)
+
+
+CROSS_PROCESS = """
+import json, sys, torch
+torch.set_num_threads(1)
+sys.path.insert(0, {tests!r})
+from test_training import separable
+from pipeline.scene import Model, TrainingSpec
+from pipeline.training import cross_validate
+frames, labels = separable(extra=1, contrast=0.7)
+spec = TrainingSpec(epochs=4, batch_size=8, folds=5, hidden_units=8, seed=5)
+out = {{}}
+for model in Model:
+    cv = cross_validate(frames, labels, model, spec)
+    out[model.value] = [cv.fold_accuracy.tolist(), cv.train_loss.tolist()]
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture
+def one_thread():
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+def test_same_seed_bit_identical_in_another_process(one_thread):
+    """One torch thread, as the workers run: another process gives the very same floats."""
+    code = CROSS_PROCESS.format(tests=str(Path(__file__).parent))
+    other = subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True
+    ).stdout
+    frames, labels = separable(extra=1, contrast=0.7)
+    spec = TrainingSpec(epochs=4, batch_size=8, folds=5, hidden_units=8, seed=5)
+    for model, (accuracy, loss) in json.loads(other).items():
+        cv = cross_validate(frames, labels, Model(model), spec)
+        assert cv.fold_accuracy.tolist() == accuracy  # JSON round-trips float64 exactly
+        assert cv.train_loss.tolist() == loss
 
 
 @pytest.mark.parametrize("model", list(Model))

@@ -5,6 +5,8 @@ import json
 import os
 import pickle
 import shutil
+import subprocess
+import sys
 import tempfile
 import threading
 import uuid
@@ -29,6 +31,7 @@ from storage import (
     RateEntry,
     ResultEntry,
     SpikeEntry,
+    StoreBusyError,
     StoreError,
     SweepStore,
     open_results,
@@ -668,3 +671,68 @@ def test_inconsistent_values_are_refused_before_writing(store, spike_entry):
         store.write_result(KEY, ResultEntry({"ffnn": [0.5], "cnn": [0.5, 1.0]}, {}, metrics()))
     for kind in EntryKind:
         assert os.listdir(store.path / kind.value) == ["zarr.json"]
+
+
+# ---------------------------------------------------------------------------------------------
+# The sweep lock and leftovers of killed writers
+
+HOLD_LOCK = """
+import sys, time
+from storage import SweepStore
+with SweepStore.open(sys.argv[1]).lock():
+    print("locked", flush=True)
+    time.sleep(600)
+"""
+
+
+def hold_lock_in_child(root: Path) -> subprocess.Popen:
+    child = subprocess.Popen(
+        [sys.executable, "-c", HOLD_LOCK, str(root)], stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout.readline().strip() == "locked"
+    return child
+
+
+def test_lock_refuses_a_second_process_naming_root_and_pid(store):
+    child = hold_lock_in_child(store.root)
+    try:
+        with pytest.raises(StoreBusyError) as info, store.lock():
+            pass
+        message = str(info.value)
+        assert f"run root {store.root} is in use by another sweep (PID {child.pid} on" in message
+        assert "\n" not in message
+    finally:
+        child.kill()
+        child.wait()
+    with store.lock():  # the kernel released the killed holder's lock
+        pass
+
+
+def test_lock_nests_within_one_process_and_is_released_by_the_outermost(store):
+    with store.lock(), SweepStore.open(store.root).lock():
+        pass
+    child = hold_lock_in_child(store.root)  # free again
+    child.kill()
+    child.wait()
+
+
+def test_read_valid_discards_a_corrupt_entry_with_a_warning(store, spike_entry):
+    assert store.read_valid(EntryKind.SPIKES, KEY) is None
+    store.write_spikes(KEY, spike_entry)
+    assert store.read_valid(EntryKind.SPIKES, KEY) is not None
+    path = chunk(store, KEY, "true_times_s")
+    path.write_bytes(path.read_bytes()[:3])
+    with pytest.warns(RuntimeWarning, match=f"corrupt spikes entry {KEY}.*recomputing"):
+        assert store.read_valid(EntryKind.SPIKES, KEY) is None
+    assert not (store.path / "spikes" / KEY).exists()
+
+
+def test_junk_left_at_an_entry_name_is_replaced(store, spike_entry):
+    # A writer killed while its partial copy was removed under it can leave a folder without
+    # metadata at the final name: invisible, and replaced by the next write of that key.
+    junk = store.path / "spikes" / KEY / "true_times_s" / "c"
+    junk.mkdir(parents=True)
+    (junk / "0").write_bytes(b"junk")
+    assert not store.has(EntryKind.SPIKES, KEY)
+    store.write_spikes(KEY, spike_entry)
+    assert_trains_identical(store.read_spikes(KEY).encoded.true, spike_entry.encoded.true)

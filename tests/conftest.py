@@ -1,4 +1,4 @@
-"""Fixtures shared by the end-to-end tests."""
+"""Fixtures shared by the end-to-end suites (tests/flows, tests/reliability)."""
 
 import json
 

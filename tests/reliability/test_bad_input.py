@@ -1,0 +1,383 @@
+"""A catalogue of bad input: scenes, grids, datasets, arguments and roots.
+
+Every case runs ``eskin sweep`` (in process, and a few as a real subprocess) and must give a
+non-zero exit, exactly one line on stderr naming the culprit (a file, a field, an argument),
+nothing on stdout, and nothing written under the root (a root that did not exist is not
+created).
+"""
+
+import os
+import stat
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+import zarr
+
+import storage.store as store_module
+from flows.cli import main
+from tests.flows.helpers import eskin, hermetic_env
+
+# -- building blocks ----------------------------------------------------------------------------
+
+SCENE = """\
+name = "bad"
+[dataset]
+{dataset}
+[array]
+rows = 2
+cols = 2
+[readout]
+threshold_v = 0.09
+{readout}
+[coding]
+window_s = 0.1
+{coding}
+[training]
+epochs = 2
+folds = 2
+{training}
+"""
+SYNTHETIC = 'kind = "synthetic"\nrecordings_per_class = 2\nduration_s = 1.0'
+
+
+def write(path: Path, content: str | bytes) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    return path
+
+
+def scene_file(tmp: Path, *, dataset=SYNTHETIC, readout="", coding="", training="") -> Path:
+    text = SCENE.format(dataset=dataset, readout=readout, coding=coding, training=training)
+    return write(tmp / "scene.toml", text)
+
+
+def grid_file(tmp: Path, base: str, sweeps: str | None = None, head: str = "") -> Path:
+    sweeps = sweeps or '[sweeps.t]\naxes = { "readout.threshold_v" = [0.05, 0.09] }\n'
+    return write(tmp / "grid.toml", f'{head}base = "{base}"\n{sweeps}')
+
+
+def dataset(tmp: Path, *, toml="sampling_rate_hz = 200.0\n", files=None) -> Path:
+    """A folder dataset of two classes x two good recordings, plus ``files`` (name -> content)."""
+    root = tmp / "data"
+    rng = np.random.default_rng(0)
+    if toml is not None:
+        write(root / "dataset.toml", toml)
+    for label in ("rough", "smooth"):
+        for i in range(2):
+            values = rng.normal(size=300)
+            write(root / label / f"r{i}.csv", "\n".join(f"{v:.6f}" for v in values) + "\n")
+    for name, content in (files or {}).items():
+        if isinstance(content, np.ndarray):
+            (root / name).parent.mkdir(parents=True, exist_ok=True)
+            np.save(root / name, content)
+        else:
+            write(root / name, content)
+    return root
+
+
+def dataset_grid(tmp: Path, **kwargs) -> list[str]:
+    data = dataset(tmp, **kwargs)
+    scene = scene_file(tmp, dataset=f'kind = "folder"\npath = "{data}"')
+    return ["--grid", str(grid_file(tmp, scene.name))]
+
+
+def scene_grid(tmp: Path, **kwargs) -> list[str]:
+    scene = scene_file(tmp, **kwargs)
+    return ["--grid", str(grid_file(tmp, scene.name))]
+
+
+def sweeps_grid(tmp: Path, sweeps: str, head: str = "") -> list[str]:
+    return ["--grid", str(grid_file(tmp, "smoke", sweeps, head))]
+
+
+CSV_LINES = "\n".join(["0.1", "0.2", "0.3"] * 50) + "\n"
+
+# Each case: (id, build(tmp) -> argv after "sweep", expected text naming the culprit).
+Case = tuple[str, Callable[[Path], list[str]], str]
+CASES: list[Case] = [
+    # scenes (as the base of a grid)
+    ("scene-unknown-key", lambda t: scene_grid(t, readout="treshold = 1"), "readout.treshold"),
+    (
+        "scene-negative-full-scale",
+        lambda t: scene_grid(t, readout="full_scale_v = -1.0"),
+        "readout.full_scale_v",
+    ),
+    (
+        "scene-threshold-above-full-scale",
+        lambda t: scene_grid(t, readout="full_scale_v = 0.05"),
+        "readout.threshold_v",
+    ),
+    (
+        "scene-unknown-effect",
+        lambda t: scene_grid(t, readout="effects.warp = {}"),
+        "readout.effects.warp",
+    ),
+    (
+        "scene-absurd-window-count",
+        lambda t: scene_grid(t, coding="n_windows = 1e300"),
+        "coding.n_windows",
+    ),
+    ("scene-no-models", lambda t: scene_grid(t, training="models = []"), "training.models"),
+    (
+        "scene-folder-without-path",
+        lambda t: scene_grid(t, dataset='kind = "folder"'),
+        "dataset.path",
+    ),
+    ("scene-missing-file", lambda t: ["--grid", str(grid_file(t, "nowhere.toml"))], "nowhere.toml"),
+    (
+        "scene-binary-junk",
+        lambda t: (
+            write(t / "junk.toml", b"\x00\xff\xfe junk"),
+            ["--grid", str(grid_file(t, "junk.toml"))],
+        )[1],
+        "junk.toml",
+    ),
+    # grids
+    (
+        "grid-unknown-field",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "array.rowz" = [1] }\n'),
+        "array.rowz",
+    ),
+    (
+        "grid-empty-axis",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "coding.window_s" = [] }\n'),
+        "sweeps.a.axes.coding.window_s",
+    ),
+    (
+        "grid-duplicate-values",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "array.rows" = [2, 2] }\n'),
+        "duplicate",
+    ),
+    (
+        "grid-zip-unequal",
+        lambda t: sweeps_grid(
+            t, '[sweeps.a]\nmode = "zip"\naxes = { "array.rows" = [1, 2], "array.cols" = [1] }\n'
+        ),
+        "sweeps.a.axes",
+    ),
+    (
+        "grid-window-too-long",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "coding.window_s" = [0.1, 60.0] }\n'),
+        "sweeps.a[1]",
+    ),
+    (
+        "grid-sweep-name-escapes",
+        lambda t: sweeps_grid(t, '[sweeps."../evil"]\naxes = { "array.rows" = [1] }\n'),
+        "sweeps.../evil",
+    ),
+    ("grid-name-escapes", lambda t: sweeps_grid(t, "", head='name = "../../etc"\n'), "name"),
+    (
+        "grid-not-toml",
+        lambda t: ["--grid", str(write(t / "g.toml", "base = [unclosed\n"))],
+        "g.toml",
+    ),
+    (
+        "grid-binary-junk",
+        lambda t: ["--grid", str(write(t / "g.toml", os.urandom(64) + b"\xff"))],
+        "g.toml",
+    ),
+    ("grid-unknown-name", lambda t: ["--grid", "papper"], "papper"),
+    (
+        "grid-no-sweeps",
+        lambda t: ["--grid", str(write(t / "g.toml", 'base = "smoke"\n'))],
+        "sweeps",
+    ),
+    # folder datasets
+    (
+        "dataset-nan",
+        lambda t: dataset_grid(t, files={"rough/bad.csv": "0.1\nnan\n0.3\n"}),
+        "rough/bad.csv",
+    ),
+    (
+        "dataset-inf-npy",
+        lambda t: dataset_grid(t, files={"smooth/bad.npy": np.array([0.0, np.inf, 1.0])}),
+        "smooth/bad.npy",
+    ),
+    (
+        "dataset-empty-file",
+        lambda t: dataset_grid(t, files={"rough/empty.csv": ""}),
+        "rough/empty.csv",
+    ),
+    (
+        "dataset-two-columns",
+        lambda t: dataset_grid(t, files={"rough/wide.csv": "1,2\n3,4\n"}),
+        "rough/wide.csv",
+    ),
+    (
+        "dataset-binary-junk",
+        lambda t: dataset_grid(t, files={"rough/junk.csv": b"\x89PNG\r\n\x1a\n\x00\x00"}),
+        "rough/junk.csv",
+    ),
+    (
+        "dataset-pickled-npy",
+        lambda t: dataset_grid(t, files={"rough/obj.npy": np.array([{"a": 1}], dtype=object)}),
+        "rough/obj.npy",
+    ),
+    (
+        "dataset-absurd-magnitude",
+        lambda t: dataset_grid(t, files={"rough/huge.csv": "1e300\n-1e300\n" * 100}),
+        "rough/huge.csv",
+    ),
+    (
+        "dataset-no-sampling-rate",
+        lambda t: dataset_grid(t, toml='name = "x"\n'),
+        "sampling_rate_hz",
+    ),
+    (
+        "dataset-wrong-sampling-rate",
+        lambda t: dataset_grid(t, toml="sampling_rate_hz = -200\n"),
+        "sampling_rate_hz",
+    ),
+    (
+        "dataset-text-sampling-rate",
+        lambda t: dataset_grid(t, toml='sampling_rate_hz = "fast"\n'),
+        "sampling_rate_hz",
+    ),
+    ("dataset-missing-toml", lambda t: dataset_grid(t, toml=None), "dataset.toml"),
+    (
+        "dataset-missing-folder",
+        lambda t: scene_grid(t, dataset=f'kind = "folder"\npath = "{t / "gone"}"'),
+        "gone",
+    ),
+    # command-line arguments
+    ("args-zero-workers", lambda t: ["--grid", "smoke", "--workers", "0"], "--workers"),
+    ("args-text-workers", lambda t: ["--grid", "smoke", "--workers", "two"], "--workers"),
+    (
+        "args-malformed-address",
+        lambda t: ["--grid", "smoke", "--address", "localhost"],
+        "--address",
+    ),
+    (
+        "args-workers-and-address",
+        lambda t: ["--grid", "smoke", "--workers", "3", "--address", "tcp://127.0.0.1:1"],
+        "--address",
+    ),
+    ("args-no-grid", lambda t: [], "--grid"),
+    ("args-unknown-option", lambda t: ["--grid", "smoke", "--frobnicate"], "--frobnicate"),
+]
+
+
+def tree(path: Path):
+    """Everything at and below ``path`` (names, sizes, modes), or None if it does not exist."""
+    if not path.exists() and not path.is_symlink():
+        return None
+    if path.is_file():
+        return ("file", path.read_bytes())
+    return sorted(
+        (str(p.relative_to(path)), p.stat().st_size if p.is_file() else -1, p.stat().st_mode)
+        for p in path.rglob("*")
+    )
+
+
+def run_cli(argv: list[str]) -> int:
+    try:
+        return main(argv)
+    except SystemExit as exc:  # argparse exits on bad arguments
+        return exc.code
+
+
+def assert_refused(capsys, argv: list[str], root: Path, expected: str) -> str:
+    before = tree(root)
+    code = run_cli(["sweep", *argv, "--root", str(root)])
+    out, err = capsys.readouterr()
+    assert code not in (0, None), f"accepted: {argv}"
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
+    assert expected in lines[0], lines[0]
+    assert tree(root) == before, "something was written under the root"
+    return lines[0]
+
+
+def test_the_catalogue_is_large():
+    assert len(CASES) + len(ROOT_CASES) >= 25
+    assert len({case[0] for case in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize(("build", "expected"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_bad_input_is_refused(capsys, tmp_path, build, expected):
+    argv = build(tmp_path / "inputs")
+    assert_refused(capsys, argv, tmp_path / "root", expected)
+
+
+# -- roots ---------------------------------------------------------------------------------------
+
+
+def file_root(tmp: Path) -> Path:
+    return write(tmp / "notes.txt", "mine")
+
+
+def under_a_file(tmp: Path) -> Path:
+    return write(tmp / "notes.txt", "mine") / "run"
+
+
+def read_only(tmp: Path) -> Path:
+    root = tmp / "ro"
+    root.mkdir()
+    root.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    return root
+
+
+def foreign_zarr(tmp: Path) -> Path:
+    zarr.open_group(str(tmp / "foreign" / "store.zarr"), mode="w", zarr_format=3)
+    return tmp / "foreign"
+
+
+def foreign_zarr_v2(tmp: Path) -> Path:
+    zarr.open_group(str(tmp / "old" / "store.zarr"), mode="w", zarr_format=2)
+    return tmp / "old"
+
+
+def not_empty(tmp: Path) -> Path:
+    return write(tmp / "thesis" / "chapter1.tex", "precious").parent
+
+
+ROOT_CASES = [
+    ("root-is-a-file", file_root, "is a file"),
+    ("root-under-a-file", under_a_file, "cannot create run root"),
+    ("root-read-only", read_only, "not writable"),
+    ("root-foreign-zarr", foreign_zarr, "foreign store"),
+    ("root-foreign-zarr-v2", foreign_zarr_v2, "not a sweep store"),
+    ("root-not-empty", not_empty, "not empty"),
+]
+
+
+@pytest.mark.parametrize(
+    ("make", "expected"), [c[1:] for c in ROOT_CASES], ids=[c[0] for c in ROOT_CASES]
+)
+def test_bad_roots_are_refused(capsys, tmp_path, monkeypatch, make, expected):
+    root = make(tmp_path)
+    if make is read_only and os.geteuid() == 0:
+        # root ignores mode bits; make the store's write probe fail as it would for a user.
+        def denied(*args, **kwargs):
+            raise PermissionError(13, "Permission denied")
+
+        monkeypatch.setattr(store_module.tempfile, "mkstemp", denied)
+    try:
+        line = assert_refused(capsys, ["--grid", "smoke"], root, expected)
+    finally:
+        if make is read_only:
+            root.chmod(stat.S_IRWXU)
+    assert str(root) in line
+
+
+# -- the real exit path ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("case_id"), ["dataset-nan", "args-text-workers", "grid-sweep-name-escapes"]
+)
+def test_bad_input_through_the_installed_command(tmp_path, case_id):
+    build, expected = next(c[1:] for c in CASES if c[0] == case_id)
+    argv = build(tmp_path / "inputs")
+    root = tmp_path / "root"
+    proc = eskin("sweep", *argv, "--root", str(root), env=hermetic_env(tmp_path), timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: ") and expected in lines[0]
+    assert not root.exists()

@@ -1,0 +1,220 @@
+"""Killed workers, killed sweeps, concurrent sweeps and corrupted chunks, end to end.
+
+Each test runs the real command line on the smoke grid in a subprocess and compares its cubes
+with the uninterrupted session run (``smoke_sweep``): every variable but the measured wall times
+(``seconds``) must be identical, values and attributes (provenance included).
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import psutil
+import pytest
+
+from storage import SweepStore
+from tests.flows.helpers import assert_same_cubes, eskin, stop, wait_for
+
+pytestmark = pytest.mark.slow
+
+POINTS = 7  # distinct points of the smoke grid
+
+
+def results(root: Path) -> dict[str, int]:
+    """Complete result entries of a root, each with its metadata's mtime in ns."""
+    folder = root / "store.zarr" / "results"
+    if not folder.is_dir():
+        return {}
+    found = {}
+    for entry in folder.iterdir():
+        try:
+            found[entry.name] = (entry / "zarr.json").stat().st_mtime_ns
+        except (FileNotFoundError, NotADirectoryError):  # the group's own zarr.json, a partial
+            continue
+    return {k: v for k, v in found.items() if not k.startswith(".")}
+
+
+def start_sweep(root: Path, env: dict[str, str], *extra: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "flows.cli",
+            "sweep",
+            "--grid",
+            "smoke",
+            "--root",
+            str(root),
+            *extra,
+            "--json",
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+        text=True,
+    )
+
+
+def dask_workers(pid: int) -> list[psutil.Process]:
+    """The local cluster's worker processes of the sweep ``pid`` (multiprocessing children)."""
+    found = []
+    for child in psutil.Process(pid).children(recursive=True):
+        try:
+            if "spawn_main" in " ".join(child.cmdline()):
+                found.append(child)
+        except psutil.NoSuchProcess:
+            continue
+    return found
+
+
+def children_after_first_point(sweep: subprocess.Popen, root: Path) -> list[psutil.Process]:
+    """Wait for the sweep's first finished point; return its processes then (all it started)."""
+    wait_for(lambda: results(root), 300, "the first finished point")
+    children = psutil.Process(sweep.pid).children(recursive=True)
+    assert len(dask_workers(sweep.pid)) == 2
+    assert any("uvicorn" in " ".join(p.cmdline()) for p in children)
+    return children
+
+
+def kill_by_pid(processes: list[psutil.Process]) -> None:
+    for process in processes:
+        try:
+            process.kill()
+        except psutil.NoSuchProcess:
+            continue
+    psutil.wait_procs(processes, timeout=20)
+
+
+def finish(process: subprocess.Popen, timeout: float = 600) -> dict:
+    out, err = process.communicate(timeout=timeout)
+    assert process.returncode == 0, err[-3000:]
+    return json.loads(out)
+
+
+def test_killed_worker_mid_sweep_gives_identical_cubes(smoke_sweep, tmp_path):
+    _, _, env = smoke_sweep
+    root = tmp_path / "run"
+    sweep = start_sweep(root, env)
+    try:
+        wait_for(lambda: results(root), 300, "the first finished point")
+        workers = dask_workers(sweep.pid)
+        assert len(workers) == 2
+        victim = workers[0]
+        victim.send_signal(signal.SIGKILL)  # both workers are busy: points are left for each
+        victim.wait(timeout=20)
+        summary = finish(sweep)
+    finally:
+        stop(sweep)
+    assert summary["points"] == POINTS and summary["computed"] == POINTS
+    assert_same_cubes(smoke_sweep[0], root)
+
+
+def test_killed_sweep_resumes_with_only_unfinished_points(smoke_sweep, tmp_path):
+    _, _, env = smoke_sweep
+    root = tmp_path / "run"
+    sweep = start_sweep(root, env)
+    left: list[psutil.Process] = []
+    try:
+        children = children_after_first_point(sweep, root)
+        os.kill(sweep.pid, signal.SIGKILL)
+        sweep.wait(timeout=20)
+        # Nothing outlives the killed sweep: Dask workers watch their parent (distributed does
+        # this), and flows.watchdog stops Prefect's temporary server.
+        _, left = psutil.wait_procs(children, timeout=30)
+        assert left == [], f"outlived the killed sweep: {left}"
+    finally:
+        stop(sweep)
+        kill_by_pid(left)
+    finished = results(root)
+    assert 1 <= len(finished) < POINTS, "the sweep was not killed mid-run"
+
+    summary = finish(start_sweep(root, env))
+    assert summary["cache_hits"] == len(finished)
+    assert summary["computed"] == POINTS - len(finished)
+    after = results(root)
+    assert len(after) == POINTS
+    assert {k: after[k] for k in finished} == finished, "a finished point was recomputed"
+    assert_same_cubes(smoke_sweep[0], root)
+    # Partial entries of the killed run are gone: the resumed sweep removed them.
+    assert not list((root / "store.zarr").glob("*/.partial-*"))
+
+
+def test_sigterm_stops_the_sweep_and_everything_it_started(smoke_sweep, tmp_path):
+    _, _, env = smoke_sweep
+    root = tmp_path / "run"
+    sweep = start_sweep(root, env)
+    children: list[psutil.Process] = []
+    try:
+        children = children_after_first_point(sweep, root)
+        sweep.send_signal(signal.SIGTERM)
+        _, err = sweep.communicate(timeout=120)
+        assert sweep.returncode == 130
+        assert "eskin: interrupted" in err.splitlines()
+        _, alive = psutil.wait_procs(children, timeout=30)
+        assert alive == [], f"left running after SIGTERM: {alive}"
+    finally:
+        stop(sweep)
+        kill_by_pid(children)
+
+
+def test_second_sweep_on_a_busy_root_is_refused(smoke_sweep, tmp_path):
+    _, _, env = smoke_sweep
+    root = tmp_path / "run"
+    first = start_sweep(root, env)
+    try:
+        wait_for(lambda: (root / "store.lock").exists(), 120, "the first sweep's lock")
+        wait_for(lambda: results(root), 300, "the first finished point")
+        before = sorted(p.relative_to(root) for p in root.rglob("*") if ".state" not in p.parts)
+        second = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
+        assert second.returncode == 2 and second.stdout == ""
+        lines = second.stderr.strip().splitlines()
+        assert len(lines) == 1, second.stderr
+        assert f"run root {root} is in use by another sweep (PID {first.pid} on" in lines[0]
+        after = sorted(p.relative_to(root) for p in root.rglob("*") if ".state" not in p.parts)
+        finished = [p for p in before if "results" in p.parts and ".partial" not in str(p)]
+        assert set(finished) <= set(after), "the refused sweep removed a finished entry"
+        summary = finish(first)
+    finally:
+        stop(first)
+    assert summary["computed"] == POINTS
+    assert_same_cubes(smoke_sweep[0], root)
+
+
+def first_file(folder: Path) -> Path:
+    return next(p for p in sorted(folder.rglob("*")) if p.is_file() and p.name != "zarr.json")
+
+
+def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep, tmp_path):
+    """Flip bytes in one point's cached result and truncate its spike train, then re-run."""
+    import shutil
+
+    from pipeline.grid import load_grid
+    from pipeline.scene import cache_key
+    from storage import EntryKind
+
+    _, _, env = smoke_sweep
+    root = tmp_path / "run"
+    shutil.copytree(smoke_sweep[0] / "store.zarr", root / "store.zarr")
+    store = SweepStore.open(root)
+    scene = next(iter(load_grid("smoke").unique_points().values()))
+    result_key, spikes_key = cache_key(scene, "results"), cache_key(scene, "spikes")
+    chunk = first_file(store.path / "results" / result_key / "accuracy")
+    data = bytearray(chunk.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    chunk.write_bytes(bytes(data))
+    train = first_file(store.path / "spikes" / spikes_key / "true_times_s")
+    train.write_bytes(train.read_bytes()[:3])
+
+    proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads(proc.stdout)
+    assert summary["cache_hits"] == POINTS - 1 and summary["computed"] == 1
+    assert f"corrupt results entry {result_key}" in proc.stderr
+    assert f"corrupt spikes entry {spikes_key}" in proc.stderr
+    assert proc.stderr.count("RuntimeWarning") >= 2
+    assert store.read_valid(EntryKind.SPIKES, spikes_key) is not None
+    assert_same_cubes(smoke_sweep[0], root)

@@ -1,0 +1,30 @@
+"""What a killed sweep leaves behind is cleaned or recomputed by the next one's plan."""
+
+import uuid
+
+import numpy as np
+import pytest
+
+from flows.orchestrate import plan_sweep
+from pipeline.grid import load_grid
+from pipeline.metrics import SpikeMetrics
+from storage import EntryKind, ResultEntry, SweepStore
+
+
+def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
+    store = SweepStore.open_or_create(tmp_path / "run")
+    keys = list(load_grid("smoke").unique_points())
+    metrics = SpikeMetrics(*([1.0] * 6))
+    for key in keys[:2]:
+        store.write_result(key, ResultEntry({"ffnn": np.array([0.5, 0.5])}, {"x": 1.0}, metrics))
+    partial = store.path / "spikes" / f".partial-{keys[3]}-{uuid.uuid4().hex}"
+    (partial / "true_times_s").mkdir(parents=True)
+    chunk = next(p for p in (store.path / "results" / keys[0] / "accuracy").rglob("*")
+                 if p.is_file() and p.name != "zarr.json")  # fmt: skip
+    chunk.write_bytes(chunk.read_bytes()[::-1])
+
+    with store.lock(), pytest.warns(RuntimeWarning, match=f"corrupt results entry {keys[0]}"):
+        plan = plan_sweep("smoke", str(store.root))
+    assert plan.cached == {keys[1]}
+    assert keys[0] in plan.missing and not store.has(EntryKind.RESULTS, keys[0])
+    assert not partial.exists()

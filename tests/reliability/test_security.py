@@ -1,0 +1,166 @@
+"""Security: nothing read from a dataset or a store is unpickled, servers listen on loopback,
+and names and paths from scene and grid files cannot leave their root."""
+
+import ast
+import os
+from pathlib import Path
+
+import psutil
+import pytest
+
+from flows.cluster import dask_client
+from flows.environment import hermetic_environment
+from flows.orchestrate import default_root
+from pipeline.errors import SceneError
+from pipeline.grid import Grid, load_grid
+from pipeline.scene import Scene
+from storage import SweepStore
+
+REPO = Path(__file__).resolve().parents[2]
+PACKAGES = ("pipeline", "storage", "flows", "benchmarks")
+UNSAFE_MODULES = {"pickle", "cPickle", "marshal", "shelve", "dill", "cloudpickle", "joblib"}
+# Calls that deserialize code or objects; np.load and read_array are fine with allow_pickle=False.
+UNSAFE_CALLS = {"torch.load", "pd.read_pickle", "pandas.read_pickle", "yaml.load", "eval", "exec"}
+NUMPY_LOADERS = {"np.load", "numpy.load", "np.lib.format.read_array", "read_array"}
+
+
+def sources() -> list[Path]:
+    files = [p for package in PACKAGES for p in (REPO / package).rglob("*.py")]
+    assert len(files) > 20
+    return files
+
+
+def dotted(node: ast.AST) -> str:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        return f"{dotted(node.value)}.{node.attr}"
+    return ""
+
+
+def unsafe_uses(tree: ast.AST) -> list[str]:
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            names = [a.name for a in node.names] + [getattr(node, "module", None) or ""]
+            found += [f"import {n}" for n in names if n.split(".")[0] in UNSAFE_MODULES]
+        elif isinstance(node, ast.Call):
+            name = dotted(node.func)
+            keywords = {k.arg: k.value for k in node.keywords}
+            if name in UNSAFE_CALLS:
+                found.append(f"call {name}")
+            pickle_kw = keywords.get("allow_pickle")
+            if pickle_kw is not None and not (
+                isinstance(pickle_kw, ast.Constant) and pickle_kw.value is False
+            ):
+                found.append(f"{name}(allow_pickle=...) not False")
+            if name in NUMPY_LOADERS and pickle_kw is None:
+                found.append(f"{name} without allow_pickle=False")
+    return found
+
+
+def test_the_scan_catches_what_it_looks_for():
+    bad = ast.parse(
+        "import pickle\nfrom dill import loads\nimport numpy as np\n"
+        "np.load('x.npy')\nnp.load('y', allow_pickle=True)\ntorch.load('m')\n"
+    )
+    assert len(unsafe_uses(bad)) == 5
+    assert unsafe_uses(ast.parse("np.load('x', allow_pickle=False)")) == []
+
+
+def test_no_code_path_unpickles_data():
+    found = {
+        str(path.relative_to(REPO)): uses
+        for path in sources()
+        if (uses := unsafe_uses(ast.parse(path.read_text(), str(path))))
+    }
+    assert found == {}
+
+
+def test_the_store_reads_only_zarr_v3_which_has_no_pickle_codec(tmp_path):
+    import zarr
+
+    from storage.store import _OPEN_ZARR
+
+    assert _OPEN_ZARR["zarr_format"] == 3
+    # A Zarr v2 store (whose object codecs may pickle) is not opened at all.
+    zarr.open_group(str(tmp_path / "old" / "store.zarr"), mode="w", zarr_format=2)
+    with pytest.raises(Exception, match="not a sweep store"):
+        SweepStore.open(tmp_path / "old")
+
+
+def listening(process: psutil.Process) -> list[str]:
+    addresses = []
+    for proc in [process, *process.children(recursive=True)]:
+        try:
+            for conn in proc.net_connections(kind="inet"):
+                if conn.status == psutil.CONN_LISTEN:
+                    addresses.append(conn.laddr.ip)
+        except psutil.NoSuchProcess:
+            continue
+    return addresses
+
+
+def test_the_local_cluster_and_its_dashboard_listen_on_loopback_only(tmp_path, monkeypatch):
+    monkeypatch.setenv("DASK_TEMPORARY_DIRECTORY", str(tmp_path))
+    with dask_client(workers=1) as client:
+        info = client.scheduler_info()
+        assert info["address"].startswith("tcp://127.0.0.1:")
+        assert all(w.startswith("tcp://127.0.0.1:") for w in info["workers"])
+        assert client.dashboard_link.startswith("http://127.0.0.1:")
+        addresses = listening(psutil.Process())
+    assert addresses and set(addresses) == {"127.0.0.1"}, addresses
+
+
+def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
+    # hermetic_environment writes os.environ: give it a copy without the user's Prefect settings.
+    environ = {k: v for k, v in os.environ.items() if not k.startswith("PREFECT_")}
+    monkeypatch.setattr(os, "environ", environ)
+    hermetic_environment(tmp_path)
+    assert os.environ["PREFECT_SERVER_API_HOST"] == "127.0.0.1"
+    from prefect.settings import get_current_settings
+
+    runner = get_current_settings().runner.server  # eskin serve's own web server, if enabled
+    assert not runner.enable and runner.host in ("localhost", "127.0.0.1")
+    readme = (REPO / "README.md").read_text()
+    starts = [line for line in readme.splitlines() if "prefect server start" in line]
+    assert starts and all("--host 127.0.0.1" in line for line in starts)
+
+
+@pytest.mark.parametrize("name", ["..", "../x", "a/b", "a\\b", ".", "/etc", "x" * 65, ""])
+def test_grid_and_sweep_names_cannot_leave_the_root(name):
+    with pytest.raises(SceneError, match="not a valid"):
+        Grid.from_dict({"name": name, "base": "smoke", "sweeps": {"a": {"axes": {"seed": [1]}}}})
+    with pytest.raises(SceneError, match="not a valid sweep name"):
+        Grid.from_dict({"base": "smoke", "sweeps": {name: {"axes": {"seed": [1]}}}})
+
+
+def test_the_default_root_is_inside_runs():
+    grid = load_grid("smoke")
+    root = default_root(grid)
+    assert root.parent == Path("runs") and root.name == "smoke"
+
+
+@pytest.mark.parametrize("key", ["../" + "0" * 29, "0" * 31 + "/", "..", "/tmp/x"])
+def test_store_names_cannot_leave_the_store(tmp_path, key):
+    store = SweepStore.open_or_create(tmp_path / "run")
+    with pytest.raises(ValueError, match="invalid"):
+        store.has("spikes", key)
+    with pytest.raises(ValueError, match="invalid cube name"):
+        store.read_cube(key)
+
+
+def test_relative_dataset_paths_are_taken_from_the_scene_files_folder(tmp_path, monkeypatch):
+    folder = tmp_path / "project"
+    folder.mkdir()
+    (folder / "scene.toml").write_text('[dataset]\nkind = "folder"\npath = "data"\n')
+    (folder / "grid.toml").write_text(
+        'base = { dataset = { kind = "folder", path = "../elsewhere" } }\n'
+        "[sweeps.a]\naxes = { seed = [1] }\n"
+    )
+    monkeypatch.chdir(tmp_path)  # not the files' folder
+    assert Scene.from_toml("project/scene.toml").dataset.path == str(folder / "data")
+    grid = load_grid("project/grid.toml")
+    assert grid.base.dataset.path == str(folder / "../elsewhere")
+    absolute = Scene.from_dict({"dataset": {"kind": "folder", "path": "/data/x"}})
+    assert absolute.dataset.path == "/data/x"
