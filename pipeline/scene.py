@@ -337,9 +337,17 @@ def stage_fields(scene: Scene, stage: Stage) -> tuple[str, ...]:
     }[stage]
 
 
+#: Revision of what the stages compute for a given scene. Bump it with any change that alters a
+#: stage's output for the same fields (a different random stream, a fixed bug, a new training
+#: step), so that stores made before the change are recomputed instead of mixed with new points.
+#: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
+MODEL_REVISION = 2
+
+
 def cache_key(scene: Scene, stage: Stage) -> str:
-    """SHA-256 (hex, 32 chars) of the canonical form of exactly the fields ``stage`` uses."""
-    text = f"{stage}:" + scene.canonical(stage_fields(scene, stage))
+    """SHA-256 (hex, 32 chars) of :data:`MODEL_REVISION` and the canonical form of exactly the
+    fields ``stage`` uses."""
+    text = f"r{MODEL_REVISION}:{stage}:" + scene.canonical(stage_fields(scene, stage))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 

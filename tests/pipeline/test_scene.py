@@ -4,6 +4,7 @@ import math
 
 import pytest
 
+from pipeline import scene as scene_module
 from pipeline.errors import SceneError
 from pipeline.scene import (
     AmplifierNoise,
@@ -157,3 +158,11 @@ def test_seed_enters_the_spike_key_only_with_random_effects():
     assert cache_key(saturating, "spikes") == cache_key(saturating.replace(seed=7), "spikes")
     noisy = ideal.replace(**{"readout.effects": {"amplifier_noise": {}}})
     assert cache_key(noisy, "spikes") != cache_key(noisy.replace(seed=7), "spikes")
+
+
+def test_a_new_model_revision_changes_every_key(monkeypatch):
+    scene = Scene.paper()
+    stages = ("recordings", "spikes", "rates", "results")
+    before = {stage: cache_key(scene, stage) for stage in stages}
+    monkeypatch.setattr(scene_module, "MODEL_REVISION", scene_module.MODEL_REVISION + 1)
+    assert all(cache_key(scene, stage) != before[stage] for stage in stages)
