@@ -95,11 +95,12 @@ def compute_missing(plan: SweepPlan, client: Any, *, show_progress: bool) -> int
     store = SweepStore.open(plan.root)
     spike_futures: dict[str, Any] = {}
     point_futures = []
+    priorities = {key: training_cost(plan.scenes[key]) for key in plan.missing}
     # Largest points first, so that no long point starts last while the other workers idle.
-    for key in sorted(plan.missing, key=lambda k: -training_cost(plan.scenes[k])):
+    for key in sorted(priorities, key=priorities.__getitem__, reverse=True):
         scene = plan.scenes[key]
         data = scene.to_dict()
-        priority = training_cost(scene)
+        priority = priorities[key]
         spikes_key = cache_key(scene, "spikes")
         if spikes_key not in spike_futures and not store.has(EntryKind.SPIKES, spikes_key):
             spike_futures[spikes_key] = client.submit(

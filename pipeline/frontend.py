@@ -112,10 +112,9 @@ def fit_front_end(recordings: Recordings, full_scale_v: float) -> FrontEnd:
         return FrontEnd(offset=low, gain_v_per_unit=1.0)
     n_samples = sum(signal.size for signal in signals)
     offset = math.fsum(float(signal.sum()) for signal in signals) / n_samples
-    largest = max(float(np.abs(signal - offset).max()) for signal in signals)
-    reference = streaming_percentile(signals, offset, PERCENTILE, largest)
+    reference = streaming_percentile(signals, offset, PERCENTILE)
     if reference == 0.0:
-        reference = largest
+        reference = _largest_deviation(signals, offset)
     gain = (full_scale_v / 2.0) / reference
     if not math.isfinite(gain):
         raise DatasetError(
@@ -125,15 +124,17 @@ def fit_front_end(recordings: Recordings, full_scale_v: float) -> FrontEnd:
     return FrontEnd(offset=offset, gain_v_per_unit=gain)
 
 
-def streaming_percentile(
-    signals: list[np.ndarray], offset: float, percentile: float, largest: float
-) -> float:
+def _largest_deviation(signals: list[np.ndarray], offset: float) -> float:
+    return max(float(np.abs(signal - offset).max()) for signal in signals)
+
+
+def streaming_percentile(signals: list[np.ndarray], offset: float, percentile: float) -> float:
     """``np.percentile(|concatenate(signals) - offset|, percentile)``, bit for bit, without
     concatenating: memory stays that of one recording however large the dataset.
 
-    One pass histograms the deviations on ``[0, largest]`` to find the bins holding the two
-    order statistics that numpy's linear interpolation needs; a second pass gathers just the
-    deviations in those bins and selects them exactly.
+    One pass finds the largest deviation, a second histograms the deviations up to it to find
+    the bins holding the two order statistics that numpy's linear interpolation needs, and a
+    third gathers just the deviations in those bins and selects them exactly.
 
     Parameters
     ----------
@@ -143,14 +144,13 @@ def streaming_percentile(
         Subtracted before taking the absolute value (recording units).
     percentile
         In ``[0, 100]``.
-    largest
-        ``max |signal - offset|`` over all signals, finite.
     """
     n = sum(signal.size for signal in signals)
     # numpy's "linear" method: virtual index (n - 1) * q, neighbours floor() and floor() + 1.
     position = (n - 1) * np.true_divide(percentile, 100)
     below = int(np.floor(position))
     ranks = (below, min(below + 1, n - 1))
+    largest = _largest_deviation(signals, offset)
     if largest == 0.0:
         return 0.0
     edges = np.linspace(0.0, largest, _SELECTION_BINS + 1)  # as np.histogram makes them

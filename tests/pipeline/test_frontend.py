@@ -134,4 +134,4 @@ def test_streaming_percentile_equals_numpy_on_the_concatenation(
     offset = float(samples.mean())
     deviation = np.abs(samples - offset)
     expected = np.percentile(deviation, percentile)
-    assert streaming_percentile(signals, offset, percentile, float(deviation.max())) == expected
+    assert streaming_percentile(signals, offset, percentile) == expected
