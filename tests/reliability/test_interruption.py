@@ -71,11 +71,13 @@ def dask_workers(pid: int) -> list[psutil.Process]:
     return found
 
 
-def children_after_first_point(sweep: subprocess.Popen, root: Path) -> list[psutil.Process]:
+def children_after_first_point(
+    sweep: subprocess.Popen, root: Path, workers: int = 2, interval: float = 0.5
+) -> list[psutil.Process]:
     """Wait for the sweep's first finished point; return its processes then (all it started)."""
-    wait_for(lambda: results(root), 300, "the first finished point")
+    wait_for(lambda: results(root), 300, "the first finished point", interval=interval)
     children = psutil.Process(sweep.pid).children(recursive=True)
-    assert len(dask_workers(sweep.pid)) == 2
+    assert len(dask_workers(sweep.pid)) == workers
     assert any("uvicorn" in " ".join(p.cmdline()) for p in children)
     return children
 
@@ -116,10 +118,12 @@ def test_killed_worker_mid_sweep_gives_identical_cubes(smoke_sweep, tmp_path):
 def test_killed_sweep_resumes_with_only_unfinished_points(smoke_sweep, tmp_path):
     _, _, env = smoke_sweep
     root = tmp_path / "run"
-    sweep = start_sweep(root, env)
+    # One worker and a fast poll: once numba's cache is warm a smoke point takes about 0.1 s,
+    # and two workers polled every 0.5 s could finish all 7 before the kill.
+    sweep = start_sweep(root, env, "--workers", "1")
     left: list[psutil.Process] = []
     try:
-        children = children_after_first_point(sweep, root)
+        children = children_after_first_point(sweep, root, workers=1, interval=0.01)
         os.kill(sweep.pid, signal.SIGKILL)
         sweep.wait(timeout=20)
         # Nothing outlives the killed sweep: Dask workers watch their parent (distributed does
