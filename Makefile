@@ -3,29 +3,34 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test bench lint clean
+.PHONY: run test bench lint lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-# Stamps re-install when pyproject.toml changes. The editable install puts the project folder on
-# sys.path ("compat" mode): Dask workers put their scratch folder, which holds a "storage" spill
-# folder, first on sys.path, and only a real path entry outranks that namespace folder.
-INSTALL := $(BIN)/python -m pip install --quiet --config-settings editable_mode=compat -e
+# Stamps re-install when pyproject.toml or the lock changes. Dependencies come from the lock (the
+# tested versions, run and test alike), so the project itself goes in without resolving them again.
+# The editable install puts the project folder on sys.path ("compat" mode): Dask workers put their
+# scratch folder, which holds a "storage" spill folder, first on sys.path, and only a real path
+# entry outranks that namespace folder.
+LOCK := requirements.lock
+PIP := $(BIN)/python -m pip install --quiet
+INSTALL := $(PIP) -r $(LOCK) && $(PIP) --no-deps --config-settings editable_mode=compat -e .
 
-$(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(INSTALL) .
+$(VENV)/.installed: pyproject.toml $(LOCK) | $(BIN)/python
+	$(INSTALL)
 	touch $@
 
-$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(INSTALL) '.[test]'
+$(VENV)/.installed-test: pyproject.toml $(LOCK) | $(BIN)/python
+	$(INSTALL)
 	touch $@ $(VENV)/.installed
 
-# Ends with the report of the paper sweep; `eskin report` prints its path.
+# Sweeps the paper grid and ends with its report, whose path it prints. The local Prefect server
+# it starts keeps the run's history for the UI and stops by itself after 30 idle minutes
+# (`.venv/bin/eskin server stop` stops it now).
 run: $(VENV)/.installed
-	$(BIN)/eskin sweep --grid paper --root runs/paper
-	$(BIN)/eskin report --root runs/paper
+	$(BIN)/eskin sweep --grid paper --root runs/paper --report
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q
@@ -36,6 +41,18 @@ bench: $(VENV)/.installed-test
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+
+# Refreshes requirements.lock: pyproject.toml resolved in a throwaway venv; refuses a CUDA torch.
+lock:
+	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
+	$(PYTHON) -m venv "$$tmp/venv"; \
+	"$$tmp/venv/bin/python" -m pip install --quiet --upgrade pip; \
+	"$$tmp/venv/bin/python" -m pip install --quiet '.[test]'; \
+	{ grep '^#' $(LOCK) || true; "$$tmp/venv/bin/python" -m pip freeze --exclude eskin-sweep \
+		--exclude pip --exclude setuptools --exclude wheel; } > "$$tmp/lock"; \
+	if grep -qi '^nvidia-' "$$tmp/lock" || ! grep -q '^torch==.*+cpu$$' "$$tmp/lock"; then \
+		echo "make lock: torch resolved to a CUDA build; give pip the CPU wheel" >&2; exit 1; fi; \
+	mv "$$tmp/lock" $(LOCK)
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache .hypothesis

@@ -1,61 +1,202 @@
-"""The paper grid on the built-in data: cold vs warm, 2 workers vs 1, overhead, worker memory.
+"""The fixed cost of a sweep: cold and warm runs of a grid, local server vs temporary server.
 
-Each sweep runs as the user runs it (``eskin sweep`` in a subprocess, its own temporary Prefect
-server included). Overhead is the part of a cold run's wall time not spent in the stages
-themselves: ``wall - (sum of stage seconds) / workers`` (idle workers count as overhead).
-Peak memory is the largest resident set of any Dask worker process, sampled every 0.2 s.
+Each sweep runs as the user runs it, in a subprocess: ``eskin sweep --json`` on a long-lived
+local Prefect server that this suite starts once (``eskin server start``, its state in a
+temporary folder) and stops at the end. Side by side runs the path Prefect takes when no server
+is configured: the flow called with no ``PREFECT_API_URL``, so Prefect starts a temporary server
+inside the run (and fails the run when that server does not answer within 20 s).
+
+Rows: a cold run of the grid on 2 workers and on 1 (both on the local server); the fixed
+overhead of the cold 2-worker run, ``wall - (sum of stage seconds) / workers`` (idle workers
+count as overhead); warm re-runs of the cold root (nothing to compute), the two paths
+interleaved after one uncounted round, medians quoted; the peak resident set of any Dask worker
+process, sampled every 0.2 s.
+
+``python -m benchmarks.sweep [--grid smoke]`` runs this suite alone and prints its rows;
+``ESKIN_BENCH_SWEEP_GRID=smoke`` picks the grid within ``python -m benchmarks`` too. The
+``paper`` grid's two cold runs take several minutes on 2 cores; the ``smoke`` grid's, seconds.
 """
 
 from __future__ import annotations
 
+import argparse
+import contextlib
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import psutil
 
+from flows.server import IDLE_ENV, MARKER, SERVER_DIR_ENV
+from flows.server import stop as stop_server
 from storage import EntryKind, SweepStore
 
-GRID = "paper"
+GRID_ENV = "ESKIN_BENCH_SWEEP_GRID"
+DEFAULT_GRID = "paper"
+WORKERS = 2
+REPEAT = 3
+COLD_TARGET_S = 300.0
+OVERHEAD_TARGET_S = 5.0
+WARM_TARGET_S = 3.0
+SPEEDUP_TARGET = 1.7
+MEMORY_TARGET = 1.5 * 2**30
+#: A safety net should this process die without its ``finally``; sweeps hold leases meanwhile.
+SERVER_IDLE_S = 600
+STOP_GRACE_S = 30.0
+SAMPLE_S = 0.2
+REPO = Path(__file__).resolve().parents[1]
+
+#: The flow called directly, as before the local server: Prefect starts its temporary server.
+TEMPORARY_SERVER_SWEEP = (
+    "import json, sys\n"
+    "from flows.sweep import sweep\n"
+    "summary = sweep(grid=sys.argv[1], root=sys.argv[2], workers=int(sys.argv[3]))\n"
+    "print(json.dumps(summary, default=str))\n"
+)
 
 
-def run_sweep(root: Path, workers: int, grid: str = GRID) -> dict:
-    """Run one sweep; return its summary, wall seconds and peak worker RSS (bytes)."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("PREFECT_")}
-    command = [
-        sys.executable,
-        "-m",
-        "flows.cli",
-        "sweep",
-        "--grid",
-        grid,
-        "--root",
-        str(root),
-        "--workers",
-        str(workers),
-        "--json",
-    ]
-    start = time.perf_counter()
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env)
+@dataclass(frozen=True)
+class Run:
+    """One finished subprocess: wall seconds, exit status, output, peak Dask worker RSS (bytes)."""
+
+    wall_s: float
+    status: int
+    stdout: str
+    stderr: str
+    peak_worker_rss: int
+
+    def failure(self) -> str:
+        lines = [line for line in self.stderr.splitlines() if line.strip()]
+        return f"exit status {self.status}: {lines[-1] if lines else 'no output'}"
+
+    def summary(self) -> dict:
+        """The JSON object the sweep printed last on stdout (it opens a line with ``{``)."""
+        start = self.stdout.rfind("\n{") + 1
+        return json.loads(self.stdout[start:])
+
+
+def run_command(command: list[str], env: dict[str, str], *, reap: bool = True) -> Run:
+    """Run ``command`` from the repository; sample its Dask workers' memory while it runs.
+
+    Every descendant seen is stopped by PID once the command ends (``reap``), or when this
+    process is interrupted, except the local Prefect server, which :func:`run` stops.
+    """
+    seen: dict[int, psutil.Process] = {}
     peak = 0
-    parent = psutil.Process(process.pid)
-    while process.poll() is None:
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        start = time.perf_counter()
+        process = subprocess.Popen(
+            command, cwd=REPO, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=err
+        )
         try:
-            for child in parent.children(recursive=True):
-                if "spawn_main" in " ".join(child.cmdline()):
-                    peak = max(peak, child.memory_info().rss)
-        except psutil.Error:
-            pass
-        time.sleep(0.2)
-    wall = time.perf_counter() - start
-    out = process.stdout.read()
-    if process.returncode != 0:
-        raise RuntimeError(f"eskin sweep failed ({process.returncode})")
-    return {"summary": json.loads(out), "wall_s": wall, "peak_worker_rss": peak}
+            parent = psutil.Process(process.pid)
+            while True:
+                try:
+                    process.wait(timeout=SAMPLE_S)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                with contextlib.suppress(psutil.Error):
+                    for child in parent.children(recursive=True):
+                        seen.setdefault(child.pid, child)
+                        if "spawn_main" in " ".join(child.cmdline()):
+                            peak = max(peak, child.memory_info().rss)
+            wall = time.perf_counter() - start
+        finally:
+            if process.poll() is None:
+                process.terminate()  # a sweep unwinds on SIGTERM and stops its Dask cluster
+                try:
+                    process.wait(timeout=STOP_GRACE_S)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait()
+                reap = True
+            if reap:
+                _stop_leftovers(list(seen.values()))
+        out.seek(0)
+        err.seek(0)
+        return Run(wall, process.returncode, out.read().decode(), err.read().decode(), peak)
+
+
+def _stop_leftovers(processes: list[psutil.Process]) -> None:
+    """SIGTERM, then SIGKILL, the processes still running (psutil skips reused PIDs)."""
+    alive = []
+    for p in processes:
+        with contextlib.suppress(psutil.Error):
+            if p.is_running() and MARKER not in " ".join(p.cmdline()):
+                p.terminate()
+                alive.append(p)
+    _, stubborn = psutil.wait_procs(alive, timeout=STOP_GRACE_S)
+    for p in stubborn:
+        with contextlib.suppress(psutil.Error):
+            p.kill()
+
+
+def eskin(*args: str, env: dict[str, str]) -> Run:
+    return run_command([sys.executable, "-m", "flows.cli", *args], env, reap=False)
+
+
+def local_sweep(grid: str, root: Path, workers: int, env: dict[str, str]) -> Run:
+    """``eskin sweep --json``: uses the local server already up; a failure is an error."""
+    run = run_command(
+        [
+            sys.executable,
+            "-m",
+            "flows.cli",
+            "sweep",
+            "--grid",
+            grid,
+            "--root",
+            str(root),
+            "--workers",
+            str(workers),
+            "--json",
+        ],
+        env,
+    )
+    if run.status != 0:
+        raise RuntimeError(f"eskin sweep --grid {grid} failed, {run.failure()}")
+    return run
+
+
+def temporary_server_sweep(grid: str, root: Path, workers: int, env: dict[str, str]) -> Run:
+    """The flow with no server configured; a failure (a slow temporary server) is recorded."""
+    code = [sys.executable, "-c", TEMPORARY_SERVER_SWEEP, grid, str(root), str(workers)]
+    return run_command(code, env)
+
+
+def hermetic_env(tmp: Path) -> dict[str, str]:
+    """This environment without Prefect settings or a server of the user's; offline."""
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith("PREFECT_") and k not in (SERVER_DIR_ENV, IDLE_ENV)
+    }
+    return env | {
+        SERVER_DIR_ENV: str(tmp / "server"),
+        IDLE_ENV: str(SERVER_IDLE_S),
+        "PREFECT_SERVER_ANALYTICS_ENABLED": "false",
+        "DO_NOT_TRACK": "1",
+    }
+
+
+def temporary_server_env(env: dict[str, str], state: Path) -> dict[str, str]:
+    """``env`` with Prefect's, Dask's and matplotlib's state under ``state``, as the CLI sets."""
+    folders = {
+        "PREFECT_HOME": state / "prefect",
+        "DASK_TEMPORARY_DIRECTORY": state / "dask",
+        "MPLCONFIGDIR": state / "matplotlib",
+    }
+    for folder in folders.values():
+        folder.mkdir(parents=True, exist_ok=True)
+    # --json sets the same level in eskin sweep: both paths log alike.
+    return env | {k: str(v) for k, v in folders.items()} | {"PREFECT_LOGGING_LEVEL": "WARNING"}
 
 
 def stage_seconds(root: Path) -> float:
@@ -75,44 +216,111 @@ def stage_seconds(root: Path) -> float:
     return total
 
 
-def run() -> list[dict]:
-    with tempfile.TemporaryDirectory(prefix="eskin-bench-") as tmp:
-        two = run_sweep(Path(tmp) / "two", workers=2)
-        warm = run_sweep(Path(tmp) / "two", workers=2)
-        one = run_sweep(Path(tmp) / "one", workers=1)
-        busy = stage_seconds(Path(tmp) / "two")
-    points = two["summary"]["points"]
-    overhead = two["wall_s"] - busy / 2
+def warm_runs(
+    grid: str, root: Path, env: dict[str, str], temporary_env: dict[str, str], repeat: int
+) -> tuple[list[Run], list[Run]]:
+    """Re-runs of a computed root, interleaved (local, temporary, ...); the first round warms
+    both paths up (the temporary server's database is created then) and is left out."""
+    local: list[Run] = []
+    temporary: list[Run] = []
+    for round_ in range(repeat + 1):
+        a = local_sweep(grid, root, WORKERS, env)
+        b = temporary_server_sweep(grid, root, WORKERS, temporary_env)
+        if round_:
+            local.append(a)
+            temporary.append(b)
+    return local, temporary
+
+
+def run(grid: str | None = None, repeat: int = REPEAT) -> list[dict]:
+    grid = grid or os.environ.get(GRID_ENV) or DEFAULT_GRID
+    with tempfile.TemporaryDirectory(prefix="eskin-bench-") as name:
+        tmp = Path(name)
+        env = hermetic_env(tmp)
+        try:
+            started = eskin("server", "start", "--quiet", "--json", env=env)
+            if started.status != 0:
+                raise RuntimeError(f"eskin server start failed, {started.failure()}")
+            two = local_sweep(grid, tmp / "two", WORKERS, env)
+            busy = stage_seconds(tmp / "two")
+            one = local_sweep(grid, tmp / "one", 1, env)
+            warm, temporary = warm_runs(
+                grid, tmp / "two", env, temporary_server_env(env, tmp / "temporary"), repeat
+            )
+        finally:
+            stop_server(tmp / "server")
+    points = two.summary()["points"]
+    overhead = two.wall_s - busy / WORKERS
+    warm_s = statistics.median(r.wall_s for r in warm)
+    hits = warm[-1].summary()["cache_hits"]
+    done = [r for r in temporary if r.status == 0]
+    if done:
+        temporary_s = statistics.median(r.wall_s for r in done)
+        versus = f"temporary server {temporary_s:.1f} s ({temporary_s / warm_s:.1f}x)"
+    else:
+        versus = "temporary server: no run finished"
+    failed = [r for r in temporary if r.status != 0]
+    if failed:
+        versus += (
+            f"; {len(failed)} of {len(temporary)} temporary-server runs failed, "
+            f"{failed[0].failure()}"
+        )
+    peak = max(two.peak_worker_rss, one.peak_worker_rss)
     return [
         {
-            "benchmark": f"paper grid cold, 2 workers ({points} points) / 600 s",
-            "ratio": two["wall_s"] / 600,
-            "target": "<= 1 (issue 3); <= 0.5 (issue 6)",
-            "detail": f"{two['wall_s']:.0f} s",
+            "benchmark": f"{grid} grid cold, {WORKERS} workers ({points} points) / "
+            f"{COLD_TARGET_S:.0f} s",
+            "ratio": two.wall_s / COLD_TARGET_S,
+            "target": "<= 1",
+            "detail": f"{two.wall_s:.0f} s, local server up",
         },
         {
-            "benchmark": "paper grid warm / cold",
-            "ratio": warm["wall_s"] / two["wall_s"],
-            "target": "<= 0.05",
-            "detail": f"warm {warm['wall_s']:.1f} s, {warm['summary']['cache_hits']} cache hits",
+            "benchmark": f"{grid} grid cold: fixed overhead / {OVERHEAD_TARGET_S:.0f} s",
+            "ratio": overhead / OVERHEAD_TARGET_S,
+            "target": "<= 1",
+            "detail": f"{overhead:.1f} s = {two.wall_s:.1f} s wall - {busy:.1f} stage-seconds / "
+            f"{WORKERS} workers, local server up",
         },
         {
-            "benchmark": "paper grid cold: 1 worker / 2 workers",
-            "ratio": one["wall_s"] / two["wall_s"],
-            "target": ">= 1.6 (issue 3), >= 1.7 (issue 6)",
-            "detail": f"1 worker {one['wall_s']:.0f} s",
+            "benchmark": f"{grid} grid warm re-run, {WORKERS} workers / {WARM_TARGET_S:.0f} s",
+            "ratio": warm_s / WARM_TARGET_S,
+            "target": "<= 1",
+            "detail": f"medians of {repeat}, interleaved: local server {warm_s:.1f} s vs "
+            f"{versus}; {hits} cache hits",
         },
         {
-            "benchmark": "Prefect + Dask overhead / cold wall",
-            "ratio": overhead / two["wall_s"],
-            "target": "<= 0.15",
-            "detail": f"{overhead:.0f} s of {two['wall_s']:.0f} s not in stages "
-            f"({busy:.0f} stage-seconds over 2 workers)",
+            "benchmark": f"{grid} grid cold: 1 worker / {WORKERS} workers",
+            "ratio": one.wall_s / two.wall_s,
+            "target": f">= {SPEEDUP_TARGET}",
+            "detail": f"1 worker {one.wall_s:.0f} s",
         },
         {
-            "benchmark": "peak worker memory / 2 GB",
-            "ratio": max(two["peak_worker_rss"], one["peak_worker_rss"]) / 2**31,
-            "target": "<= 1 (issue 3), <= 0.75 (issue 6)",
-            "detail": f"{max(two['peak_worker_rss'], one['peak_worker_rss']) / 2**20:.0f} MiB",
+            "benchmark": f"peak Dask worker memory / {MEMORY_TARGET / 2**30:.1f} GiB",
+            "ratio": peak / MEMORY_TARGET,
+            "target": "<= 1",
+            "detail": f"{peak / 2**20:.0f} MiB",
         },
     ]
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.sweep",
+        description="Benchmark a sweep's fixed cost: local Prefect server vs temporary server.",
+    )
+    parser.add_argument(
+        "--grid",
+        help=f"a built-in grid or a grid TOML file (default: ${GRID_ENV} or {DEFAULT_GRID}; "
+        "smoke for a check in a few minutes)",
+    )
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="counted warm runs of each path")
+    args = parser.parse_args(argv)
+    rows = run(args.grid, args.repeat)
+    width = max(len(r["benchmark"]) for r in rows)
+    print(f"{'benchmark':{width}s}  {'ratio':>8s}  target / detail")
+    for r in rows:
+        print(f"{r['benchmark']:{width}s}  {r['ratio']:8.2f}  {r['target']}; {r['detail']}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,8 +1,13 @@
-"""The ``eskin`` command line.
+"""The ``eskin`` command line: it parses arguments, calls plain functions and prints.
 
-``eskin run [--scene NAME|FILE] [--dataset NAME|PATH] [--json]`` simulates one scene and prints a
-summary (or, with ``--json``, one JSON object on stdout). Errors in the user's input print one line
-``eskin: error: ...`` on stderr and exit with status 2.
+``eskin run`` simulates one scene; ``eskin sweep`` runs the Prefect flow ``sweep`` on Dask;
+``eskin server`` starts, shows or stops the local Prefect server sweeps use; ``eskin serve``
+serves the flow as a deployment; ``eskin report`` writes a run root's report.
+
+Exit status: 0 on success, 2 for bad input or usage (one line ``eskin: error: ...`` on stderr
+naming what and where), 1 for a run that failed on good input (a point that failed more often
+than Dask allows, a Prefect server that could not start), 130 when interrupted (Ctrl-C,
+SIGTERM).
 
 JSON numbers that are infinite (an SSNR of a REAL train equal to its TRUE train) are written as the
 strings ``"inf"`` and ``"-inf"``: JSON has no infinity, and ``float("inf")`` reads them back.
@@ -20,6 +25,8 @@ import time
 from pathlib import Path
 from typing import Any, NoReturn
 
+from flows import cluster
+from flows.report import DEFAULT_ADC_BITS
 from pipeline.errors import EskinError
 
 EXIT_USER_ERROR = 2
@@ -32,14 +39,44 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USER_ERROR, f"eskin: error: {message} (see {self.prog} --help)\n")
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: need a whole number >= 1")
+    return value
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("eskin-sweep")
+    except PackageNotFoundError:
+        return "unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="eskin",
         description="Neuromorphic e-skin design sweeps: spiking taxel readout to texture accuracy.",
+        epilog="Exit status: 0 success, 1 a run that failed, 2 bad input or usage, 130 "
+        "interrupted.",
+    )
+    parser.add_argument("--version", action="version", version=f"eskin {_version()}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress bars, log lines or notes on stderr (errors still print)",
     )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = commands.add_parser(
         "run",
+        parents=[common],
         help="simulate one scene and print its accuracy, spike metrics and stage timings",
         description="Simulate one scene end to end and print a summary.",
     )
@@ -60,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sweep = commands.add_parser(
         "sweep",
+        parents=[common],
         help="sweep a grid of scenes on Dask and write labelled result cubes",
         description="Run the Prefect flow 'sweep': compute the grid's cache misses on Dask "
         "workers and write one xarray cube per sweep under the root.",
@@ -71,26 +109,59 @@ def build_parser() -> argparse.ArgumentParser:
         help="a built-in grid (paper, smoke) or a grid TOML file",
     )
     sweep.add_argument(
-        "--root", metavar="DIR", help="where the store goes (default: runs/<grid name>)"
+        "--root",
+        metavar="DIR",
+        help="where the store goes (default: runs/<grid name>, or runs/<grid name>-<dataset "
+        "name> with --dataset)",
     )
     where = sweep.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
-        type=int,
-        default=2,
+        type=_positive_int,
         metavar="N",
-        help="local Dask workers, 1 thread each (default 2)",
+        help=f"local Dask workers, 1 thread each (default: the cores available, "
+        f"{cluster.available_cores()} here)",
     )
     where.add_argument(
         "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
     )
+    sweep.add_argument(
+        "--dataset",
+        metavar="NAME|PATH",
+        help="sweep the grid on other recordings: 'synthetic', a VibTac-12 folder (X/Y/Z.csv) "
+        "or a folder dataset (dataset.toml)",
+    )
+    sweep.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="show the points, how many are cached and the estimated cost of the rest; "
+        "write nothing",
+    )
+    sweep.add_argument(
+        "--report", action="store_true", help="write the report (<root>/report) at the end"
+    )
     sweep.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     sweep.set_defaults(handler=_sweep)
 
+    server = commands.add_parser(
+        "server",
+        parents=[common],
+        help="start, show or stop the local Prefect server that sweeps use",
+        description="Sweeps use the Prefect server named by PREFECT_API_URL, or else a local "
+        "one (127.0.0.1, state in $ESKIN_SERVER_DIR, default runs/.prefect) that the first "
+        "sweep starts and later sweeps reuse; it stops by itself after $ESKIN_SERVER_IDLE_S "
+        "seconds (default 1800) without a sweep.",
+    )
+    server.add_argument("action", choices=["start", "status", "stop"])
+    server.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    server.set_defaults(handler=_server)
+
     serve = commands.add_parser(
         "serve",
+        parents=[common],
         help="serve the 'sweep' flow as the deployment sweep/default on a Prefect server",
-        description="Serve the flow 'sweep' as deployment 'default' (needs PREFECT_API_URL). "
+        description="Serve the flow 'sweep' as deployment 'default' on the server of "
+        "PREFECT_API_URL, or on the local one (started if need be, kept up while serving). "
         "Start sweeps with: prefect deployment run sweep/default --param grid=smoke "
         "--param root=DIR",
     )
@@ -101,6 +172,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     report = commands.add_parser(
         "report",
+        parents=[common],
         help="turn a sweep's cubes into the paper's figures and Table I, and the cost of accuracy",
         description="Write figures (PNG, SVG), report.md and a self-contained report.html from "
         "the result cubes of a run root, and print the path of report.html.",
@@ -112,9 +184,10 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument(
         "--adc-bits",
         type=int,
-        default=12,
+        default=DEFAULT_ADC_BITS,
         metavar="N",
-        help="resolution of the frame-based ADC readout Table I compares with (default 12)",
+        help="resolution of the frame-based ADC readout Table I compares with "
+        f"(default {DEFAULT_ADC_BITS})",
     )
     report.add_argument(
         "--adc-rate-hz",
@@ -132,7 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         return args.handler(args)
     except EskinError as exc:
         print(f"eskin: error: {exc}", file=sys.stderr)
-        return EXIT_USER_ERROR
+        return exc.exit_status
     except KeyboardInterrupt:
         print("eskin: interrupted", file=sys.stderr)
         return 130
@@ -149,7 +222,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.dataset is not None:
         override = resolve_dataset_argument(args.dataset)
         scene = scene.replace(**{f"dataset.{k}": v for k, v in override.items()})
-    progress = _StageProgress(stage_names(scene), enabled=not args.json)
+    progress = _StageProgress(stage_names(scene), enabled=not (args.json or args.quiet))
     try:
         result = run_scene(scene, on_stage=progress.advance)
     finally:
@@ -165,46 +238,83 @@ def _run(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
     from flows.environment import hermetic_environment
-    from pipeline.grid import load_grid
+    from flows.orchestrate import check_grid, default_root, dry_run, format_dry_run, load_sweep_grid
+    from flows.server import prefect_server
     from storage import SweepStore
 
-    if args.workers < 1:
-        raise EskinError(f"--workers {args.workers}: need at least 1")
-    grid = load_grid(args.grid)
+    workers = args.workers or cluster.available_cores()
+    grid = load_sweep_grid(args.grid, args.dataset)
     # Every check runs before the store is created and Prefect imported: bad input writes nothing.
-    from flows.orchestrate import check_grid, default_root
-
     check_grid(grid)
     if args.address is not None:
         probe_scheduler(args.address)
-    root = Path(args.root) if args.root else default_root(grid)
+    root = Path(args.root) if args.root else default_root(grid, args.dataset)
+    if args.dry_run:
+        plan = dry_run(grid, root, workers)
+        print(
+            json.dumps(_json_safe(plan.to_json()), indent=2) if args.json else format_dry_run(plan)
+        )
+        return 0
     store = SweepStore.open_or_create(root)
-    # SIGTERM unwinds like Ctrl-C, so the local Dask cluster and Prefect's temporary server
-    # are stopped (the default action would kill this process alone and orphan the server).
+    # SIGTERM unwinds like Ctrl-C, so the local Dask cluster is stopped (the default action
+    # would kill this process alone).
     signal.signal(signal.SIGTERM, _interrupt)
     start = time.perf_counter()
     # Refuse a second sweep on this root before Prefect starts; the flow's own lock nests in it.
     with store.lock():
         hermetic_environment(store.root)
-        if args.json:
+        if args.json or args.quiet:
             os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
-        from flows.sweep import guard_temporary_server, sweep
+        with prefect_server(show_progress=not args.quiet):
+            from flows.sweep import sweep
 
-        guard_temporary_server()
-        summary = sweep(
-            grid=args.grid,
-            root=str(store.root),
-            workers=args.workers,
-            address=args.address,
-            show_progress=not args.json,
-        )
-    # The whole sweep as the user waits for it, Prefect's temporary server included.
+            summary = sweep(
+                grid=args.grid,
+                root=str(store.root),
+                workers=workers,
+                address=args.address,
+                dataset=args.dataset,
+                report=args.report,
+                show_progress=not args.quiet,
+            )
+    # The whole sweep as the user waits for it, the server start included.
     summary["seconds"] = time.perf_counter() - start
-    _log_sweep(store.root, {**summary, "grid": grid.name})
     if args.json:
         print(json.dumps(_json_safe(summary), indent=2))
     else:
         print(format_sweep_summary(summary))
+    return 0
+
+
+def _server(args: argparse.Namespace) -> int:
+    from flows import server
+
+    if args.action == "start":
+        with server.prefect_server(show_progress=not args.quiet) as api_url:
+            pass
+        info = {"running": True, "api_url": api_url, "ui_url": api_url.removesuffix("/api")}
+    elif args.action == "stop":
+        stopped = server.stop()
+        info = {
+            "running": False,
+            "stopped": stopped is not None,
+            "state_dir": str(server.server_dir()),
+        }
+    else:
+        found = server.status()
+        info = {"running": found is not None, "state_dir": str(server.server_dir())}
+        if found is not None:
+            info |= {"api_url": found.api_url, "ui_url": found.ui_url, "pid": found.pid}
+    if args.json:
+        print(json.dumps(info, indent=2))
+    elif args.action == "stop":
+        print("stopped the Prefect server" if info["stopped"] else "no Prefect server was running")
+    elif info["running"]:
+        print(
+            f"Prefect server: {info['ui_url']}" + (f" (PID {info['pid']})" if "pid" in info else "")
+        )
+    else:
+        print(f"no Prefect server running (state in {info['state_dir']})")
     return 0
 
 
@@ -213,6 +323,7 @@ def _interrupt(signum: int, frame: Any) -> None:
 
 
 def format_sweep_summary(summary: dict[str, Any]) -> str:
+    from flows.orchestrate import best_points
     from storage import open_results
 
     cubes = open_results(summary["root"])
@@ -224,80 +335,46 @@ def format_sweep_summary(summary: dict[str, Any]) -> str:
     for name in summary["cubes"]:
         cube = cubes[name]
         dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy"].dims[:-2])
-        mean = cube["accuracy"].mean("fold")
-        for model in cube["model"].values:
-            per_model = mean.sel(model=model)
-            best = per_model.where(per_model == per_model.max(), drop=True)
-            at = ", ".join(f"{d}={best[d].values.ravel()[0]:g}" for d in per_model.dims)
+        for row in best_points(cube):
+            at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
             lines.append(
-                f"{name:12s} {dims:28s} {model:6s} {100 * float(per_model.max()):5.1f} % at {at}"
+                f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
             )
     lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
     lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
+    if summary.get("report"):
+        lines.append(f"report: {summary['report']}")
+    if summary.get("flow_run_url"):
+        lines.append(f"Prefect flow run: {summary['flow_run_url']}")
     return "\n".join(lines)
 
 
-def _log_sweep(root: Path, summary: dict[str, Any]) -> None:
-    """Record the sweep's cache hits and wall time for ``eskin report``; never fail the sweep."""
-    from storage.runlog import append_sweep_run
-
-    try:
-        append_sweep_run(root, summary)
-    except OSError as error:
-        print(f"eskin: warning: sweep not logged in {root}: {error}", file=sys.stderr)
-
-
 def _report(args: argparse.Namespace) -> int:
-    from contextlib import suppress
+    from flows.report import write_run_report
 
-    from flows.environment import hermetic_environment
-    from storage import SweepStore, open_results
-
-    problems = []
-    if args.adc_bits < 1:
-        problems.append(f"--adc-bits {args.adc_bits}: need at least 1")
-    if args.adc_rate_hz is not None and not (
-        math.isfinite(args.adc_rate_hz) and args.adc_rate_hz > 0
-    ):
-        problems.append(f"--adc-rate-hz {args.adc_rate_hz:g}: need a number > 0")
-    if problems:
-        raise EskinError("; ".join(problems))
-    store = SweepStore.open(args.root)
-    cubes = open_results(store.root)
-    if not cubes:
-        raise EskinError(f"no result cubes in {store.root}: run 'eskin sweep' on it first")
-    with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
-        hermetic_environment(store.root, prefect=False)
-    from pipeline.figures import draw_report
-    from pipeline.report import FrameReadout, build_report, recording_facts
-    from storage.report import write_report
-    from storage.runlog import read_sweep_runs
-
-    try:
-        facts = recording_facts(next(iter(cubes.values())))
-    except (EskinError, OSError) as error:
-        print(f"eskin: warning: recordings not readable, classes unknown: {error}", file=sys.stderr)
-        facts = None
-    rate_hz = args.adc_rate_hz or (facts.fs_hz if facts else None)
-    frame = FrameReadout(args.adc_bits, rate_hz) if rate_hz else None
-    report = build_report(cubes, facts=facts, frame=frame, runs=read_sweep_runs(store.root))
-    out = Path(args.out) if args.out else store.root / "report"
-    print(write_report(out, report, draw_report(report), show_progress=True))
+    out = Path(args.out) if args.out else None
+    path = write_run_report(
+        Path(args.root),
+        out,
+        adc_bits=args.adc_bits,
+        adc_rate_hz=args.adc_rate_hz,
+        show_progress=not args.quiet,
+    )
+    print(path)
     return 0
 
 
 def _serve(args: argparse.Namespace) -> int:
-    if not os.environ.get("PREFECT_API_URL"):
-        raise EskinError(
-            "eskin serve needs a Prefect server: start one with 'prefect server start --host "
-            "127.0.0.1' and set PREFECT_API_URL=http://127.0.0.1:4200/api"
-        )
-    from pipeline.grid import load_grid
+    from flows.orchestrate import load_sweep_grid
+    from flows.server import prefect_server
 
-    load_grid(args.grid)
-    from flows.sweep import sweep
+    load_sweep_grid(args.grid)
+    with prefect_server(show_progress=not args.quiet) as api_url:
+        from flows.sweep import sweep
 
-    sweep.serve(name="default", parameters={"grid": args.grid})
+        if not args.quiet:
+            print(f"serving sweep/default on {api_url.removesuffix('/api')}", file=sys.stderr)
+        sweep.serve(name="default", parameters={"grid": args.grid})
     return 0
 
 

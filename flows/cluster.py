@@ -8,6 +8,7 @@ The local cluster runs ``workers`` processes with one thread each, every server 
 from __future__ import annotations
 
 import logging
+import os
 import re
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,6 +21,13 @@ CONNECT_TIMEOUT_S = 20.0
 
 class ClusterError(EskinError):
     """The Dask scheduler cannot be used."""
+
+
+def available_cores() -> int:
+    """Cores this process may run on (its CPU affinity): the default number of local workers."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
 
 
 def check_address(address: str) -> None:
@@ -36,9 +44,12 @@ def probe_scheduler(address: str, *, timeout_s: float = CONNECT_TIMEOUT_S) -> No
 
 @contextmanager
 def dask_client(
-    workers: int = 2, address: str | None = None, *, timeout_s: float = CONNECT_TIMEOUT_S
+    workers: int | None = None, address: str | None = None, *, timeout_s: float = CONNECT_TIMEOUT_S
 ) -> Iterator[object]:
-    """A ``distributed.Client`` on a fresh local cluster, or on the scheduler at ``address``."""
+    """A ``distributed.Client`` on a fresh local cluster, or on the scheduler at ``address``.
+
+    The local cluster has ``workers`` single-thread processes (default: one per available core).
+    """
     import dask
     from distributed import Client, LocalCluster
 
@@ -58,6 +69,7 @@ def dask_client(
         finally:
             client.close()
         return
+    workers = available_cores() if workers is None else workers
     if workers < 1:
         raise ClusterError(f"--workers {workers}: need at least 1")
     # Workers allocate from one glibc arena, whose heap can keep training's large tensors (see

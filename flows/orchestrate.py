@@ -8,6 +8,10 @@ whose result is in the store is not computed again.
 
 from __future__ import annotations
 
+import functools
+import json
+import re
+import statistics
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -15,14 +19,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import xarray as xr
 
 from flows.work import compute_point, compute_spikes
 from pipeline.coding import MAX_AUTO_WINDOWS
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
-from pipeline.recordings import load_recordings
+from pipeline.recordings import resolve_dataset_argument
 from pipeline.scene import Scene, cache_key
-from storage import EntryKind, SweepStore
+from storage import EntryKind, ResultEntry, SweepStore
 from storage.cubes import build_cube
 
 DEFAULT_RUNS_DIR = Path("runs")
@@ -31,25 +36,51 @@ NO_WORKER_TIMEOUT_S = 120.0
 
 
 class SweepFailed(EskinError):
-    """Some points of a sweep failed; the others are in the store."""
+    """Some points of a sweep failed; the others are in the store (exit status 1)."""
+
+    exit_status = 1
 
 
 @dataclass(frozen=True)
 class SweepPlan:
-    """What a sweep will do: its grid, its store, its distinct points and which are cached."""
+    """What a sweep will do: its grid, its store, its distinct points and which are cached.
+
+    ``records`` holds the result entries of the cached points as planning read (and checked)
+    them, so that assembling the cubes reads from the store only the points computed since.
+    """
 
     grid: Grid
     root: str
     scenes: dict[str, Scene]  # distinct points by result key
-    cached: frozenset[str]
+    records: dict[str, ResultEntry]
+
+    @property
+    def cached(self) -> frozenset[str]:
+        return frozenset(self.records)
 
     @property
     def missing(self) -> list[str]:
         return [key for key in self.scenes if key not in self.cached]
 
+    @functools.cached_property
+    def sweep_keys(self) -> dict[str, tuple[str, ...]]:
+        """The distinct result keys of each named sweep, in the order of its points."""
+        keys: dict[str, dict[str, None]] = {s.name: {} for s in self.grid.sweeps}
+        for point in self.grid.points():
+            keys[point.sweep][point.key] = None
+        return {name: tuple(found) for name, found in keys.items()}
 
-def default_root(grid: Grid) -> Path:
-    return DEFAULT_RUNS_DIR / grid.name
+
+def default_root(grid: Grid, dataset: str | None = None) -> Path:
+    """``runs/<grid name>``, or ``runs/<grid name>-<dataset name>`` on other recordings.
+
+    A grid swept on another dataset gets a root of its own, so its cubes never replace those
+    of the grid's own recordings.
+    """
+    if dataset is None:
+        return DEFAULT_RUNS_DIR / grid.name
+    label = re.sub(r"[^A-Za-z0-9_-]+", "-", Path(dataset).name).strip("-") or "dataset"
+    return DEFAULT_RUNS_DIR / f"{grid.name}-{label}"
 
 
 def check_grid(grid: Grid) -> None:
@@ -58,45 +89,74 @@ def check_grid(grid: Grid) -> None:
     for point in grid.points():
         key = cache_key(point.scene, "recordings")
         if key not in facts:
-            recordings = load_recordings(point.scene.dataset)
-            facts[key] = DatasetFacts(
-                fs_hz=recordings.fs_hz,
-                min_samples=recordings.min_samples,
-                min_class_size=int(np.bincount(recordings.labels).min()),
-            )
+            facts[key] = DatasetFacts.describe(point.scene.dataset)
     check_fits(grid, facts)
 
 
-def open_root(grid_ref: str, root: str | None) -> SweepStore:
-    """The store at ``root`` (default ``runs/<grid name>``), created if need be."""
-    return SweepStore.open_or_create(root or default_root(load_grid(grid_ref)))
+def load_sweep_grid(grid_ref: str, dataset: str | None = None) -> Grid:
+    """The grid ``grid_ref`` (a built-in name or a TOML file), on ``dataset`` if one is given.
+
+    Parameters
+    ----------
+    grid_ref
+        A built-in grid name or a grid TOML file (:func:`pipeline.grid.load_grid`).
+    dataset
+        The command line's ``--dataset`` text (``synthetic`` or a dataset folder), resolved with
+        :func:`pipeline.recordings.resolve_dataset_argument`; it replaces the base scene's
+        dataset for every point (:meth:`pipeline.grid.Grid.with_dataset`). None keeps the
+        grid's own.
+
+    Raises
+    ------
+    SceneError
+        The grid is invalid, or a sweep sets a ``dataset.*`` field while ``dataset`` is given.
+    DatasetError
+        ``dataset`` names no dataset.
+    """
+    grid = load_grid(grid_ref)
+    if dataset is None:
+        return grid
+    return grid.with_dataset(resolve_dataset_argument(dataset))
 
 
-def plan_sweep(grid_ref: str, root: str) -> SweepPlan:
+def open_root(grid_ref: str, root: str | None, dataset: str | None = None) -> SweepStore:
+    """The store at ``root`` (default: :func:`default_root`), created if need be.
+
+    ``dataset`` is as for :func:`load_sweep_grid`, which checks it before anything is created.
+    """
+    grid = load_sweep_grid(grid_ref, dataset)
+    return SweepStore.open_or_create(root or default_root(grid, dataset))
+
+
+def plan_sweep(grid_ref: str, root: str, dataset: str | None = None) -> SweepPlan:
     """Load and check the grid, tidy the store, and find the cached points.
 
     Call it holding the root's lock (:meth:`storage.SweepStore.lock`): no other sweep writes to
     the root then, so every partial entry is a leftover of a killed run and is removed. A
     cached result that fails its checksum is discarded (with a warning) and planned again.
+    ``dataset`` is as for :func:`load_sweep_grid`.
     """
-    grid = load_grid(grid_ref)
+    grid = load_sweep_grid(grid_ref, dataset)
     check_grid(grid)
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    cached = frozenset(k for k in scenes if store.read_valid(EntryKind.RESULTS, k) is not None)
-    return SweepPlan(grid, str(store.root), scenes, cached)
+    found = {key: store.read_valid(EntryKind.RESULTS, key) for key in scenes}
+    records = {key: entry for key, entry in found.items() if entry is not None}
+    return SweepPlan(grid, str(store.root), scenes, records)
 
 
-def compute_missing(plan: SweepPlan, client: Any, *, show_progress: bool) -> int:
-    """Submit every missing point (after the spike trains it needs) and wait for them all."""
-    from tqdm import tqdm
+def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
+    """Submit every missing point (after the spike trains it needs); return its future by key.
 
+    Largest points first, so that no long point starts last while the other workers idle. A
+    spike train that several points share is submitted once, and one already in the store not
+    at all.
+    """
     store = SweepStore.open(plan.root)
     spike_futures: dict[str, Any] = {}
-    point_futures = []
+    point_futures = {}
     priorities = {key: training_cost(plan.scenes[key]) for key in plan.missing}
-    # Largest points first, so that no long point starts last while the other workers idle.
     for key in sorted(priorities, key=priorities.__getitem__, reverse=True):
         scene = plan.scenes[key]
         data = scene.to_dict()
@@ -112,38 +172,37 @@ def compute_missing(plan: SweepPlan, client: Any, *, show_progress: bool) -> int
                 priority=priority + 1,
             )
         after = [spike_futures[spikes_key]] if spikes_key in spike_futures else []
-        point_futures.append(
-            client.submit(
-                compute_point,
-                plan.root,
-                data,
-                *after,
-                key=f"point-{key}",
-                pure=False,
-                priority=priority,
-            )
+        point_futures[key] = client.submit(
+            compute_point,
+            plan.root,
+            data,
+            *after,
+            key=f"point-{key}",
+            pure=False,
+            priority=priority,
         )
-    failures = []
-    with tqdm(
+    return point_futures
+
+
+def progress_bar(plan: SweepPlan, show_progress: bool) -> Any:
+    """A tqdm bar over the plan's distinct points, cached ones counted as done."""
+    from tqdm import tqdm
+
+    return tqdm(
         total=len(plan.scenes),
         initial=len(plan.cached),
         unit="point",
         desc=f"sweep {plan.grid.name}",
         disable=None if show_progress else True,
-    ) as bar:
-        for future in _completed(client, point_futures):
-            if future.status == "error":
-                failures.append(f"{future.key}: {future.exception()}")
-            bar.update(1)
-    if failures:
-        shown = "; ".join(failures[:3]) + (
-            f"; and {len(failures) - 3} more" if len(failures) > 3 else ""
-        )
-        raise SweepFailed(
-            f"{len(failures)} of {len(point_futures)} points failed (the others are kept in "
-            f"{plan.root}): {shown}"
-        )
-    return len(point_futures)
+    )
+
+
+def failure_message(failures: list[str], n_points: int, root: str) -> str:
+    """One line: how many of ``n_points`` failed, the first three failures, where the rest are."""
+    shown = "; ".join(failures[:3]) + (
+        f"; and {len(failures) - 3} more" if len(failures) > 3 else ""
+    )
+    return f"{len(failures)} of {n_points} points failed (the others are kept in {root}): {shown}"
 
 
 def training_cost(scene: Scene) -> int:
@@ -157,11 +216,15 @@ def training_cost(scene: Scene) -> int:
     return scene.array.n_taxels * windows * len(scene.training.models)
 
 
-def _completed(client: Any, futures: list[Any]) -> Iterator[Any]:
-    """Yield futures as they finish; fail if the cluster has had no worker for too long."""
+def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str, str | None]]:
+    """Yield ``(key, failure)`` as points finish (``failure`` None for a success).
+
+    Raises :class:`SweepFailed` if the cluster has had no worker for ``NO_WORKER_TIMEOUT_S``.
+    """
     from distributed import wait
 
-    pending = set(futures)
+    keys = {future: key for key, future in futures.items()}
+    pending = set(keys)
     alone_since = None
     while pending:
         try:
@@ -170,7 +233,8 @@ def _completed(client: Any, futures: list[Any]) -> Iterator[Any]:
             done = set()
         for future in done:
             pending.discard(future)
-            yield future
+            failed = future.status == "error"
+            yield keys[future], f"{future.key}: {future.exception()}" if failed else None
         if client.nthreads():
             alone_since = None
         elif alone_since is None:
@@ -182,12 +246,253 @@ def _completed(client: Any, futures: list[Any]) -> Iterator[Any]:
             )
 
 
+def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
+    """Build the cube of the sweep ``name`` from the store, write it and return it."""
+    store = SweepStore.open(plan.root)
+    spec = next(s for s in plan.grid.sweeps if s.name == name)
+    records = {
+        key: plan.records[key] if key in plan.records else store.read_result(key)
+        for key in plan.sweep_keys[name]
+    }
+    cube = build_cube(plan.grid, spec, records)
+    store.write_cube(name, cube)
+    return cube
+
+
 def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
     """Build every sweep's cube from the store and write it; return where each cube is."""
-    store = SweepStore.open(plan.root)
-    records = {key: store.read_result(key) for key in plan.scenes}
-    locations = {}
-    for sweep_spec in plan.grid.sweeps:
-        store.write_cube(sweep_spec.name, build_cube(plan.grid, sweep_spec, records))
-        locations[sweep_spec.name] = str(Path(plan.root) / "store.zarr" / "cubes" / sweep_spec.name)
-    return locations
+    for spec in plan.grid.sweeps:
+        assemble_cube(plan, spec.name)
+    return {spec.name: cube_location(plan, spec.name) for spec in plan.grid.sweeps}
+
+
+def cube_location(plan: SweepPlan, name: str) -> str:
+    return str(Path(plan.root) / "store.zarr" / "cubes" / name)
+
+
+def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
+    """Per model, the best mean accuracy over folds of a cube and the swept values it is at.
+
+    Returns
+    -------
+    list of dict
+        ``{"model", "accuracy", "at"}`` per model, ``at`` mapping each swept dimension to its
+        value at the best point (the first of equals, in the cube's order).
+    """
+    mean = cube["accuracy"].mean("fold")
+    rows = []
+    for model in cube["model"].values:
+        per_model = mean.sel(model=model)
+        flat = int(np.nanargmax(per_model.values)) if per_model.size else 0
+        index = np.unravel_index(flat, per_model.shape)
+        at = {
+            dim: per_model[dim].values[i].item()
+            for dim, i in zip(per_model.dims, index, strict=True)
+        }
+        rows.append({"model": str(model), "accuracy": float(per_model.values[index]), "at": at})
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# Dry run
+
+
+@dataclass(frozen=True)
+class SweepCounts:
+    """Distinct points of one named sweep, and how many of them are cached or missing."""
+
+    name: str
+    points: int
+    cached: int
+    missing: int
+
+
+@dataclass(frozen=True)
+class DryRun:
+    """What a sweep would do, found without writing anything (:func:`dry_run`).
+
+    Attributes
+    ----------
+    grid : str
+        The grid's name.
+    root : str
+        The run root looked at (it need not exist).
+    points, cached, missing : int
+        Distinct points of the grid (a point shared by two sweeps counts once), those with a
+        valid result in the store, and the rest.
+    sweeps : tuple of SweepCounts
+        The same counts per named sweep, in the grid's order (a shared point counts in each).
+    estimated_seconds : float
+        Estimated compute seconds (s) of the missing points of known kind, summed.
+    unknown : int
+        Missing points of unknown kind (no cached point like them): not in the estimate.
+    workers : int
+        Workers the wall estimate divides by.
+    """
+
+    grid: str
+    root: str
+    points: int
+    cached: int
+    missing: int
+    sweeps: tuple[SweepCounts, ...]
+    estimated_seconds: float
+    unknown: int
+    workers: int
+
+    @property
+    def wall_seconds(self) -> float:
+        """``estimated_seconds / workers`` (s): the wall time if every worker stays busy."""
+        return self.estimated_seconds / self.workers
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-able dict of every attribute, plus ``wall_seconds``."""
+        return {
+            "grid": self.grid,
+            "root": self.root,
+            "points": self.points,
+            "cached": self.cached,
+            "missing": self.missing,
+            "sweeps": {
+                s.name: {"points": s.points, "cached": s.cached, "missing": s.missing}
+                for s in self.sweeps
+            },
+            "estimated_seconds": self.estimated_seconds,
+            "unknown": self.unknown,
+            "workers": self.workers,
+            "wall_seconds": self.wall_seconds,
+        }
+
+    def format(self) -> str:
+        """The human table of :func:`format_dry_run`."""
+        return format_dry_run(self)
+
+
+def cost_kind(scene: Scene) -> str:
+    """What a point's cost depends on: its canonical form without the values that do not count.
+
+    The readout threshold, the effects' parameter values and every seed (scene, dataset,
+    training) are dropped; the names of the effects that run stay. What is left (dataset,
+    taxels, windows, models, epochs, folds, hidden units, batch size, ...) decides how long
+    encoding and training take.
+    """
+    data = scene.to_dict()
+    for part in (data, data["dataset"], data["training"]):
+        part.pop("seed", None)
+    data.pop("name")
+    readout = data["readout"]
+    readout.pop("threshold_v")
+    readout["effects"] = sorted(readout["effects"])
+    return json.dumps(data, sort_keys=True, separators=(",", ":"))
+
+
+def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
+    """Count the grid's cached and missing points and estimate the cost of the missing ones.
+
+    Writes nothing: a ``root`` that does not exist (or holds no store yet) simply has nothing
+    cached and is not created; partial entries are left alone, and a corrupt result is counted
+    as missing (the sweep would recompute it) but not removed.
+
+    The estimate: points of the same *kind* (:func:`cost_kind`) cost about the same. A missing
+    point is estimated at the median, over the cached points of this grid of its kind, of the
+    total of their measured stage seconds (:attr:`storage.ResultEntry.seconds`); a missing
+    point whose kind has no cached point is counted in ``unknown`` and left out. Stage seconds
+    are as measured when each stage ran, so a spike train or a dataset that several points
+    share counts in each of them: the estimate leans high for points that will share work with
+    cached ones. The wall estimate, ``estimated_seconds / workers``, assumes the workers stay
+    busy to the end (a sweep with fewer missing points than workers, or one long point, takes
+    longer).
+
+    Parameters
+    ----------
+    grid
+        The grid (already given its dataset, if overridden).
+    root
+        The run root a sweep of ``grid`` would use.
+    workers
+        Workers the sweep would run on (>= 1).
+
+    Raises
+    ------
+    StoreError
+        ``root`` is something a sweep would refuse (a file, a foreign store, ...).
+    """
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    store = SweepStore.open_readonly(root)
+    scenes = grid.unique_points()
+    totals: dict[str, float] = {}
+    if store is not None:
+        for key in scenes:
+            entry = store.peek_result(key)
+            if entry is not None:
+                totals[key] = sum(entry.seconds.values())
+    by_kind: dict[str, list[float]] = {}
+    for key, seconds in totals.items():
+        by_kind.setdefault(cost_kind(scenes[key]), []).append(seconds)
+    medians = {kind: statistics.median(values) for kind, values in by_kind.items()}
+    estimated = 0.0
+    unknown = 0
+    for key, scene in scenes.items():
+        if key in totals:
+            continue
+        median = medians.get(cost_kind(scene))
+        if median is None:
+            unknown += 1
+        else:
+            estimated += median
+    sweep_keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
+    for point in grid.points():
+        sweep_keys[point.sweep][point.key] = None
+    counts = []
+    for name, keys in sweep_keys.items():
+        n_cached = sum(key in totals for key in keys)
+        counts.append(SweepCounts(name, len(keys), n_cached, len(keys) - n_cached))
+    return DryRun(
+        grid=grid.name,
+        root=str(root),
+        points=len(scenes),
+        cached=len(totals),
+        missing=len(scenes) - len(totals),
+        sweeps=tuple(counts),
+        estimated_seconds=estimated,
+        unknown=unknown,
+        workers=workers,
+    )
+
+
+def format_dry_run(d: DryRun) -> str:
+    """A short table: points, cached and missing per sweep and in all, then the estimate."""
+    width = max(len("all (distinct)"), *(len(s.name) for s in d.sweeps))
+    rows = [(s.name, s.points, s.cached, s.missing) for s in d.sweeps]
+    rows.append(("all (distinct)", d.points, d.cached, d.missing))
+    lines = [
+        f"dry run of grid {d.grid!r} in {d.root} (nothing written)",
+        f"{'sweep':<{width}}  {'points':>6}  {'cached':>6}  {'missing':>7}",
+        *(f"{n:<{width}}  {p:>6}  {c:>6}  {m:>7}" for n, p, c, m in rows),
+    ]
+    known = d.missing - d.unknown
+    if d.missing == 0:
+        lines.append("estimate: nothing to compute")
+    elif known == 0:
+        lines.append(
+            f"estimate: unknown ({d.missing} missing points, none of a kind already measured)"
+        )
+    else:
+        text = (
+            f"estimate: {_duration(d.estimated_seconds)} of compute for {known} missing points, "
+            f"~{_duration(d.wall_seconds)} wall on {d.workers} worker(s) if they stay busy"
+        )
+        if d.unknown:
+            text += f"; {d.unknown} more of unknown kind (none like them measured)"
+        lines.append(text)
+    return "\n".join(lines)
+
+
+def _duration(seconds: float) -> str:
+    """``"42 s"``, ``"12 min"`` or ``"3.5 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"

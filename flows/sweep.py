@@ -1,98 +1,218 @@
-"""The ``sweep`` Prefect flow: three coarse tasks around :mod:`flows.orchestrate`.
+"""The ``sweep`` Prefect flow: a plan task, one task per named sweep, an optional report task.
 
-Prefect runs only in this process (``plan``, ``compute``, ``assemble``); the Dask workers run
-the plain functions of :mod:`flows.work` and never call the Prefect API (worker processes that
-did would each start their own temporary Prefect server on one SQLite file).
+The flow plans the grid, submits every missing point to Dask (largest first, each shared point
+once), and starts one task per named sweep of the grid (``threshold``, ``window``, ...). A sweep's
+task waits for its own points, assembles its cube and publishes a table artifact of its best
+point per model, so the UI shows each sweep's state as its points finish. Meanwhile the flow
+follows all points: a progress bar on the terminal, a progress artifact, and run-logger lines
+(points done, cache hits, failures). With ``report=True`` a last task writes the report and a
+link artifact to it.
+
+Prefect runs only in this process; the Dask workers run the plain functions of
+:mod:`flows.work` and never call the Prefect API (worker processes that did would each start a
+temporary Prefect server of their own when no real one is configured).
 """
 
 from __future__ import annotations
 
-import atexit
-import subprocess
+import contextlib
+import re
+import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from prefect import flow, task
+from prefect import flow, get_run_logger, task
+from prefect.artifacts import (
+    create_link_artifact,
+    create_progress_artifact,
+    create_table_artifact,
+    update_progress_artifact,
+)
 from prefect.cache_policies import NO_CACHE
+from prefect.task_runners import ThreadPoolTaskRunner
 
-from flows import watchdog
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
-from flows.orchestrate import SweepPlan, assemble_cubes, compute_missing, open_root, plan_sweep
+from flows.orchestrate import (
+    SweepFailed,
+    SweepPlan,
+    assemble_cube,
+    best_points,
+    completed_points,
+    cube_location,
+    failure_message,
+    open_root,
+    plan_sweep,
+    progress_bar,
+    submit_missing,
+)
+from storage.runlog import append_sweep_run
+
+#: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
+REPORT_EVERY_S = 5.0
+#: Threads for the sweep tasks, which only wait on Dask futures; more sweeps than this queue.
+MAX_CONCURRENT_SWEEPS = 32
 
 
-def guard_temporary_server() -> None:
-    """Start Prefect's temporary server (when no server is configured) under a watchdog.
+def flow_run_url() -> str | None:
+    """The UI page of the running flow run (as Prefect's own log line gives it), if known."""
+    from prefect.runtime import flow_run
+    from prefect.settings import PREFECT_UI_URL
 
-    Prefect starts that server as a plain subprocess and stops it at interpreter exit; a sweep
-    killed by SIGKILL would leave it running, holding the root's Prefect database. Starting it
-    here first (Prefect's client then reuses it) gives its PID to :mod:`flows.watchdog`, which
-    stops it as soon as this process is gone. On a normal exit Prefect stops it first, after
-    flushing its logs and events; the watchdog then finds it gone.
-    """
-    from prefect.settings import PREFECT_API_URL
-
-    if PREFECT_API_URL.value():
-        return
-    from prefect.server.api.server import SubprocessASGIServer
-
-    guards: list[subprocess.Popen] = []
-    atexit.register(_release, guards)  # atexit runs last-in first-out: after Prefect's stop
-    server = SubprocessASGIServer()
-    server.start()
-    guards.append(watchdog.start(server.server_process.pid, "prefect.server.api.server:create_app"))
+    ui, run_id = PREFECT_UI_URL.value(), flow_run.get_id()
+    return f"{ui}/runs/flow-run/{run_id}" if ui and run_id else None
 
 
-def _release(guards: list[subprocess.Popen]) -> None:
-    for guard in guards:
-        guard.stdin.close()  # end of file: the watchdog stops the server if it still runs
-        guard.wait()
+def artifact_key(*parts: str) -> str:
+    """An artifact key from names (Prefect allows lowercase letters, digits and dashes)."""
+    return re.sub(r"[^a-z0-9-]+", "-", "-".join(parts).lower()).strip("-")
 
 
 @task(name="plan", cache_policy=NO_CACHE)
-def plan_task(grid: str, root: str) -> SweepPlan:
-    return plan_sweep(grid, root)
+def plan_task(grid: str, root: str, dataset: str | None) -> SweepPlan:
+    plan = plan_sweep(grid, root, dataset)
+    get_run_logger().info(
+        "%d distinct points in %d sweeps: %d cached, %d to compute",
+        len(plan.scenes),
+        len(plan.grid.sweeps),
+        len(plan.cached),
+        len(plan.missing),
+    )
+    return plan
 
 
-@task(name="compute", cache_policy=NO_CACHE)
-def compute_task(plan: SweepPlan, workers: int, address: str | None, show_progress: bool) -> int:
-    hermetic_environment(Path(plan.root), prefect=False)
-    with dask_client(workers, address) as client:
-        return compute_missing(plan, client, show_progress=show_progress)
+@task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
+def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
+    """Wait for the sweep's points, assemble its cube, publish its best points as a table."""
+    from distributed import wait
+
+    logger = get_run_logger()
+    keys = plan.sweep_keys[name]
+    mine = {futures[key] for key in keys if key in futures}
+    if mine:
+        wait(mine)
+    failed = [f"{f.key}: {f.exception()}" for f in mine if f.status == "error"]
+    if failed:
+        raise SweepFailed(failure_message(failed, len(keys), plan.root))
+    cube = assemble_cube(plan, name)
+    rows = best_points(cube)
+    create_table_artifact(
+        key=artifact_key(plan.grid.name, name, "best"),
+        table=[{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
+        description=f"Sweep {name!r} of grid {plan.grid.name!r}: the best point per model "
+        f"(mean accuracy over folds) of {len(keys)} points. Cube: {cube_location(plan, name)}",
+    )
+    for r in rows:
+        at = ", ".join(f"{dim}={value}" for dim, value in r["at"].items())
+        logger.info("%s: best %s %.1f %% at %s", name, r["model"], 100 * r["accuracy"], at)
+    return cube_location(plan, name)
 
 
-@task(name="assemble", cache_policy=NO_CACHE)
-def assemble_task(plan: SweepPlan) -> dict[str, str]:
-    return assemble_cubes(plan)
+@task(name="report", cache_policy=NO_CACHE)
+def report_task(root: str) -> str:
+    from flows.report import write_run_report
+
+    path = write_run_report(Path(root))
+    create_link_artifact(
+        key=artifact_key(Path(root).name, "report"),
+        link=path.absolute().as_uri(),
+        link_text=str(path),
+        description="The sweep's report: figures, the paper's claims, Table I.",
+    )
+    return str(path)
 
 
-@flow(name="sweep")
+@flow(
+    name="sweep",
+    task_runner=ThreadPoolTaskRunner(max_workers=MAX_CONCURRENT_SWEEPS),
+    log_prints=False,
+)
 def sweep(
     grid: str = "smoke",
     root: str | None = None,
-    workers: int = 2,
+    workers: int | None = None,
     address: str | None = None,
+    dataset: str | None = None,
+    report: bool = False,
     show_progress: bool = False,
 ) -> dict[str, Any]:
     """Sweep a grid (a built-in name or a TOML file) into labelled cubes under ``root``.
 
     ``root`` defaults to ``runs/<grid name>``; ``address`` (``tcp://HOST:PORT``) uses an
-    existing Dask scheduler instead of a local cluster of ``workers`` processes.
+    existing Dask scheduler instead of a local cluster of ``workers`` processes (default: one
+    per available core); ``dataset`` (a folder or ``synthetic``) replaces the grid's recordings;
+    ``report`` writes the report under ``<root>/report`` at the end.
     """
     start = time.perf_counter()
-    store = open_root(grid, root)
+    logger = get_run_logger()
+    store = open_root(grid, root, dataset)
+    summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
+    if show_progress and summary["flow_run_url"]:
+        print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
     # One sweep per root: a second one is refused here (the command line takes the lock before
     # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
     with store.lock():
-        plan = plan_task(grid, str(store.root))
-        computed = compute_task(plan, workers, address, show_progress) if plan.missing else 0
-        cubes = assemble_task(plan)
-    return {
+        plan = plan_task(grid, str(store.root), dataset)
+        with contextlib.ExitStack() as stack:
+            futures: dict[str, Any] = {}
+            if plan.missing:
+                hermetic_environment(Path(plan.root), prefect=False)
+                client = stack.enter_context(dask_client(workers, address))
+                summary["dashboard"] = client.dashboard_link
+                logger.info("Dask dashboard: %s", client.dashboard_link)
+                if show_progress:
+                    print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
+                futures = submit_missing(plan, client)
+            runs = [sweep_task.submit(plan, s.name, futures) for s in plan.grid.sweeps]
+            if futures:
+                _follow(plan, client, futures, show_progress)
+            states = [run.wait() or run.state for run in runs]
+        failed = [s.message or s.name for s in states if not s.is_completed()]
+        if failed:
+            raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
+        cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
+    summary |= {
         "root": plan.root,
         "cubes": cubes,
         "points": len(plan.scenes),
         "cache_hits": len(plan.cached),
-        "computed": computed,
-        "seconds": time.perf_counter() - start,
+        "computed": len(futures),
     }
+    summary["seconds"] = time.perf_counter() - start
+    try:  # before the report, which shows every logged sweep of the root
+        append_sweep_run(plan.root, {**summary, "grid": plan.grid.name})
+    except OSError as error:
+        logger.warning("sweep not logged in %s: %s", plan.root, error)
+    if report:
+        summary["report"] = report_task(plan.root)
+    return summary
+
+
+def _follow(plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress: bool) -> None:
+    """Follow every submitted point: the bar per point, the API and log every few seconds."""
+    logger = get_run_logger()
+    total, done, failures = len(plan.scenes), len(plan.cached), 0
+    artifact = create_progress_artifact(
+        progress=100 * done / total,
+        key=artifact_key(plan.grid.name, "progress"),
+        description=f"Points of grid {plan.grid.name!r} done (cached ones count as done).",
+    )
+    last = time.monotonic()
+    with progress_bar(plan, show_progress) as bar:
+        for _, failure in completed_points(client, futures):
+            done += 1
+            bar.update(1)
+            if failure:
+                failures += 1
+                logger.error("point failed: %s", failure)
+            if time.monotonic() - last >= REPORT_EVERY_S or done == total:
+                last = time.monotonic()
+                update_progress_artifact(artifact_id=artifact, progress=100 * done / total)
+                logger.info(
+                    "%d of %d points done (%d cached, %d failed)",
+                    done,
+                    total,
+                    len(plan.cached),
+                    failures,
+                )

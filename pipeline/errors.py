@@ -9,7 +9,13 @@ from __future__ import annotations
 
 
 class EskinError(ValueError):
-    """Bad user input; ``str(error)`` is one line naming what and where."""
+    """Bad user input; ``str(error)`` is one line naming what and where.
+
+    ``exit_status`` is the command line's exit status for it: 2 for bad input or usage; a
+    subclass for a run that failed on good input says 1.
+    """
+
+    exit_status = 2
 
 
 class SceneError(EskinError):

@@ -37,7 +37,8 @@ Everything that can be checked without the recordings is checked when the grid l
 problem is reported at once: unknown fields, empty axes, duplicate values, zipped axes of unequal
 length, and values a scene refuses. :func:`check_fits` then checks the points against the
 recordings (windows longer than a recording, arrays whose delays eat it, classes smaller than
-the folds) before any work starts.
+the folds) before any work starts, naming the shortest recording; :func:`check_scene_fits` is
+the same check for one scene (``eskin run``).
 """
 
 from __future__ import annotations
@@ -51,12 +52,25 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from pipeline.coding import whole_windows
 from pipeline.errors import SceneError
-from pipeline.scene import EFFECT_TYPES, Effect, Scene, cache_key, with_dataset_path_from
+from pipeline.scene import (
+    EFFECT_TYPES,
+    DatasetKind,
+    DatasetSpec,
+    Effect,
+    Scene,
+    cache_key,
+    with_dataset_path_from,
+)
 from pipeline.taxels import cut_samples, taxel_delays_s
+
+if TYPE_CHECKING:
+    from pipeline.recordings import Recordings
 
 NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
 
@@ -158,6 +172,55 @@ class Grid:
             unique.setdefault(point.key, point.scene)
         return unique
 
+    def with_dataset(self, fields: Mapping[str, Any]) -> Grid:
+        """This grid with the base scene's ``dataset`` table replaced, so every point uses it.
+
+        Parameters
+        ----------
+        fields
+            A scene ``dataset`` table, e.g. ``{"kind": "folder", "path": "/data/mine"}`` as
+            :func:`pipeline.recordings.resolve_dataset_argument` returns it. A relative
+            ``path`` is taken from the current directory. If ``kind`` is the base's own (or
+            missing), the base's other dataset settings stay (a synthetic dataset's size, a
+            VibTac-12 axis and segments) and ``fields`` override them; a different ``kind``
+            replaces the whole table, as one kind's settings mean nothing to another (a
+            folder dataset refuses a ``sampling_rate_hz`` it does not have).
+
+        Returns
+        -------
+        Grid
+            Same name and sweeps; its base (and so the provenance of its cubes, which records
+            the base scene) names the new dataset.
+
+        Raises
+        ------
+        SceneError
+            A sweep sets or sweeps a ``dataset.*`` field itself (the override would silently
+            lose to it at some points and not at others), naming each such sweep and field;
+            or ``fields`` is not a valid dataset table.
+        """
+        problems = [
+            f"sweeps.{sweep.name}.{part}: {field!r} sets the dataset itself, so the dataset "
+            "cannot be replaced for the whole grid (drop the field from the sweep, or the "
+            "dataset override)"
+            for sweep in self.sweeps
+            for part, fields_of_sweep in (
+                ("set", list(sweep.fixed)),
+                ("axes", [axis.field for axis in sweep.axes]),
+            )
+            for field in fields_of_sweep
+            if field.split(".")[0] == "dataset"
+        ]
+        if problems:
+            raise SceneError(problems, repr(self.name), "grid")
+        data = self.base.to_dict()
+        new = dict(fields)
+        same_kind = new.get("kind", data["dataset"]["kind"]) == data["dataset"]["kind"]
+        data["dataset"] = {**data["dataset"], **new} if same_kind else new
+        data = with_dataset_path_from(data, Path.cwd())
+        base = Scene.from_dict(data, source=f"scene {self.base.name!r} with dataset {new}")
+        return dataclasses.replace(self, base=base)
+
     def describe(self) -> dict[str, Any]:
         """A JSON-able description (for provenance in cube attrs)."""
         return {
@@ -218,11 +281,136 @@ def load_grid(name_or_path: str | Path) -> Grid:
 
 @dataclass(frozen=True)
 class DatasetFacts:
-    """What :func:`check_fits` needs to know of a dataset."""
+    """What :func:`check_scene_fits` needs to know of a dataset; build it with :meth:`of`.
+
+    Attributes
+    ----------
+    fs_hz : float
+        Sampling rate (Hz).
+    min_samples : int
+        Samples of the shortest recording.
+    min_class_size : int
+        Recordings of the smallest class.
+    shortest : str
+        Name of the shortest recording (the first of equally short ones) as
+        :attr:`pipeline.recordings.Recordings.names` gives it: ``"<class>/<file name>"`` for a
+        folder dataset (its path relative to the dataset folder), ``"Texture3/segment07"``,
+        ``"<class>/rec03"``; empty if unknown.
+    dataset : str
+        Name of the dataset (:attr:`pipeline.recordings.Recordings.name`); empty if unknown.
+    smallest_class : str
+        Name of the smallest class (the first of equally small ones); empty if unknown.
+    """
 
     fs_hz: float
     min_samples: int
     min_class_size: int
+    shortest: str = ""
+    dataset: str = ""
+    smallest_class: str = ""
+
+    @classmethod
+    def of(cls, recordings: Recordings) -> DatasetFacts:
+        """The facts of loaded recordings."""
+        lengths = recordings.lengths
+        shortest = int(np.argmin(lengths))
+        sizes = np.bincount(recordings.labels, minlength=len(recordings.class_names))
+        smallest = int(np.argmin(sizes))
+        return cls(
+            fs_hz=recordings.fs_hz,
+            min_samples=int(lengths[shortest]),
+            min_class_size=int(sizes[smallest]),
+            shortest=recordings.names[shortest],
+            dataset=recordings.name,
+            smallest_class=recordings.class_names[smallest],
+        )
+
+    @classmethod
+    def describe(cls, spec: DatasetSpec) -> DatasetFacts:
+        """The facts of the recordings ``spec`` names; the built-in ones are not generated.
+
+        Raises
+        ------
+        DatasetError
+            As :func:`pipeline.recordings.load_recordings`.
+        """
+        from pipeline.recordings import load_recordings, synthetic_arguments
+        from pipeline.synthetic import synthetic_layout
+
+        if DatasetKind(spec.kind) is not DatasetKind.SYNTHETIC:
+            return cls.of(load_recordings(spec))
+
+        layout = synthetic_layout(**synthetic_arguments(spec))
+        return cls(
+            fs_hz=layout.fs_hz,
+            min_samples=layout.n_samples,
+            min_class_size=spec.recordings_per_class,
+            shortest=layout.names[0],
+            dataset="synthetic",
+            smallest_class=layout.class_names[0],
+        )
+
+    def shortest_recording(self) -> str:
+        """``"the shortest recording, <name> of dataset '<dataset>' (<n> samples)"``."""
+        named = f", {self.shortest}" if self.shortest else ""
+        of = f" of dataset {self.dataset!r}" if self.dataset else ""
+        return f"the shortest recording{named}{of} ({self.min_samples} samples)"
+
+
+def scene_misfits(scene: Scene, facts: DatasetFacts) -> list[tuple[str, str]]:
+    """Every way ``scene`` does not fit its recordings, as ``(scene field, problem)`` pairs.
+
+    A scene fits when its taxel delays leave at least 2 samples of the shortest recording, the
+    remaining duration holds at least one window (and a fixed ``coding.n_windows``), and every
+    class has at least ``training.folds`` recordings: the same conditions the simulation needs.
+    Each problem names the shortest recording where it is the culprit. Empty if the scene fits.
+    """
+    problems: list[tuple[str, str]] = []
+    array = scene.array
+    cut = cut_samples(taxel_delays_s(array), facts.fs_hz)
+    remaining = facts.min_samples - cut
+    if remaining < 2:
+        problems.append(
+            (
+                "array",
+                f"the delays of a {array.rows}x{array.cols} array (pitch {array.pitch_mm:g} mm "
+                f"at {array.speed_mm_s:g} mm/s: {cut / facts.fs_hz:.3g} s, {cut} samples at "
+                f"{facts.fs_hz:g} Hz) use up {facts.shortest_recording()}; at least "
+                f"{cut + 2} samples are needed",
+            )
+        )
+    else:
+        usable_s = (remaining - 1) / facts.fs_hz  # as SpikeTrains.duration_s
+        fit = whole_windows(usable_s, scene.coding.window_s)
+        wanted = scene.coding.n_windows
+        if fit < 1 or (wanted != "auto" and wanted > fit):
+            n = 1 if wanted == "auto" else wanted
+            field = "coding.window_s" if fit < 1 else "coding.n_windows"
+            problems.append(
+                (
+                    field,
+                    f"{n} window(s) of {scene.coding.window_s} s do not fit "
+                    f"{facts.shortest_recording()}: {usable_s:.3g} s after taxel delays "
+                    f"hold {fit}",
+                )
+            )
+    if facts.min_class_size < scene.training.folds:
+        problems.append(
+            (
+                "training.folds",
+                f"{scene.training.folds} folds need at least that many recordings per class; "
+                + (f"class {facts.smallest_class!r}" if facts.smallest_class else "a class")
+                + f" has fewer ({facts.min_class_size})",
+            )
+        )
+    return problems
+
+
+def check_scene_fits(scene: Scene, facts: DatasetFacts) -> None:
+    """Raise :class:`SceneError` listing every misfit of ``scene`` (:func:`scene_misfits`)."""
+    problems = scene_misfits(scene, facts)
+    if problems:
+        raise SceneError([f"{field}: {text}" for field, text in problems], repr(scene.name))
 
 
 def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
@@ -233,32 +421,19 @@ def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
     facts
         For each dataset of the grid, keyed by ``cache_key(scene, "recordings")``.
     """
-    problems: list[str] = []
+    # Points sharing a problem (every threshold of a too-short dataset, say) are listed once.
+    places: dict[str, list[str]] = {}
     for point in grid.points():
-        scene = point.scene
-        fact = facts[cache_key(scene, "recordings")]
         where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
-        cut = cut_samples(taxel_delays_s(scene.array), fact.fs_hz)
-        usable_s = (fact.min_samples - cut - 1) / fact.fs_hz  # as SpikeTrains.duration_s
-        if fact.min_samples - cut < 2:
-            problems.append(
-                f"{where}: the delays of a {scene.array.rows}x{scene.array.cols} array "
-                f"({cut / fact.fs_hz:.3g} s) use up the shortest recording"
-            )
-            continue
-        fit = whole_windows(usable_s, scene.coding.window_s)
-        wanted = scene.coding.n_windows
-        if fit < 1 or (wanted != "auto" and wanted > fit):
-            n = 1 if wanted == "auto" else wanted
-            problems.append(
-                f"{where}: {n} window(s) of {scene.coding.window_s} s do not fit the shortest "
-                f"recording ({usable_s:.3g} s after taxel delays)"
-            )
-        if fact.min_class_size < scene.training.folds:
-            problems.append(
-                f"{where}: {scene.training.folds} folds need at least that many recordings per "
-                f"class; the smallest class has {fact.min_class_size}"
-            )
+        fact = facts[cache_key(point.scene, "recordings")]
+        for _, text in scene_misfits(point.scene, fact):
+            places.setdefault(text, []).append(where)
+    problems = [
+        ", ".join(wheres[:3])
+        + (f" and {len(wheres) - 3} more" if len(wheres) > 3 else "")
+        + f": {text}"
+        for text, wheres in places.items()
+    ]
     if problems:
         raise SceneError(problems, repr(grid.name), "grid")
 

@@ -255,6 +255,18 @@ class _Problem(Exception):
 # Dispatch
 
 
+def synthetic_arguments(spec: DatasetSpec) -> dict[str, Any]:
+    """The keyword arguments of :func:`pipeline.synthetic.synthetic_recordings` for ``spec``."""
+    from pipeline.synthetic import DEFAULT_FS_HZ
+
+    return {
+        "seed": spec.seed,
+        "recordings_per_class": spec.recordings_per_class,
+        "duration_s": spec.duration_s,
+        "fs_hz": spec.sampling_rate_hz or DEFAULT_FS_HZ,
+    }
+
+
 def load_recordings(spec: DatasetSpec) -> Recordings:
     """Load the recordings a scene's ``dataset`` part describes.
 
@@ -281,14 +293,9 @@ def load_recordings(spec: DatasetSpec) -> Recordings:
     """
     kind = DatasetKind(spec.kind)
     if kind is DatasetKind.SYNTHETIC:
-        from pipeline.synthetic import DEFAULT_FS_HZ, synthetic_recordings
+        from pipeline.synthetic import synthetic_recordings
 
-        return synthetic_recordings(
-            seed=spec.seed,
-            recordings_per_class=spec.recordings_per_class,
-            duration_s=spec.duration_s,
-            fs_hz=spec.sampling_rate_hz or DEFAULT_FS_HZ,
-        )
+        return synthetic_recordings(**synthetic_arguments(spec))
     if not spec.path:
         raise DatasetError(f"dataset of kind {kind.value!r} needs a path (dataset.path)")
     if kind is DatasetKind.VIBTAC12:

@@ -23,6 +23,7 @@ import numpy as np
 
 from pipeline.coding import frames, resolve_n_windows
 from pipeline.frontend import FrontEnd, fit_front_end
+from pipeline.grid import DatasetFacts, check_scene_fits
 from pipeline.metrics import (
     SpikeMetrics,
     data_rate_bps,
@@ -185,9 +186,19 @@ def run_scene(
         What to simulate.
     on_stage : callable, optional
         Called with each stage name (:func:`stage_names`) as it starts, for progress display.
+
+    Raises
+    ------
+    SceneError
+        The scene does not fit its recordings (:func:`pipeline.grid.check_scene_fits`): taxel
+        delays that use up the shortest recording, windows that do not fit it, classes smaller
+        than the folds. Checked right after loading, before any simulation.
     """
     watch = Stopwatch(on_stage)
     recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v, stopwatch=watch)
+    # Before the long stages, and naming the recording: the taxel and coding stages would only
+    # fail deep inside, on whichever recording came first.
+    check_scene_fits(scene, DatasetFacts.of(recordings))
     encoded = encode(recordings, front_end, scene, stopwatch=watch)
     with watch.stage("metrics"):
         metrics = spike_metrics(encoded, scene)

@@ -80,8 +80,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
-from scipy.signal import lfilter
 
 from pipeline.errors import DatasetError
 from pipeline.recordings import Recordings
@@ -202,6 +200,80 @@ def ridge_shape(shape: str, phase: np.ndarray) -> np.ndarray:
     raise ValueError(f"unknown ridge shape {shape!r}")
 
 
+@dataclass(frozen=True)
+class SyntheticLayout:
+    """What :func:`synthetic_recordings` will make, known without generating a sample.
+
+    Attributes
+    ----------
+    n_samples : int
+        Samples of every recording.
+    fs_hz : float
+        Sampling rate (Hz).
+    labels : tuple of int
+        Class index of each recording, class-major.
+    names : tuple of str
+        ``"<class name>/rec01"`` (1-based) per recording.
+    class_names : tuple of str
+        The class names, in label order.
+    """
+
+    n_samples: int
+    fs_hz: float
+    labels: tuple[int, ...]
+    names: tuple[str, ...]
+    class_names: tuple[str, ...] = tuple(tc.name for tc in TEXTURE_CLASSES)
+
+
+def synthetic_layout(
+    *,
+    seed: int = 0,
+    recordings_per_class: int = 10,
+    duration_s: float = 5.0,
+    fs_hz: float = DEFAULT_FS_HZ,
+) -> SyntheticLayout:
+    """Check :func:`synthetic_recordings`' arguments and give the shape of its dataset.
+
+    Checking a grid against its recordings needs only their lengths, names and classes; this
+    gives them in microseconds, where generating the recordings takes about a second.
+
+    Raises
+    ------
+    DatasetError
+        An argument out of range (named in the message).
+    """
+    problems = []
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        problems.append(f"seed must be an integer >= 0, got {seed!r}")
+    if (
+        isinstance(recordings_per_class, bool)
+        or not isinstance(recordings_per_class, int | np.integer)
+        or recordings_per_class < 1
+    ):
+        problems.append(
+            f"recordings_per_class must be an integer >= 1, got {recordings_per_class!r}"
+        )
+    if not (_is_real(fs_hz) and fs_hz > 0):
+        problems.append(f"fs_hz must be a finite number > 0, got {fs_hz!r}")
+    if not (_is_real(duration_s) and duration_s > 0):
+        problems.append(f"duration_s must be a finite number > 0, got {duration_s!r}")
+    elif not problems and round(duration_s * fs_hz) < 2:
+        problems.append(
+            f"duration_s = {duration_s} s at fs_hz = {fs_hz} Hz gives fewer than 2 samples"
+        )
+    if problems:
+        raise DatasetError("synthetic dataset: " + "; ".join(problems))
+
+    n_samples = round(duration_s * fs_hz)
+    per_class = range(int(recordings_per_class))
+    return SyntheticLayout(
+        n_samples=n_samples,
+        fs_hz=float(fs_hz),
+        labels=tuple(c for c in range(len(TEXTURE_CLASSES)) for _ in per_class),
+        names=tuple(f"{tc.name}/rec{r + 1:02d}" for tc in TEXTURE_CLASSES for r in per_class),
+    )
+
+
 def synthetic_recordings(
     *,
     seed: int = 0,
@@ -236,44 +308,22 @@ def synthetic_recordings(
     DatasetError
         An argument out of range (named in the message).
     """
-    problems = []
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        problems.append(f"seed must be an integer >= 0, got {seed!r}")
-    if (
-        isinstance(recordings_per_class, bool)
-        or not isinstance(recordings_per_class, int | np.integer)
-        or recordings_per_class < 1
-    ):
-        problems.append(
-            f"recordings_per_class must be an integer >= 1, got {recordings_per_class!r}"
-        )
-    if not (_is_real(fs_hz) and fs_hz > 0):
-        problems.append(f"fs_hz must be a finite number > 0, got {fs_hz!r}")
-    if not (_is_real(duration_s) and duration_s > 0):
-        problems.append(f"duration_s must be a finite number > 0, got {duration_s!r}")
-    elif not problems and round(duration_s * fs_hz) < 2:
-        problems.append(
-            f"duration_s = {duration_s} s at fs_hz = {fs_hz} Hz gives fewer than 2 samples"
-        )
-    if problems:
-        raise DatasetError("synthetic dataset: " + "; ".join(problems))
-
-    n_samples = round(duration_s * fs_hz)
-    t = np.arange(n_samples, dtype=np.float64) / fs_hz
-    signals, labels, names = [], [], []
+    layout = synthetic_layout(
+        seed=seed, recordings_per_class=recordings_per_class, duration_s=duration_s, fs_hz=fs_hz
+    )
+    t = np.arange(layout.n_samples, dtype=np.float64) / fs_hz
+    signals = []
     for c, texture in enumerate(TEXTURE_CLASSES):
         for r in range(int(recordings_per_class)):
             streams = np.random.SeedSequence([int(seed), c, r]).spawn(3)
             scan, rough, noise = (np.random.default_rng(s) for s in streams)
             signals.append(_recording(texture, t, scan, rough, noise))
-            labels.append(c)
-            names.append(f"{texture.name}/rec{r + 1:02d}")
     return Recordings(
         signals=tuple(signals),
-        labels=np.array(labels, dtype=np.int64),
-        class_names=tuple(tc.name for tc in TEXTURE_CLASSES),
-        fs_hz=float(fs_hz),
-        names=tuple(names),
+        labels=np.array(layout.labels, dtype=np.int64),
+        class_names=layout.class_names,
+        fs_hz=layout.fs_hz,
+        names=layout.names,
         units="a.u.",
         name="synthetic",
     )
@@ -295,6 +345,10 @@ def _recording(
     noise: np.random.Generator,
 ) -> np.ndarray:
     """One recording: float64, shape ``t.shape``, a.u. (the model of the module docstring)."""
+    # scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
+    # cached, or that checks a grid on other recordings, never needs them.
+    from scipy.ndimage import gaussian_filter1d
+
     # Scan: position x(t) in mm, integrated analytically from the speed.
     speed = SCAN_SPEED_MM_S * (1.0 + SPEED_SPREAD * scan.standard_normal())
     freqs = scan.uniform(*_WOBBLE_BAND_HZ, size=_WOBBLE_COMPONENTS)
@@ -325,6 +379,8 @@ def _recording(
 
 def _ou_roughness(rng: np.random.Generator, n: int, sigma: float, corr_mm: float) -> np.ndarray:
     """Stationary exponentially correlated Gaussian noise on the grid: float64 ``(n,)``, um."""
+    from scipy.signal import lfilter
+
     a = math.exp(-GRID_MM / corr_mm)
     start = sigma * rng.standard_normal()
     drive = rng.standard_normal(n)

@@ -20,12 +20,14 @@ SSNR and STE with fold-averaged accuracy across the sweep's points (infinite met
 Accuracy of a model or fold a point did not train is NaN. Every variable but ``seconds`` is a
 deterministic function of the grid and its seeds; ``seconds`` are measurements. Units are in
 each variable's ``units`` attribute; provenance (grid, sweep, base scene, seeds, package version)
-in the cube's attributes.
+in the cube's attributes, with the versions of Python and of the libraries that shape the results
+as ``version_<name>`` strings (see ``DEPENDENCY_VERSIONS``).
 """
 
 from __future__ import annotations
 
 import json
+import platform
 from collections.abc import Mapping
 from importlib import metadata
 from typing import Any
@@ -60,6 +62,16 @@ UNITS = {
     "correlation_r": "1",
     "correlation_p": "1",
     "correlation_n": "points",
+}
+# One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and
+# plain strings keep cubes comparable with xarray.testing.assert_identical. Read once, at import:
+# the process runs one set of libraries.
+DEPENDENCY_VERSIONS: dict[str, str] = {
+    "version_python": platform.python_version(),
+    **{
+        f"version_{name.replace('-', '_')}": metadata.version(name)
+        for name in ("torch", "numpy", "numba", "scikit-learn", "xarray", "zarr")
+    },
 }
 _SUFFIX_UNITS = {
     "_v": "V",
@@ -170,4 +182,5 @@ def _provenance(grid: Grid, sweep: Sweep) -> dict[str, Any]:
         "training_seed": grid.base.training.seed,
         "package_version": metadata.version("eskin-sweep"),
         "grid_description": json.dumps(grid.describe(), sort_keys=True),
+        **DEPENDENCY_VERSIONS,
     }

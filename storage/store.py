@@ -301,6 +301,35 @@ class SweepStore:
         _check_store_root(root, need_store=True)
         return cls(root)
 
+    @classmethod
+    def open_readonly(cls, root: str | Path) -> SweepStore | None:
+        """The sweep store at ``root`` to read only, or None where a sweep would create one.
+
+        Writes nothing, not even ``root``: use it to look at a run root without touching it
+        (read entries with :meth:`peek_result`, never :meth:`read_valid`, which discards
+        corrupt ones).
+
+        Returns
+        -------
+        SweepStore or None
+            None if ``root`` does not exist or is a directory without ``store.zarr`` that
+            :meth:`open_or_create` would accept (empty, or only leftovers of an interrupted
+            store creation): nothing is cached there.
+
+        Raises
+        ------
+        StoreError
+            ``root`` is one that :meth:`open_or_create` refuses: a file, a non-empty directory
+            without ``store.zarr``, a foreign or unreadable ``store.zarr``.
+        """
+        root = Path(root)
+        if not root.exists() and not root.is_symlink():
+            return None
+        _check_store_root(root, need_store=False)
+        if not (root / STORE_NAME).exists():
+            return None
+        return cls(root)
+
     def _create(self) -> None:
         """Build the store under a temporary name in ``root`` and rename it into place."""
         partial = self.root / f"{STORE_PARTIAL_PREFIX}{uuid.uuid4().hex}"
@@ -592,6 +621,18 @@ class SweepStore:
             return ResultEntry(fold_accuracy, _read_seconds(attrs), _read_metrics(ds))
 
         return self._read_entry(EntryKind.RESULTS, key, build)
+
+    def peek_result(self, key: str) -> ResultEntry | None:
+        """The result entry ``key`` if it is complete and valid, else None; writes nothing.
+
+        Unlike :meth:`read_valid`, a corrupt entry is left where it is (the next sweep that
+        holds the lock discards and recomputes it); unlike :meth:`read_result`, no problem
+        raises.
+        """
+        try:
+            return self.read_result(key)
+        except (StoreError, OSError):
+            return None
 
     # -----------------------------------------------------------------------------------------
     # Cubes

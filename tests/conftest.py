@@ -1,10 +1,35 @@
 """Fixtures shared by the end-to-end suites (tests/flows, tests/reliability)."""
 
 import json
+import os
 
 import pytest
 
+from flows import server
 from tests.flows.helpers import eskin, hermetic_env
+
+#: A backstop: the session's server stops by itself if the suite dies before its teardown.
+SUITE_SERVER_IDLE_S = "600"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def suite_prefect_server(tmp_path_factory):
+    """One local Prefect server state for the whole suite, stopped at its end.
+
+    Every sweep the tests start (in a subprocess or in this process) finds the folder through
+    ``ESKIN_SERVER_DIR``: the first starts the server, the others reuse it, as a user's do.
+    """
+    state = tmp_path_factory.mktemp("prefect-server")
+    saved = {k: os.environ.get(k) for k in (server.SERVER_DIR_ENV, server.IDLE_ENV)}
+    os.environ[server.SERVER_DIR_ENV] = str(state)
+    os.environ[server.IDLE_ENV] = SUITE_SERVER_IDLE_S
+    yield state
+    server.stop(state)
+    for name, value in saved.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
 
 
 @pytest.fixture(scope="session")

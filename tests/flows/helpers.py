@@ -1,7 +1,6 @@
 """End-to-end test helpers: run the real command line and servers in a hermetic environment."""
 
 import os
-import socket
 import subprocess
 import sys
 import time
@@ -41,12 +40,6 @@ def eskin(*args: str, env: dict[str, str], timeout: float = 900) -> subprocess.C
     )
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def stop(*processes: subprocess.Popen) -> None:
     """Stop processes we started, by PID: SIGTERM, then SIGKILL after 20 s."""
     for process in processes:
@@ -68,6 +61,21 @@ def wait_for(predicate, timeout: float, what: str, interval: float = 0.5) -> Non
             return
         time.sleep(interval)
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def live_tree(root: Path) -> set[Path]:
+    """Every entry below ``root`` (relative paths) while a sweep may be writing under it.
+
+    A running sweep renames ``.partial-*`` entries into place and removes others, so a folder
+    listed a moment ago may be gone before it is entered; ``Path.rglob`` then raises
+    FileNotFoundError. Here a folder that vanished is skipped, and an entry counts if it was
+    listed: the snapshot is of what existed during the walk, not of one instant.
+    """
+    found = set()
+    for folder, dirs, files in os.walk(root, onerror=lambda error: None):
+        here = Path(folder).relative_to(root)
+        found.update(here / name for name in (*dirs, *files))
+    return found
 
 
 def assert_same_cubes(root_a: Path, root_b: Path) -> None:

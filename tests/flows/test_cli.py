@@ -96,7 +96,7 @@ def one_error_line(capsys, *argv):
         ("[readout]\nthreshhold_v = 0.1\n", "readout.threshhold_v: unknown key"),
         ("[readout]\nthreshold_v = 0.0\n", "readout.threshold_v: 0.0 is out of range"),
         ("[readout]\nthreshold_v = -0.05\n", "readout.threshold_v: -0.05 is out of range"),
-        ("[coding]\nwindow_s = 10.0\n", "coding.window_s: 10.0 s is longer than"),
+        ("[coding]\nwindow_s = 10.0\n", "coding.window_s: 1 window(s) of 10.0 s do not fit"),
         (
             "[readout.effects]\namplifier_noise = { sigma_v = -0.1 }\n",
             "readout.effects.amplifier_noise.sigma_v: -0.1 is out of range",

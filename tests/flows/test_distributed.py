@@ -5,11 +5,11 @@ import json
 import subprocess
 import urllib.request
 
+from flows import server
 from tests.flows.helpers import (
     BIN,
     assert_same_cubes,
     eskin,
-    free_port,
     hermetic_env,
     stop,
     wait_for,
@@ -74,27 +74,28 @@ def test_existing_scheduler_and_workers_give_identical_cubes(smoke_sweep, tmp_pa
         stop(*workers, scheduler)
 
 
-def test_prefect_deployment_run(smoke_sweep, tmp_path):
-    port = free_port()
-    api = f"http://127.0.0.1:{port}/api"
-    env = hermetic_env(tmp_path, PREFECT_API_URL=api)
-    server = subprocess.Popen(
-        [BIN / "prefect", "server", "start", "--host", "127.0.0.1", "--port", str(port)],
-        env=env,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+def api_post(api: str, path: str, body: dict) -> list[dict]:
+    request = urllib.request.Request(
+        f"{api}/{path}",
+        data=json.dumps(body).encode(),
+        headers={"Content-Type": "application/json"},
+        method="POST",
     )
+    with urllib.request.urlopen(request, timeout=60) as response:
+        return json.loads(response.read())
+
+
+def test_prefect_deployment_run(smoke_sweep, tmp_path):
+    """``prefect deployment run sweep/default --watch`` on the local server ``eskin`` starts;
+    afterwards the API lists the run's task runs (one per named sweep) and its artifacts."""
+    state = tmp_path / "server-state"
+    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
     serving = None
     try:
-
-        def healthy():
-            try:
-                with urllib.request.urlopen(f"{api}/health", timeout=2) as response:
-                    return response.status == 200
-            except OSError:
-                return False
-
-        wait_for(healthy, 180, "the Prefect server")
+        started = eskin("server", "start", "--json", env=env, timeout=900)
+        assert started.returncode == 0, started.stderr[-2000:]
+        api = json.loads(started.stdout)["api_url"]
+        env["PREFECT_API_URL"] = api
         serving = subprocess.Popen(
             [BIN / "eskin", "serve", "--grid", "smoke"],
             env=env,
@@ -136,5 +137,25 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path):
         assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
         assert "Completed" in run.stdout + run.stderr
         assert_same_cubes(smoke_sweep[0], root)
+
+        (flow_run,) = api_post(api, "flow_runs/filter", {})
+        assert flow_run["state_type"] == "COMPLETED"
+        task_runs = api_post(
+            api, "task_runs/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}
+        )
+        names = sorted(t["name"] for t in task_runs)
+        assert names[0].startswith("plan-")  # Prefect numbers unnamed task runs
+        assert names[1:] == ["sweep-noise", "sweep-threshold", "sweep-window"]
+        assert all(t["state_type"] == "COMPLETED" for t in task_runs)
+        artifacts = api_post(
+            api, "artifacts/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}
+        )
+        keys = {a["key"]: a for a in artifacts}
+        assert {"smoke-threshold-best", "smoke-window-best", "smoke-noise-best"} <= set(keys)
+        assert keys["smoke-progress"]["type"] == "progress"
+        assert keys["smoke-progress"]["data"] == 100.0
+        table = json.loads(keys["smoke-threshold-best"]["data"])
+        assert {row["model"] for row in table} == {"ffnn", "cnn"}
     finally:
-        stop(*(p for p in (serving, server) if p is not None))
+        stop(*(p for p in (serving,) if p is not None))
+        server.stop(state)

@@ -17,7 +17,19 @@ SMOKE_SWEEPS = {"threshold", "window", "noise"}
 
 def test_cold_run_summary(smoke_sweep):
     root, summary, _ = smoke_sweep
-    assert set(summary) == {"root", "cubes", "points", "cache_hits", "computed", "seconds"}
+    assert set(summary) == {
+        "root",
+        "cubes",
+        "points",
+        "cache_hits",
+        "computed",
+        "seconds",
+        "flow_run_url",
+        "dashboard",
+    }
+    assert summary["flow_run_url"].startswith("http://127.0.0.1:")
+    assert "/runs/flow-run/" in summary["flow_run_url"]
+    assert summary["dashboard"].startswith("http://127.0.0.1:")
     assert summary["points"] == 7  # 8 grid points, the operating point shared by two sweeps
     assert summary["cache_hits"] == 0 and summary["computed"] == 7
     assert set(summary["cubes"]) == SMOKE_SWEEPS

@@ -1,10 +1,21 @@
 """Grids: built-in grids cover the paper's figures; expansion, dimension names, validation."""
 
+import numpy as np
 import pytest
 
 from pipeline.errors import SceneError
-from pipeline.grid import DatasetFacts, Grid, SweepMode, check_fits, load_grid
-from pipeline.scene import Effect, cache_key
+from pipeline.grid import (
+    DatasetFacts,
+    Grid,
+    SweepMode,
+    check_fits,
+    check_scene_fits,
+    load_grid,
+    scene_misfits,
+)
+from pipeline.recordings import Recordings
+from pipeline.scene import Effect, Scene, cache_key
+from pipeline.taxels import cut_samples, taxel_delays_s, taxel_signals
 
 
 def sweep(grid, name):
@@ -125,9 +136,176 @@ def test_check_fits_lists_windows_longer_than_recordings_and_small_classes():
     assert "4 folds need at least that many recordings per class" in message
 
 
+def recordings_with_short_class(short: int, fs_hz: float = 1000.0) -> Recordings:
+    """Ten recordings of ``short`` samples in class ``a``, ten of 2000 in class ``b``."""
+    rng = np.random.default_rng(0)
+    lengths = [short] * 10 + [2000] * 10
+    return Recordings(
+        signals=tuple(rng.normal(size=n) for n in lengths),
+        labels=np.repeat([0, 1], 10),
+        class_names=("a", "b"),
+        fs_hz=fs_hz,
+        names=tuple(f"{c}/r{i:02d}.npy" for c in "ab" for i in range(10)),
+        units="a.u.",
+        name="mine",
+    )
+
+
+def test_dataset_facts_name_the_first_shortest_recording():
+    facts = DatasetFacts.of(recordings_with_short_class(50))
+    assert facts == DatasetFacts(
+        1000.0, 50, 10, shortest="a/r00.npy", dataset="mine", smallest_class="a"
+    )
+
+
+def test_shared_check_refuses_delays_that_use_up_a_recording_naming_it():
+    scene = Scene.paper()  # 3x3 taxels, 1 mm at 20 mm/s: delays up to 0.1 s
+    cut = cut_samples(taxel_delays_s(scene.array), 1000.0)
+    assert cut == 100
+    with pytest.raises(SceneError) as info:
+        check_scene_fits(scene, DatasetFacts.of(recordings_with_short_class(50)))
+    message = str(info.value)
+    assert message.startswith("invalid scene 'paper': array: the delays of a 3x3 array")
+    for expected in ("0.1 s, 100 samples at 1000 Hz", "a/r00.npy of dataset 'mine'", "50 samples"):
+        assert expected in message
+    # The boundary is the simulation's own: taxel_signals needs 2 samples left.
+    delays = taxel_delays_s(scene.array)
+    with pytest.raises(ValueError, match="leave 1 samples"):
+        taxel_signals(np.zeros(cut + 1), 1000.0, delays)
+    taxel_signals(np.zeros(cut + 2), 1000.0, delays)
+    at = {
+        n: [f for f, _ in scene_misfits(scene, DatasetFacts.of(recordings_with_short_class(n)))]
+        for n in (cut + 1, cut + 2)
+    }
+    assert at == {cut + 1: ["array"], cut + 2: ["coding.window_s"]}
+
+
+def test_shared_check_refuses_windows_that_do_not_fit_naming_the_recording():
+    scene = Scene.paper()
+    facts = DatasetFacts.of(recordings_with_short_class(300))  # 0.199 s after the delays
+    check_scene_fits(scene, facts)  # "auto": one 0.1 s window fits
+    with pytest.raises(
+        SceneError,
+        match=r"coding\.n_windows: 2 window\(s\) of 0\.1 s do not fit "
+        r"the shortest recording, a/r00\.npy of dataset 'mine' \(300 samples\)",
+    ):
+        check_scene_fits(scene.replace(**{"coding.n_windows": 2}), facts)
+    with pytest.raises(SceneError, match=r"coding\.window_s: 1 window\(s\) of 0\.25 s .* a/r00"):
+        check_scene_fits(scene.replace(**{"coding.window_s": 0.25}), facts)
+
+
+def test_check_fits_is_the_shared_check_at_every_point():
+    grid = Grid.from_dict({"base": "paper", "sweeps": {"t": {"axes": {"array.rows": [1, 3]}}}})
+    # 0.1 s: one window for a 1x3 array along y (no delays), 1 sample left by the 3x3 delays.
+    facts = DatasetFacts.of(recordings_with_short_class(101))
+    with pytest.raises(SceneError) as info:
+        check_fits(grid, {cache_key(grid.base, "recordings"): facts})
+    message = str(info.value)
+    assert "sweeps.t[0]" not in message
+    assert message.startswith("invalid grid 'grid': sweeps.t[1]: the delays of a 3x3 array")
+    assert "use up the shortest recording, a/r00.npy of dataset 'mine'" in message
+    # One problem at many points is listed once.
+    thresholds = {"readout.threshold_v": [0.05, 0.07, 0.09, 0.11, 0.13]}
+    grid = Grid.from_dict({"base": "paper", "sweeps": {"t": {"axes": thresholds}}})
+    with pytest.raises(SceneError) as info:
+        check_fits(grid, {cache_key(grid.base, "recordings"): facts})
+    message = str(info.value)
+    assert "invalid grid 'grid': sweeps.t[0], sweeps.t[1], sweeps.t[2] and 2 more: " in message
+    assert message.count("a/r00.npy") == 1
+
+
 def test_describe_round_trips_through_json():
     import json
 
     description = load_grid("smoke").describe()
     assert json.loads(json.dumps(description)) == description
     assert description["sweeps"]["noise"]["mode"] == "zip"
+
+
+def test_with_dataset_replaces_the_dataset_of_every_point_and_the_provenance(tmp_path):
+    grid = load_grid("smoke")
+    table = {"kind": "vibtac12", "path": str(tmp_path)}
+    moved = grid.with_dataset(table)
+    assert moved.name == grid.name and moved.sweeps == grid.sweeps
+    # Another kind replaces the whole table: the smoke data's size does not carry over.
+    assert moved.base.dataset == Scene.from_dict({"dataset": table}).dataset
+    scenes = [p.scene for p in moved.points()]
+    assert len(scenes) == len(grid.points())
+    assert {s.dataset for s in scenes} == {moved.base.dataset}
+    assert all(s.dataset.path == str(tmp_path) for s in scenes)
+    # The noise sweep's own settings stay.
+    assert {p.scene.array.n_taxels for p in moved.points() if p.sweep == "noise"} == {1}
+    assert moved.describe()["base"]["dataset"]["kind"] == "vibtac12"
+    assert not set(moved.unique_points()) & set(grid.unique_points())
+    assert grid.base.dataset.kind == "synthetic"  # the original is unchanged
+
+
+def test_with_dataset_of_the_same_kind_keeps_the_bases_other_settings():
+    moved = load_grid("smoke").with_dataset({"kind": "synthetic", "seed": 7})
+    dataset = moved.base.dataset
+    assert (dataset.seed, dataset.recordings_per_class, dataset.duration_s) == (7, 4, 1.5)
+
+
+def test_with_dataset_takes_a_relative_path_from_the_current_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    moved = load_grid("smoke").with_dataset({"kind": "folder", "path": "mine"})
+    assert moved.base.dataset.path == str(tmp_path / "mine")
+
+
+def test_with_dataset_refuses_a_grid_whose_sweeps_set_the_dataset():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "fine": {"axes": {"readout.threshold_v": [0.05]}},
+                "sized": {
+                    "set": {"dataset.recordings_per_class": 6},
+                    "axes": {"readout.threshold_v": [0.05]},
+                },
+                "seeded": {"axes": {"dataset.seed": [1, 2]}},
+            },
+        }
+    )
+    with pytest.raises(SceneError) as info:
+        grid.with_dataset({"kind": "synthetic"})
+    message = str(info.value)
+    assert "sweeps.sized.set: 'dataset.recordings_per_class'" in message
+    assert "sweeps.seeded.axes: 'dataset.seed'" in message
+    assert "sweeps.fine" not in message
+    with pytest.raises(SceneError, match="dataset.kind"):
+        load_grid("smoke").with_dataset({"kind": "tape"})
+
+
+@pytest.mark.parametrize(
+    "dataset",
+    [
+        {"kind": "synthetic", "recordings_per_class": 2, "duration_s": 0.5},
+        {
+            "kind": "synthetic",
+            "recordings_per_class": 3,
+            "duration_s": 0.2501,
+            "sampling_rate_hz": 999.0,
+        },
+        {"kind": "synthetic", "seed": 7, "recordings_per_class": 1, "duration_s": 0.1},
+    ],
+)
+def test_described_facts_of_the_built_in_data_are_those_of_the_generated_data(dataset):
+    """Checking a grid describes the built-in recordings without generating them."""
+    from pipeline.recordings import load_recordings
+
+    spec = Scene.from_dict({"dataset": dataset}).dataset
+    assert DatasetFacts.describe(spec) == DatasetFacts.of(load_recordings(spec))
+
+
+def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
+    from pipeline.recordings import load_recordings
+
+    (tmp_path / "dataset.toml").write_text("sampling_rate_hz = 100.0\n")
+    for name, lengths in {"a": (30, 20), "b": (25, 40)}.items():
+        (tmp_path / name).mkdir()
+        for i, n in enumerate(lengths):
+            np.save(tmp_path / name / f"r{i}.npy", np.sin(np.arange(n, dtype=np.float64)))
+    spec = Scene.from_dict({"dataset": {"kind": "folder", "path": str(tmp_path)}}).dataset
+    facts = DatasetFacts.describe(spec)
+    assert facts == DatasetFacts.of(load_recordings(spec))
+    assert (facts.min_samples, facts.shortest) == (20, "a/r1.npy")

@@ -494,6 +494,25 @@ def test_load_recordings_dispatches_on_kind(tmp_path):
         load_recordings(DatasetSpec(kind=DatasetKind.FOLDER))
 
 
+def test_every_source_names_each_recording_by_its_class(tmp_path):
+    """Messages name a culprit recording by these names (e.g. one too short for a scene)."""
+    vt = write_vibtac(tmp_path / "vt", np.ones((12, 20)))
+    classes = {"a": {"x.csv": [1, 2], "y.npy": [3, 4]}, "b": {"z.csv": [5, 6]}}
+    folder = make_folder(tmp_path / "f", classes)
+    specs = [
+        DatasetSpec(recordings_per_class=2, duration_s=0.5),
+        DatasetSpec(kind=DatasetKind.VIBTAC12, path=str(vt), segments=2),
+        DatasetSpec(kind=DatasetKind.FOLDER, path=str(folder)),
+    ]
+    synthetic, _, _ = recordings = [load_recordings(spec) for spec in specs]
+    for rec in recordings:
+        assert len(set(rec.names)) == rec.n_recordings
+        classes = [name.split("/")[0] for name in rec.names]
+        assert classes == [rec.class_names[label] for label in rec.labels]
+    first = synthetic.class_names[0]
+    assert synthetic.names[:2] == (f"{first}/rec01", f"{first}/rec02")
+
+
 def test_resolve_dataset_argument(tmp_path, monkeypatch):
     assert resolve_dataset_argument("synthetic") == {"kind": "synthetic"}
     folder = make_folder(tmp_path / "f", {"a": {"x.csv": [1, 2]}})

@@ -86,6 +86,30 @@ def dataset_grid(tmp: Path, **kwargs) -> list[str]:
     return ["--grid", str(grid_file(tmp, scene.name))]
 
 
+def short_class_dataset(tmp: Path) -> Path:
+    """At 1 kHz: class ``a`` holds ten 50-sample recordings (shorter than the 0.1 s taxel delays
+    of the paper's 3x3 array), classes ``b`` and ``c`` ten of 2000 samples; .csv and .npy."""
+    root = write(tmp / "short" / "dataset.toml", "sampling_rate_hz = 1000.0\n").parent
+    rng = np.random.default_rng(1)
+    for label, n in (("a", 50), ("b", 2000), ("c", 2000)):
+        for i in range(10):
+            values = rng.normal(size=n)
+            if i % 2:
+                np.save(root / label / f"r{i}.npy", values)
+            else:
+                write(root / label / f"r{i}.csv", "\n".join(f"{v:.6f}" for v in values) + "\n")
+    return root
+
+
+def short_class_grid(tmp: Path) -> list[str]:
+    data = short_class_dataset(tmp)
+    sweeps = (
+        f'[sweeps.t]\nset = {{ "dataset.kind" = "folder", "dataset.path" = "{data}" }}\n'
+        'axes = { "readout.threshold_v" = [0.05, 0.09] }\n'
+    )
+    return ["--grid", str(grid_file(tmp, "paper", sweeps))]
+
+
 def scene_grid(tmp: Path, **kwargs) -> list[str]:
     scene = scene_file(tmp, **kwargs)
     return ["--grid", str(grid_file(tmp, scene.name))]
@@ -244,6 +268,7 @@ CASES: list[Case] = [
         lambda t: scene_grid(t, dataset=f'kind = "folder"\npath = "{t / "gone"}"'),
         "gone",
     ),
+    ("dataset-shorter-than-taxel-delays", short_class_grid, "a/r0.csv"),
     # command-line arguments
     ("args-zero-workers", lambda t: ["--grid", "smoke", "--workers", "0"], "--workers"),
     ("args-text-workers", lambda t: ["--grid", "smoke", "--workers", "two"], "--workers"),
@@ -380,4 +405,44 @@ def test_bad_input_through_the_installed_command(tmp_path, case_id):
     assert proc.returncode == 2 and proc.stdout == ""
     lines = proc.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("eskin: error: ") and expected in lines[0]
+    assert not root.exists()
+
+
+# -- eskin run -------------------------------------------------------------------------------------
+
+SHORT_CLASS_MESSAGE = ("a/r0.csv", "the delays of a 3x3 array", "0.1 s", "50 samples")
+
+
+def test_run_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_path):
+    data = short_class_dataset(tmp_path)
+    before = tree(data)
+    code = run_cli(["run", "--scene", "paper", "--dataset", str(data)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
+    for expected in SHORT_CLASS_MESSAGE:
+        assert expected in lines[0], lines[0]
+    assert tree(data) == before
+
+
+def test_sweep_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_path):
+    line = assert_refused(capsys, short_class_grid(tmp_path), tmp_path / "root", "sweeps.t[0]")
+    for expected in SHORT_CLASS_MESSAGE:
+        assert expected in line, line
+    assert not (tmp_path / "root").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_short_recordings_through_the_installed_command(tmp_path, command):
+    root = tmp_path / "root"
+    if command == "run":
+        argv = ["run", "--scene", "paper", "--dataset", str(short_class_dataset(tmp_path))]
+    else:
+        argv = ["sweep", *short_class_grid(tmp_path), "--root", str(root)]
+    proc = eskin(*argv, env=hermetic_env(tmp_path), timeout=300)
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), proc.stderr[-3000:]
+    assert "a/r0.csv" in lines[0]
     assert not root.exists()

@@ -8,6 +8,7 @@ from pathlib import Path
 import psutil
 import pytest
 
+from flows import server
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.orchestrate import default_root
@@ -122,9 +123,16 @@ def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
 
     runner = get_current_settings().runner.server  # eskin serve's own web server, if enabled
     assert not runner.enable and runner.host in ("localhost", "127.0.0.1")
-    readme = (REPO / "README.md").read_text()
-    starts = [line for line in readme.splitlines() if "prefect server start" in line]
-    assert starts and all("--host 127.0.0.1" in line for line in starts)
+    # The local Prefect server that sweeps start: API and UI on loopback only.
+    state = tmp_path / "server-state"
+    monkeypatch.setenv(server.SERVER_DIR_ENV, str(state))
+    try:
+        with server.prefect_server(show_progress=False) as url:
+            assert url.startswith("http://127.0.0.1:")
+            addresses = listening(psutil.Process(server.status(state).pid))
+    finally:
+        server.stop(state)
+    assert addresses and set(addresses) == {"127.0.0.1"}, addresses
 
 
 @pytest.mark.parametrize("name", ["..", "../x", "a/b", "a\\b", ".", "/etc", "x" * 65, ""])

@@ -2,14 +2,17 @@
 
 import json
 import math
+import platform
+from importlib import metadata
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from pipeline.grid import Grid, sweep_points
 from pipeline.metrics import SpikeMetrics
 from storage.cubes import build_cube
-from storage.store import ResultEntry
+from storage.store import ResultEntry, SweepStore
 
 
 def metrics(ssnr_db: float = math.inf, ste_s2: float = 0.0) -> SpikeMetrics:
@@ -112,3 +115,25 @@ def test_correlations_along_a_noise_sweep():
     assert cube["correlation_n"].sel(model="ffnn", metric="ssnr_db") == 3  # +inf left out
     assert cube["correlation_n"].sel(model="ffnn", metric="ste_s2") == 4
     assert np.all(np.isfinite(cube["correlation_p"].values))
+
+
+def test_cube_records_dependency_versions_and_round_trips(tmp_path):
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
+    )
+    sweep = grid.sweeps[0]
+    cube = build_cube(grid, sweep, entries(grid, sweep, lambda p: ResultEntry({}, {}, metrics())))
+    expected = {
+        "version_python": platform.python_version(),
+        "version_torch": metadata.version("torch"),
+        "version_numpy": metadata.version("numpy"),
+        "version_numba": metadata.version("numba"),
+        "version_scikit_learn": metadata.version("scikit-learn"),
+        "version_xarray": metadata.version("xarray"),
+        "version_zarr": metadata.version("zarr"),
+        "package_version": metadata.version("eskin-sweep"),
+    }
+    assert {name: cube.attrs.get(name) for name in expected} == expected
+    store = SweepStore.open_or_create(tmp_path / "run")
+    store.write_cube("t", cube)
+    xr.testing.assert_identical(store.read_cube("t"), cube)  # plain strings survive Zarr

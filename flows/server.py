@@ -1,0 +1,327 @@
+"""A local Prefect server that outlives a sweep, so the UI keeps the history of every run.
+
+``eskin sweep`` (and ``eskin serve``) use the server named by ``PREFECT_API_URL`` when one is
+set. Otherwise they use a local server whose state (its SQLite database, its log, ``server.json``
+naming its PID and port) lives in one folder, ``runs/.prefect`` beside the run roots by default
+(``ESKIN_SERVER_DIR`` names another). The first sweep that finds no server running starts one,
+on 127.0.0.1 and a free port; later sweeps reuse it. It stops with ``eskin server stop``, or by
+itself once no sweep has used it for ``ESKIN_SERVER_IDLE_S`` seconds (30 minutes by default).
+
+Start-up waits as long as the machine needs: a first start sets up the database, which took
+15-20 s on a busy 2-core machine, beyond Prefect's own 20 s limit for its temporary server. It
+fails only when the server process exits, or after ``ESKIN_SERVER_START_TIMEOUT_S`` (15 minutes
+by default), with a :class:`ServerError` naming the log to read.
+
+Who uses the server is told by leases: a process that uses it holds a shared ``flock`` on
+``leases.lock`` for as long as it does. The server's idle monitor tries for an exclusive lock
+now and then; it gets it only when no lease is held, and once that has been so for the idle
+period it keeps the lock and shuts the server down. A sweep that wants a lease meanwhile waits
+for that shutdown to end, finds no server, and starts a new one, so a sweep never gets a server
+that is about to stop. The kernel drops a killed process's locks, so a killed sweep holds no
+lease.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from pipeline.errors import EskinError
+
+SERVER_DIR_ENV = "ESKIN_SERVER_DIR"
+IDLE_ENV = "ESKIN_SERVER_IDLE_S"
+START_TIMEOUT_ENV = "ESKIN_SERVER_START_TIMEOUT_S"
+DEFAULT_SERVER_DIR = Path("runs") / ".prefect"
+DEFAULT_IDLE_S = 1800.0
+DEFAULT_START_TIMEOUT_S = 900.0
+HOST = "127.0.0.1"
+#: In the server's command line; a PID whose command line lacks it is not our server.
+MARKER = "flows.server"
+STOP_GRACE_S = 30.0
+
+
+class ServerError(EskinError):
+    """The Prefect server cannot be started or reached: the run fails (exit status 1)."""
+
+    exit_status = 1
+
+
+@dataclass(frozen=True)
+class ServerInfo:
+    """A running local server: its process and where it listens."""
+
+    pid: int
+    port: int
+    state_dir: Path
+
+    @property
+    def ui_url(self) -> str:
+        return f"http://{HOST}:{self.port}"
+
+    @property
+    def api_url(self) -> str:
+        return f"{self.ui_url}/api"
+
+
+def server_dir() -> Path:
+    """The local server's state folder: ``$ESKIN_SERVER_DIR`` or ``runs/.prefect``."""
+    return Path(os.environ.get(SERVER_DIR_ENV) or DEFAULT_SERVER_DIR).absolute()
+
+
+def _seconds_from_env(name: str, default: float) -> float:
+    text = os.environ.get(name)
+    if text is None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0:
+        raise EskinError(f"{name}={text!r}: need a number of seconds > 0")
+    return value
+
+
+def healthy(api_url: str, timeout_s: float = 2.0) -> bool:
+    """Whether the Prefect API at ``api_url`` answers its health check."""
+    try:
+        with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
+            return response.status == 200
+    except (OSError, ValueError):
+        return False
+
+
+def status(state: Path | None = None) -> ServerInfo | None:
+    """The local server of ``state`` if its process runs and answers, else None."""
+    info = _recorded(state or server_dir())
+    if info is None or not healthy(info.api_url):
+        return None
+    return info
+
+
+@contextlib.contextmanager
+def prefect_server(*, show_progress: bool = True) -> Iterator[str]:
+    """Use a Prefect server for the duration of the block; yield its API URL.
+
+    ``PREFECT_API_URL``, when set, names the server (it must answer). Otherwise the local server
+    is started if none runs, and a lease keeps it from stopping while the block runs; Prefect
+    (imported or not) uses it inside the block.
+
+    Raises
+    ------
+    ServerError
+        The named server does not answer, or the local one could not start.
+    """
+    named = os.environ.get("PREFECT_API_URL")
+    if named:
+        if not healthy(named, timeout_s=30.0):
+            raise ServerError(f"PREFECT_API_URL={named}: the Prefect server does not answer")
+        yield named
+        return
+    state = server_dir()
+    state.mkdir(parents=True, exist_ok=True)
+    with open(state / "leases.lock", "a+") as lease:
+        # Blocks only while an idle server shuts down (its monitor holds the lock exclusively).
+        fcntl.flock(lease, fcntl.LOCK_SH)
+        with _exclusive(state / "start.lock"):
+            info = status(state) or _start(state, show_progress=show_progress)
+        with _using(info):
+            yield info.api_url
+
+
+@contextlib.contextmanager
+def _using(info: ServerInfo) -> Iterator[None]:
+    """Point Prefect at ``info`` for the block, whether or not Prefect is imported yet."""
+    urls = {"PREFECT_API_URL": info.api_url, "PREFECT_UI_URL": info.ui_url}
+    saved = {name: os.environ.get(name) for name in urls}
+    os.environ.update(urls)
+    try:
+        if "prefect" not in sys.modules:  # it reads the environment when imported
+            yield
+            return
+        from prefect.settings import PREFECT_API_URL, PREFECT_UI_URL, temporary_settings
+
+        with temporary_settings({PREFECT_API_URL: info.api_url, PREFECT_UI_URL: info.ui_url}):
+            yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def stop(state: Path | None = None) -> ServerInfo | None:
+    """Stop the local server of ``state`` (SIGTERM, SIGKILL after a grace); return what ran."""
+    state = state or server_dir()
+    info = _recorded(state)
+    if info is None:
+        return None
+    os.kill(info.pid, signal.SIGTERM)
+    deadline = time.monotonic() + STOP_GRACE_S
+    while _alive(info.pid) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    if _alive(info.pid):
+        os.kill(info.pid, signal.SIGKILL)
+    with contextlib.suppress(FileNotFoundError):
+        (state / "server.json").unlink()
+    return info
+
+
+def _start(state: Path, *, show_progress: bool) -> ServerInfo:
+    """Start the local server and wait until it answers (as long as a busy machine needs)."""
+    from tqdm import tqdm
+
+    timeout_s = _seconds_from_env(START_TIMEOUT_ENV, DEFAULT_START_TIMEOUT_S)
+    idle_s = _seconds_from_env(IDLE_ENV, DEFAULT_IDLE_S)
+    port = _free_port()
+    log_path = state / "server.log"
+    env = {
+        **os.environ,
+        "PREFECT_HOME": str(state),
+        "PREFECT_SERVER_API_HOST": HOST,
+        "PREFECT_SERVER_API_PORT": str(port),
+        "PREFECT_SERVER_ANALYTICS_ENABLED": "false",
+        "DO_NOT_TRACK": "1",
+        "MPLCONFIGDIR": str(state / "matplotlib"),
+    }
+    for name in ("PREFECT_API_URL", "PREFECT_UI_URL"):
+        env.pop(name, None)
+    with open(log_path, "ab") as log:
+        process = subprocess.Popen(
+            [sys.executable, "-m", MARKER, str(state), str(port), repr(idle_s)],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,  # a Ctrl-C of the sweep must not stop the shared server
+        )
+    info = ServerInfo(process.pid, port, state)
+    (state / "server.json").write_text(json.dumps({"pid": info.pid, "port": info.port}))
+    start = time.monotonic()
+    with tqdm(
+        desc=f"starting the Prefect server on {info.ui_url}",
+        bar_format="{desc} ({elapsed})",
+        file=sys.stderr,
+        disable=None if show_progress else True,
+        leave=False,
+    ) as bar:
+        while not healthy(info.api_url):
+            if process.poll() is not None:
+                raise ServerError(
+                    f"the Prefect server exited with status {process.returncode} while "
+                    f"starting; see {log_path}"
+                )
+            if time.monotonic() - start > timeout_s:
+                stop(state)
+                raise ServerError(
+                    f"the Prefect server did not answer within {timeout_s:.0f} s "
+                    f"({START_TIMEOUT_ENV}); see {log_path}"
+                )
+            time.sleep(0.25)
+            bar.refresh()
+    return info
+
+
+def _recorded(state: Path) -> ServerInfo | None:
+    try:
+        data = json.loads((state / "server.json").read_text())
+        info = ServerInfo(int(data["pid"]), int(data["port"]), state)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return info if _is_ours(info.pid) else None
+
+
+def _is_ours(pid: int) -> bool:
+    """Whether ``pid`` runs this module (a reused PID is left alone)."""
+    try:
+        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return False
+    return _alive(pid) and MARKER.encode() in cmdline
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and has not exited (a zombie has)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[-1].split()[0] not in ("Z", "X")
+
+
+@contextlib.contextmanager
+def _exclusive(path: Path) -> Iterator[None]:
+    with open(path, "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind((HOST, 0))
+        return s.getsockname()[1]
+
+
+# ---------------------------------------------------------------------------------------------
+# The server process: ``python -m flows.server STATE PORT IDLE_S``
+
+
+def _watch_idle(state: Path, idle_s: float, server: object) -> None:
+    """Shut ``server`` down once no lease has been held for ``idle_s`` seconds."""
+    poll_s = min(10.0, idle_s / 4)
+    lease = open(state / "leases.lock", "a+")  # held until the process exits
+    last_used = time.monotonic()
+    while not server.should_exit:
+        time.sleep(poll_s)
+        try:
+            fcntl.flock(lease, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            last_used = time.monotonic()
+            continue
+        if time.monotonic() - last_used >= idle_s:
+            # Keep the lock until the process is gone: a new sweep waits, then starts afresh.
+            print(f"eskin: no sweep for {idle_s:.0f} s; stopping", flush=True)
+            server.should_exit = True
+            return
+        fcntl.flock(lease, fcntl.LOCK_UN)
+
+
+def main(argv: list[str]) -> int:
+    import uvicorn
+
+    state, port, idle_s = Path(argv[0]), int(argv[1]), float(argv[2])
+    config = uvicorn.Config(
+        "prefect.server.api.server:create_app",
+        factory=True,
+        host=HOST,
+        port=port,
+        log_level="warning",
+        lifespan="on",
+    )
+    server = uvicorn.Server(config)
+    threading.Thread(target=_watch_idle, args=(state, idle_s, server), daemon=True).start()
+    try:
+        server.run()
+    finally:
+        recorded = state / "server.json"
+        with contextlib.suppress(OSError, ValueError):
+            if json.loads(recorded.read_text()).get("pid") == os.getpid():
+                recorded.unlink()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,140 @@
+"""The local Prefect server: started on first need, reused, stopped on demand or when idle.
+
+Each test uses its own state folder, so it starts (and stops) a server of its own and never
+touches the suite's shared one.
+"""
+
+import fcntl
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import psutil
+import pytest
+
+from flows import server
+from tests.flows.helpers import eskin, hermetic_env
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture
+def state(tmp_path, monkeypatch):
+    folder = tmp_path / "server-state"
+    monkeypatch.setenv(server.SERVER_DIR_ENV, str(folder))
+    monkeypatch.delenv("PREFECT_API_URL", raising=False)
+    yield folder
+    server.stop(folder)
+
+
+def test_started_once_reused_and_stopped(state):
+    assert server.status(state) is None
+    with server.prefect_server(show_progress=False) as url:
+        first = server.status(state)
+        assert first is not None and url == first.api_url
+        assert url.startswith("http://127.0.0.1:")
+        assert os.environ["PREFECT_API_URL"] == url
+    assert "PREFECT_API_URL" not in os.environ, "the block's settings leaked"
+    with server.prefect_server(show_progress=False) as again:
+        assert again == url
+    assert server.status(state).pid == first.pid, "a second use started another server"
+    assert server.healthy(url)
+    assert server.stop(state).pid == first.pid
+    psutil.Process(first.pid).wait(timeout=10)  # stop() returns once it has exited
+    assert server.status(state) is None and not (state / "server.json").exists()
+
+
+def test_idle_server_stops_by_itself_but_not_while_leased(state, monkeypatch):
+    monkeypatch.setenv(server.IDLE_ENV, "2")
+    with server.prefect_server(show_progress=False):
+        info = server.status(state)
+        time.sleep(5)  # twice the idle period, with a lease held
+        assert server.status(state) is not None, "stopped while a sweep used it"
+    psutil.Process(info.pid).wait(timeout=60)  # stops about 2 s after the lease ends
+    assert not (state / "server.json").exists()
+    assert "no sweep for 2 s; stopping" in (state / "server.log").read_text()
+
+
+def test_a_sweep_arriving_while_the_idle_server_stops_waits_and_gets_a_new_one(state):
+    """The monitor holds the lease lock exclusively while it shuts down; a sweep waits for it."""
+    with server.prefect_server(show_progress=False):
+        old = server.status(state)
+    got: list[str] = []
+    with open(state / "leases.lock", "a+") as monitor:
+        fcntl.flock(monitor, fcntl.LOCK_EX)  # what the idle monitor holds until it is gone
+
+        def sweep():
+            with server.prefect_server(show_progress=False) as url:
+                got.append(url)
+
+        arriving = threading.Thread(target=sweep)
+        arriving.start()
+        time.sleep(2)
+        assert not got, "a sweep got a lease on a server that was stopping"
+        server.stop(state)
+    arriving.join(timeout=600)
+    assert got and server.healthy(got[0])
+    assert server.status(state).pid != old.pid
+
+
+def test_a_named_server_is_used_and_must_answer(state, monkeypatch):
+    monkeypatch.setenv("PREFECT_API_URL", "http://127.0.0.1:9/api")  # discard port: nothing
+    with pytest.raises(server.ServerError, match="does not answer"), server.prefect_server():
+        pass
+    assert not state.exists(), "a local server was started although one was named"
+
+
+def test_a_server_that_cannot_start_is_one_error_line_and_exit_1(tmp_path):
+    """A state folder the server cannot use (its database path is a folder) fails fast."""
+    state = tmp_path / "broken"
+    (state / "prefect.db").mkdir(parents=True)
+    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
+    proc = eskin("server", "start", env=env, timeout=300)
+    assert proc.returncode == 1, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert lines[-1].startswith("eskin: error: the Prefect server exited with status")
+    assert str(state / "server.log") in lines[-1]
+
+
+def test_server_commands(tmp_path):
+    state = tmp_path / "cli-state"
+    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
+    try:
+        status = eskin("server", "status", "--json", env=env)
+        assert status.returncode == 0 and json.loads(status.stdout)["running"] is False
+        started = eskin("server", "start", "--json", env=env, timeout=600)
+        assert started.returncode == 0, started.stderr
+        url = json.loads(started.stdout)["ui_url"]
+        status = eskin("server", "status", env=env)
+        assert status.returncode == 0 and url in status.stdout
+        stopped = eskin("server", "stop", env=env)
+        assert stopped.returncode == 0 and "stopped" in stopped.stdout
+        assert json.loads(eskin("server", "status", "--json", env=env).stdout)["running"] is False
+    finally:
+        server.stop(state)
+
+
+def test_start_lock_serialises_concurrent_starts(state):
+    """Two processes that both find no server start only one between them."""
+    code = (
+        "import sys; sys.path.insert(0, '.')\n"
+        "from flows import server\n"
+        "with server.prefect_server(show_progress=False) as url: print(url)\n"
+    )
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", code],
+            stdout=subprocess.PIPE,
+            text=True,
+            env={**os.environ, server.SERVER_DIR_ENV: str(state)},
+        )
+        for _ in range(2)
+    ]
+    urls = {p.communicate(timeout=600)[0].strip() for p in procs}
+    assert len(urls) == 1 and all(p.returncode == 0 for p in procs)
+    # The leases were released with the processes: the monitor could lock exclusively now.
+    with open(state / "leases.lock", "a+") as lease:
+        fcntl.flock(lease, fcntl.LOCK_EX | fcntl.LOCK_NB)
