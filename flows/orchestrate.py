@@ -363,10 +363,6 @@ class DryRun:
             "wall_seconds": self.wall_seconds,
         }
 
-    def format(self) -> str:
-        """The human table of :func:`format_dry_run`."""
-        return format_dry_run(self)
-
 
 def cost_kind(scene: Scene) -> str:
     """What a point's cost depends on: its canonical form without the values that do not count.

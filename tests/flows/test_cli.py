@@ -1,5 +1,6 @@
 """``eskin run``: the JSON contract, the summary, and one clear stderr line for each bad input."""
 
+import contextlib
 import json
 import math
 import re
@@ -201,3 +202,79 @@ def test_run_on_the_vibtac12_copy(capsys, tiny_scene):
     assert result["n_windows"] >= 15  # 399-sample segments at 200 Hz hold about 19 windows
     for model in ("ffnn", "cnn"):
         assert len(result["accuracy"][model]["folds"]) == 4
+
+
+# -- command-line conventions ---------------------------------------------------------------------
+
+
+def test_version(capsys):
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"eskin {version('eskin-sweep')}"
+
+
+@pytest.mark.parametrize("workers", ["0", "-1", "two"])
+def test_workers_must_be_a_positive_whole_number(capsys, workers):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["sweep", "--grid", "smoke", "--workers", workers])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"argument --workers: {workers!r}: need a whole number" in err
+
+
+def test_a_failed_run_exits_1_with_one_line(capsys, tmp_path, monkeypatch):
+    """A sweep whose points failed is a failed run on good input, not bad input."""
+    import flows.sweep
+    from flows.orchestrate import SweepFailed
+
+    message = "2 of 7 points failed (the others are kept in ROOT): point-x: boom"
+
+    def failing(**_):
+        raise SweepFailed(message)
+
+    monkeypatch.setattr(flows.sweep, "sweep", failing)
+    monkeypatch.setattr("flows.server.prefect_server", lambda **_: contextlib.nullcontext("url"))
+    code, out, err = run_cli(capsys, "sweep", "--grid", "smoke", "--root", str(tmp_path / "r"))
+    assert code == 1 and out == ""
+    assert (
+        err == "eskin: error: 2 of 7 points failed (the others are kept in ROOT): point-x: boom\n"
+    )
+
+
+def test_dry_run_writes_nothing_and_reports_every_point(capsys, tmp_path):
+    root = tmp_path / "not-there"
+    code, out, err = run_cli(
+        capsys, "sweep", "--grid", "smoke", "--root", str(root), "--dry-run", "--json"
+    )
+    assert code == 0, err
+    plan = json.loads(out)
+    assert (plan["points"], plan["cached"], plan["missing"], plan["unknown"]) == (7, 0, 7, 7)
+    assert set(plan["sweeps"]) == {"threshold", "window", "noise"}
+    assert not root.exists()
+    code, out, _ = run_cli(capsys, "sweep", "--grid", "smoke", "--root", str(root), "--dry-run")
+    assert code == 0 and "nothing written" in out and "unknown" in out
+    assert not root.exists()
+
+
+def test_dry_run_default_root_on_another_dataset_is_its_own(capsys, tmp_path, monkeypatch):
+    data = make_folder_dataset(tmp_path / "my data")
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(
+        capsys, "sweep", "--grid", "smoke", "--dataset", str(data), "--dry-run", "--json"
+    )
+    # The smoke grid's 4 folds do not fit 3 recordings per class: refused before any work.
+    assert code == 2 and "class 'rough' has fewer (3)" in err
+    three_folds = tmp_path / "grid.toml"
+    three_folds.write_text(
+        'name = "g"\n[base]\ntraining = { folds = 3, epochs = 2 }\n'
+        '[sweeps.t]\naxes = { "readout.threshold_v" = [0.05, 0.1] }\n'
+    )
+    code, out, err = run_cli(
+        capsys, "sweep", "--grid", str(three_folds), "--dataset", str(data), "--dry-run", "--json"
+    )
+    assert code == 0, err
+    assert json.loads(out)["root"] == str(Path("runs") / "g-my-data")
+    assert not (tmp_path / "runs").exists()

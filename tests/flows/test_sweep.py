@@ -3,6 +3,7 @@
 import json
 import os
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ import xarray as xr
 
 from flows.cli import main
 from storage import open_results
-from tests.flows.helpers import eskin
+from tests.flows.helpers import eskin, hermetic_env
 
 SMOKE_SWEEPS = {"threshold", "window", "noise"}
 
@@ -210,3 +211,62 @@ def test_the_readme_queries_run_on_a_sweep(smoke_sweep):
     namespace: dict = {}
     exec(block.replace('"runs/paper"', repr(str(smoke_sweep[0]))), namespace)
     assert set(namespace["cubes"]) == SMOKE_SWEEPS
+
+
+def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
+    """``--dataset`` puts any grid on other recordings; ``--report`` ends with the report, and
+    the flow run links to it in the Prefect UI."""
+    import urllib.request
+
+    from flows import server
+    from flows.sweep import artifact_key
+
+    data = tmp_path / "three textures"
+    data.mkdir()
+    (data / "dataset.toml").write_text("sampling_rate_hz = 500.0\nname = 'three'\n")
+    rng = np.random.default_rng(1)
+    t = np.arange(1000) / 500.0
+    for k, texture in enumerate(("fine", "medium", "coarse")):
+        (data / texture).mkdir()
+        for r in range(4):
+            ridges = np.sin(2 * np.pi * (5 + 10 * k) * t + rng.uniform(0, 2 * np.pi))
+            np.save(data / texture / f"r{r}.npy", ridges + 0.3 * rng.standard_normal(t.size))
+    grid = tmp_path / "grid.toml"
+    grid.write_text(
+        'name = "g"\nbase = "smoke"\n[sweeps.t]\naxes = { "readout.threshold_v" = [0.05, 0.2] }\n'
+    )
+    root = tmp_path / "run"
+    env = hermetic_env(tmp_path)
+    proc = eskin(
+        "sweep",
+        "--grid",
+        str(grid),
+        "--dataset",
+        str(data),
+        "--root",
+        str(root),
+        "--report",
+        "--json",
+        env=env,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads(proc.stdout)
+    assert summary["computed"] == 2
+    assert Path(summary["report"]) == root / "report" / "report.html"
+    assert Path(summary["report"]).is_file()
+    cube = open_results(root)["t"]
+    assert cube.sizes["threshold_v"] == 2
+    assert "three textures" in cube.attrs["base_scene"]
+
+    api = server.status().api_url  # the suite's server, which this sweep used
+    request = urllib.request.Request(
+        f"{api}/artifacts/filter",
+        data=json.dumps(
+            {"artifacts": {"key": {"any_": [artifact_key(root.name, "report")]}}}
+        ).encode(),
+        headers={"Content-Type": "application/json"},
+        method="POST",
+    )
+    with urllib.request.urlopen(request, timeout=60) as response:
+        links = json.loads(response.read())
+    assert any(Path(summary["report"]).as_uri() in a["data"] for a in links)
