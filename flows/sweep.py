@@ -167,8 +167,9 @@ def sweep(
             runs = [sweep_task.submit(plan, s.name, futures) for s in plan.grid.sweeps]
             if futures:
                 _follow(plan, client, futures, show_progress)
-            states = [run.wait() or run.state for run in runs]
-        failed = [s.message or s.name for s in states if not s.is_completed()]
+            for run in runs:
+                run.wait()
+        failed = [run.state.message for run in runs if not run.state.is_completed()]
         if failed:
             raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
         cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}

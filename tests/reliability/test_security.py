@@ -3,6 +3,7 @@ and names and paths from scene and grid files cannot leave their root."""
 
 import ast
 import os
+import urllib.request
 from pathlib import Path
 
 import psutil
@@ -109,6 +110,9 @@ def test_the_local_cluster_and_its_dashboard_listen_on_loopback_only(tmp_path, m
         assert info["address"].startswith("tcp://127.0.0.1:")
         assert all(w.startswith("tcp://127.0.0.1:") for w in info["workers"])
         assert client.dashboard_link.startswith("http://127.0.0.1:")
+        # The dashboard serves its pages (it needs bokeh, which distributed does not require).
+        with urllib.request.urlopen(client.dashboard_link, timeout=60) as response:
+            assert response.status == 200 and b"bokeh" in response.read().lower()
         addresses = listening(psutil.Process())
     assert addresses and set(addresses) == {"127.0.0.1"}, addresses
 
