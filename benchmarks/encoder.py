@@ -53,7 +53,7 @@ def run(repeat: int = 7) -> list[dict]:
         {
             "benchmark": "ideal encoder vs memory copy",
             "ratio": encoder_s / copy_s,
-            "target": "<= 20 (issue 2), <= 10 (issue 6)",
+            "target": "<= 10",
             "detail": f"{n / encoder_s / 1e6:.0f} M samples/s vs copy {n / copy_s / 1e6:.0f} M/s",
         },
         {

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import signal
 import sys
@@ -27,6 +26,7 @@ from typing import Any, NoReturn
 
 from flows import cluster
 from flows.report import DEFAULT_ADC_BITS
+from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 
 EXIT_USER_ERROR = 2
@@ -39,14 +39,12 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USER_ERROR, f"eskin: error: {message} (see {self.prog} --help)\n")
 
 
-def _positive_int(text: str) -> int:
+def _workers(text: str) -> int:
+    # The cluster's rule, reported as argparse reports a bad option (it names --workers).
     try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: need a whole number >= 1")
-    return value
+        return cluster.check_workers(text)
+    except cluster.ClusterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _version() -> str:
@@ -117,7 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     where = sweep.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
-        type=_positive_int,
+        type=_workers,
         metavar="N",
         help=f"local Dask workers, 1 thread each (default: the cores available, "
         f"{cluster.available_cores()} here)",
@@ -229,7 +227,7 @@ def _run(args: argparse.Namespace) -> int:
         progress.close()
     summary = result_summary(result)
     if args.json:
-        print(json.dumps(_json_safe(summary), indent=2))
+        print(json.dumps(json_safe(summary), indent=2))
     else:
         print(format_summary(summary))
     return 0
@@ -252,7 +250,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.dry_run:
         plan = dry_run(grid, root, workers)
         print(
-            json.dumps(_json_safe(plan.to_json()), indent=2) if args.json else format_dry_run(plan)
+            json.dumps(json_safe(plan.to_json()), indent=2) if args.json else format_dry_run(plan)
         )
         return 0
     store = SweepStore.open_or_create(root)
@@ -280,7 +278,7 @@ def _sweep(args: argparse.Namespace) -> int:
     # The whole sweep as the user waits for it, the server start included.
     summary["seconds"] = time.perf_counter() - start
     if args.json:
-        print(json.dumps(_json_safe(summary), indent=2))
+        print(json.dumps(json_safe(summary), indent=2))
     else:
         print(format_sweep_summary(summary))
     return 0
@@ -320,33 +318,6 @@ def _server(args: argparse.Namespace) -> int:
 
 def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt(signal.Signals(signum).name)
-
-
-def format_sweep_summary(summary: dict[str, Any]) -> str:
-    from flows.orchestrate import best_points
-    from storage import open_results
-
-    cubes = open_results(summary["root"])
-    lines = [
-        f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
-        f"computed) in {summary['seconds']:.1f} s",
-        f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
-    ]
-    for name in summary["cubes"]:
-        cube = cubes[name]
-        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy"].dims[:-2])
-        for row in best_points(cube):
-            at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
-            lines.append(
-                f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
-            )
-    lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
-    lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
-    if summary.get("report"):
-        lines.append(f"report: {summary['report']}")
-    if summary.get("flow_run_url"):
-        lines.append(f"Prefect flow run: {summary['flow_run_url']}")
-    return "\n".join(lines)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -401,74 +372,6 @@ class _StageProgress:
 
     def close(self) -> None:
         self.bar.close()
-
-
-def result_summary(result: Any) -> dict[str, Any]:
-    """The JSON object of ``eskin run --json`` (ARCHITECTURE section 7)."""
-    scene = result.scene
-    m = result.metrics
-    return {
-        "scene": scene.name,
-        "dataset": scene.dataset.kind.value,
-        "n_recordings": result.n_recordings,
-        "n_classes": result.n_classes,
-        "chance": 1.0 / result.n_classes,
-        "taxels": scene.array.n_taxels,
-        "threshold_v": scene.readout.threshold_v,
-        "window_s": scene.coding.window_s,
-        "n_windows": result.n_windows,
-        "dropped_spikes": result.dropped_spikes,
-        "accuracy": {
-            model.value: {
-                "mean": cv.mean,
-                "std": cv.std,
-                "folds": [float(a) for a in cv.fold_accuracy],
-            }
-            for model, cv in result.accuracy.items()
-        },
-        "ssnr_db": m.ssnr_db,
-        "ste_s2": m.ste_s2,
-        "ste_sign_safe_s2": m.ste_sign_safe_s2,
-        "event_rate_hz": m.event_rate_hz,
-        "data_rate_bps": m.data_rate_bps,
-        "equivalent_bits": m.equivalent_bits,
-        "timings_s": dict(result.timings_s),
-    }
-
-
-def format_summary(s: dict[str, Any]) -> str:
-    lines = [
-        f"scene {s['scene']!r} on {s['dataset']} data: {s['n_recordings']} recordings, "
-        f"{s['n_classes']} classes (chance {100 * s['chance']:.1f} %)",
-        f"  {s['taxels']} taxels, threshold {s['threshold_v']:g} V "
-        f"({s['equivalent_bits']:.2f} equivalent bits), "
-        f"{s['n_windows']} windows of {s['window_s']:g} s",
-    ]
-    for model, acc in s["accuracy"].items():
-        lines.append(
-            f"  {model.upper():5s} accuracy {100 * acc['mean']:5.1f} % "
-            f"+- {100 * acc['std']:.1f} % over {len(acc['folds'])} folds"
-        )
-    ssnr = "inf (REAL = TRUE)" if math.isinf(s["ssnr_db"]) else f"{s['ssnr_db']:.2f}"
-    lines += [
-        f"  SSNR {ssnr} dB, STE {s['ste_s2']:.3g} s^2 (sign-safe {s['ste_sign_safe_s2']:.3g})",
-        f"  event rate {s['event_rate_hz']:.4g} spikes/s, "
-        f"data rate {s['data_rate_bps']:.4g} bit/s (address-event)",
-        "  seconds: "
-        + ", ".join(f"{stage} {sec:.2f}" for stage, sec in s["timings_s"].items())
-        + f" (total {sum(s['timings_s'].values()):.1f})",
-    ]
-    return "\n".join(lines)
-
-
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return "inf" if value > 0 else "-inf" if value < 0 else "nan"
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_json_safe(v) for v in value]
-    return value
 
 
 if __name__ == "__main__":

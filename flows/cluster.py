@@ -8,6 +8,7 @@ The local cluster runs ``workers`` processes with one thread each, every server 
 from __future__ import annotations
 
 import logging
+import numbers
 import os
 import re
 from collections.abc import Iterator
@@ -28,6 +29,33 @@ def available_cores() -> int:
     if hasattr(os, "sched_getaffinity"):
         return len(os.sched_getaffinity(0))
     return os.cpu_count() or 1
+
+
+def check_workers(value: object, *, name: str | None = None) -> int:
+    """``value`` as a number of workers: a whole number >= 1, or its decimal text.
+
+    The one rule for worker counts: the command line's ``--workers`` type and every Python
+    entry point (:func:`dask_client`, :func:`flows.orchestrate.run_sweep`) call it before
+    anything starts.
+
+    Raises
+    ------
+    ClusterError
+        ``value`` is not a whole number >= 1 (the message starts with ``name`` when given;
+        the command line names the option itself).
+    """
+    number = None
+    if isinstance(value, str):
+        try:
+            number = int(value)
+        except ValueError:
+            pass
+    elif isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        number = int(value)
+    if number is None or number < 1:
+        prefix = f"{name} " if name else ""
+        raise ClusterError(f"{prefix}{value!r}: need a whole number >= 1")
+    return number
 
 
 def check_address(address: str) -> None:
@@ -69,9 +97,7 @@ def dask_client(
         finally:
             client.close()
         return
-    workers = available_cores() if workers is None else workers
-    if workers < 1:
-        raise ClusterError(f"--workers {workers}: need at least 1")
+    workers = available_cores() if workers is None else check_workers(workers, name="workers")
     # Workers allocate from one glibc arena, whose heap can keep training's large tensors (see
     # flows.environment.tune_allocator); Dask's own MALLOC_TRIM_THRESHOLD_ would return them to
     # the kernel after every step. A variable the user set wins.

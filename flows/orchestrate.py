@@ -8,12 +8,15 @@ whose result is in the store is not computed again.
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import functools
 import json
+import logging
 import re
 import statistics
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,14 +24,18 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from flows.work import compute_point, compute_spikes
+from flows.cluster import ClusterError, check_workers, dask_client
+from flows.environment import hermetic_environment
+from flows.work import ensure_entry
 from pipeline.coding import MAX_AUTO_WINDOWS
+from pipeline.cube import RecordingsInfo, build_cube
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import resolve_dataset_argument
 from pipeline.scene import Scene, cache_key
-from storage import EntryKind, ResultEntry, SweepStore
-from storage.cubes import build_cube
+from pipeline.stages import RESULTS, SPIKES
+from storage import EntryKind, ResultEntry, StoreError, SweepStore
+from storage.cubes import SPIKE_STAGES
 
 DEFAULT_RUNS_DIR = Path("runs")
 POLL_S = 2.0
@@ -47,12 +54,15 @@ class SweepPlan:
 
     ``records`` holds the result entries of the cached points as planning read (and checked)
     them, so that assembling the cubes reads from the store only the points computed since.
+    ``datasets`` holds the facts of each dataset the grid was checked against, by recordings
+    cache key.
     """
 
     grid: Grid
     root: str
     scenes: dict[str, Scene]  # distinct points by result key
     records: dict[str, ResultEntry]
+    datasets: dict[str, DatasetFacts] = dataclasses.field(default_factory=dict)
 
     @property
     def cached(self) -> frozenset[str]:
@@ -83,14 +93,18 @@ def default_root(grid: Grid, dataset: str | None = None) -> Path:
     return DEFAULT_RUNS_DIR / f"{grid.name}-{label}"
 
 
-def check_grid(grid: Grid) -> None:
-    """Check every point against its recordings (each dataset loaded once); raise on misfits."""
+def check_grid(grid: Grid) -> dict[str, DatasetFacts]:
+    """Check every point against its recordings (each dataset loaded once); raise on misfits.
+
+    Returns the facts of each dataset, by recordings cache key.
+    """
     facts: dict[str, DatasetFacts] = {}
     for point in grid.points():
         key = cache_key(point.scene, "recordings")
         if key not in facts:
             facts[key] = DatasetFacts.describe(point.scene.dataset)
     check_fits(grid, facts)
+    return facts
 
 
 def load_sweep_grid(grid_ref: str, dataset: str | None = None) -> Grid:
@@ -137,13 +151,13 @@ def plan_sweep(grid_ref: str, root: str, dataset: str | None = None) -> SweepPla
     ``dataset`` is as for :func:`load_sweep_grid`.
     """
     grid = load_sweep_grid(grid_ref, dataset)
-    check_grid(grid)
+    datasets = check_grid(grid)
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
     found = {key: store.read_valid(EntryKind.RESULTS, key) for key in scenes}
     records = {key: entry for key, entry in found.items() if entry is not None}
-    return SweepPlan(grid, str(store.root), scenes, records)
+    return SweepPlan(grid, str(store.root), scenes, records, datasets)
 
 
 def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
@@ -161,11 +175,12 @@ def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
         scene = plan.scenes[key]
         data = scene.to_dict()
         priority = priorities[key]
-        spikes_key = cache_key(scene, "spikes")
-        if spikes_key not in spike_futures and not store.has(EntryKind.SPIKES, spikes_key):
+        spikes_key = SPIKES.key(scene)
+        if spikes_key not in spike_futures and not store.has(SPIKES.name, spikes_key):
             spike_futures[spikes_key] = client.submit(
-                compute_spikes,
+                ensure_entry,
                 plan.root,
+                SPIKES.name,
                 data,
                 key=f"spikes-{spikes_key}",
                 pure=False,
@@ -173,8 +188,9 @@ def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
             )
         after = [spike_futures[spikes_key]] if spikes_key in spike_futures else []
         point_futures[key] = client.submit(
-            compute_point,
+            ensure_entry,
             plan.root,
+            RESULTS.name,
             data,
             *after,
             key=f"point-{key}",
@@ -254,9 +270,46 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
         key: plan.records[key] if key in plan.records else store.read_result(key)
         for key in plan.sweep_keys[name]
     }
-    cube = build_cube(plan.grid, spec, records)
+    records = with_recordings(plan, store, records)
+    cube = build_cube(plan.grid, spec, records, spike_stages=SPIKE_STAGES)
     store.write_cube(name, cube)
     return cube
+
+
+def with_recordings(
+    plan: SweepPlan, store: SweepStore, records: dict[str, ResultEntry]
+) -> dict[str, ResultEntry]:
+    """The result entries, each stating the recordings it was computed on where that is known.
+
+    What an entry does not state itself (entries written before results did) is taken from
+    what the store and the plan know of the same recordings: the class names from the point's
+    rate entry, the dataset name and sampling rate from the facts the grid was checked against.
+    A fact neither has stays unknown, and so out of the cube, rather than guessed.
+    """
+    class_names: dict[str, tuple[str, ...] | None] = {}
+    completed = {}
+    for key, record in records.items():
+        known = record.recordings or RecordingsInfo()
+        if None not in (known.dataset_name, known.class_names, known.sampling_rate_hz):
+            completed[key] = record
+            continue
+        scene = plan.scenes[key]
+        recordings_key = cache_key(scene, "recordings")
+        if recordings_key not in class_names:
+            try:
+                class_names[recordings_key] = store.read_rates(
+                    cache_key(scene, "rates")
+                ).class_names
+            except (StoreError, OSError):
+                class_names[recordings_key] = None
+        facts = plan.datasets.get(recordings_key)
+        info = RecordingsInfo(
+            dataset_name=known.dataset_name or (facts.dataset if facts else None) or None,
+            class_names=known.class_names or class_names[recordings_key],
+            sampling_rate_hz=known.sampling_rate_hz or (facts.fs_hz if facts else None),
+        )
+        completed[key] = dataclasses.replace(record, recordings=info)
+    return completed
 
 
 def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
@@ -291,6 +344,147 @@ def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
         }
         rows.append({"model": str(model), "accuracy": float(per_model.values[index]), "at": at})
     return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# A whole sweep, without Prefect
+
+
+@contextlib.contextmanager
+def sweep_client(
+    plan: SweepPlan,
+    client: Any = None,
+    workers: int | None = None,
+    address: str | None = None,
+) -> Iterator[Any]:
+    """The Dask client that takes the plan's missing points, or None when none is missing.
+
+    ``client``, when given, is used as it is and left open. Otherwise a fresh one is made
+    (:func:`flows.cluster.dask_client` with ``workers`` or ``address``) and closed at the end.
+    """
+    if not plan.missing:
+        yield None
+    elif client is not None:
+        yield client
+    else:
+        hermetic_environment(Path(plan.root), prefect=False)
+        with dask_client(workers, address) as fresh:
+            yield fresh
+
+
+def sweep_summary(
+    plan: SweepPlan, cubes: dict[str, str], computed: int, seconds: float
+) -> dict[str, Any]:
+    """A finished sweep's summary, as ``eskin sweep --json`` prints it.
+
+    Keys: ``root``, ``cubes`` (each cube's location by sweep name), ``points`` (distinct),
+    ``cache_hits``, ``computed`` and ``seconds`` (the sweep's wall time, s).
+    """
+    return {
+        "root": plan.root,
+        "cubes": cubes,
+        "points": len(plan.scenes),
+        "cache_hits": len(plan.cached),
+        "computed": computed,
+        "seconds": seconds,
+    }
+
+
+def log_sweep_run(
+    plan: SweepPlan, summary: dict[str, Any], warn: Callable[..., Any] | None = None
+) -> None:
+    """Append the sweep to the root's run log, which the report shows.
+
+    A log that cannot be written does not fail the sweep: ``warn`` (default: this module's
+    logger) is called with a %-format message instead.
+    """
+    from storage.runlog import append_sweep_run
+
+    try:
+        append_sweep_run(plan.root, {**summary, "grid": plan.grid.name})
+    except OSError as error:
+        (warn or logging.getLogger(__name__).warning)(
+            "sweep not logged in %s: %s", plan.root, error
+        )
+
+
+def run_sweep(
+    grid: str | Path,
+    root: str | Path | None = None,
+    *,
+    client: Any = None,
+    workers: int | None = None,
+    dataset: str | Path | None = None,
+    show_progress: bool = False,
+) -> dict[str, Any]:
+    """Sweep a grid into labelled cubes under ``root``, on a Dask client, without Prefect.
+
+    What the ``sweep`` flow does, as one plain call for a notebook or a script: hold the
+    root's lock, plan the grid, submit its missing points, wait for them, assemble and write
+    every cube, and log the sweep for the report.
+
+    Parameters
+    ----------
+    grid
+        A built-in grid name (``paper``, ``smoke``) or a grid TOML file.
+    root
+        The run root (default: :func:`default_root`), created if need be.
+    client
+        A ``distributed.Client`` to compute on, left open. Default: a local cluster of
+        ``workers`` single-thread processes, started only if a point is missing and stopped
+        at the end.
+    workers
+        Workers of that local cluster (default: one per available core); not with ``client``.
+    dataset
+        Other recordings for every point (``"synthetic"`` or a dataset folder), as
+        ``eskin sweep --dataset``.
+    show_progress
+        Show a progress bar over the points on stderr.
+
+    Returns
+    -------
+    dict
+        :func:`sweep_summary`, plus ``dashboard`` (the Dask dashboard's address, or None when
+        nothing was computed).
+
+    Raises
+    ------
+    EskinError
+        Bad input (grid, dataset, root, ``workers``), before anything is written; a root that
+        another sweep holds (:class:`storage.StoreBusyError`).
+    SweepFailed
+        Some points failed; the cubes of the sweeps they are not in are written.
+    """
+    start = time.perf_counter()
+    if workers is not None:
+        if client is not None:
+            raise ClusterError("give a client or a number of workers, not both")
+        workers = check_workers(workers, name="workers")
+    grid_ref = str(grid)
+    data_ref = None if dataset is None else str(dataset)
+    store = open_root(grid_ref, None if root is None else str(root), data_ref)
+    with store.lock():
+        plan = plan_sweep(grid_ref, str(store.root), data_ref)
+        failed: dict[str, str] = {}
+        with sweep_client(plan, client, workers) as dask:
+            futures = submit_missing(plan, dask) if dask is not None else {}
+            with progress_bar(plan, show_progress) as bar:
+                for key, failure in completed_points(dask, futures):
+                    bar.update(1)
+                    if failure:
+                        failed[key] = failure
+            dashboard = dask.dashboard_link if dask is not None else None
+        cubes = {}
+        for spec in plan.grid.sweeps:
+            # A sweep with a failed point has no cube: a cube never holds a hole.
+            if not failed.keys() & set(plan.sweep_keys[spec.name]):
+                assemble_cube(plan, spec.name)
+                cubes[spec.name] = cube_location(plan, spec.name)
+    if failed:
+        raise SweepFailed(failure_message(list(failed.values()), len(plan.scenes), plan.root))
+    summary = sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+    log_sweep_run(plan, summary)
+    return summary | {"dashboard": dashboard}
 
 
 # ---------------------------------------------------------------------------------------------

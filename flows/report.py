@@ -1,17 +1,24 @@
 """Write a run root's report: the plain function behind ``eskin report`` and the flow's report task.
 
 It wires three layers together: :mod:`pipeline.report` turns the cubes into curves, claims and
-tables, :mod:`pipeline.figures` draws them, and :mod:`storage.report` writes the folder whole.
+tables (:mod:`pipeline.report.analysis`), draws them (:mod:`pipeline.report.figures`) and renders
+the files of the report (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the
+folder whole.
 """
 
 from __future__ import annotations
 
-import math
 import sys
 from contextlib import suppress
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pipeline.errors import EskinError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from pipeline.report import Panel, Report
 
 DEFAULT_ADC_BITS = 12
 
@@ -35,7 +42,7 @@ def write_run_report(
         earlier report is refused.
     adc_bits, adc_rate_hz
         The frame-based ADC readout that Table I compares with: bits per sample and frame rate
-        per taxel in Hz (default: the recordings' sampling rate).
+        per taxel in Hz (default: the recordings' sampling rate, as the cubes state it).
 
     Raises
     ------
@@ -43,12 +50,13 @@ def write_run_report(
         Bad ADC figures, a root that is not a sweep store, or a store with no cubes.
     """
     from flows.environment import hermetic_environment
+    from pipeline.numbers import positive_number
     from storage import SweepStore, open_results
 
     problems = []
     if adc_bits < 1:
         problems.append(f"--adc-bits {adc_bits}: need at least 1")
-    if adc_rate_hz is not None and not (math.isfinite(adc_rate_hz) and adc_rate_hz > 0):
+    if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
         problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
     if problems:
         raise EskinError("; ".join(problems))
@@ -58,18 +66,52 @@ def write_run_report(
         raise EskinError(f"no result cubes in {store.root}: run 'eskin sweep' on it first")
     with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
         hermetic_environment(store.root, prefect=False)
-    from pipeline.figures import draw_report
-    from pipeline.report import FrameReadout, build_report, recording_facts
-    from storage.report import write_report
+    from pipeline.report import FrameReadout, build_report, sampling_rate_hz
+    from pipeline.report.figures import draw_report
+    from storage.report import check_report_folder
     from storage.runlog import read_sweep_runs
 
-    try:
-        facts = recording_facts(next(iter(cubes.values())))
-    except (EskinError, OSError) as error:
-        print(f"eskin: warning: recordings not readable, classes unknown: {error}", file=sys.stderr)
-        facts = None
-    rate_hz = adc_rate_hz or (facts.fs_hz if facts else None)
+    rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
     frame = FrameReadout(adc_bits, rate_hz) if rate_hz else None
-    report = build_report(cubes, facts=facts, frame=frame, runs=read_sweep_runs(store.root))
+    report = build_report(cubes, frame=frame, runs=read_sweep_runs(store.root))
+    if rate_hz is None:
+        print(
+            "eskin: warning: the cubes do not state the recordings' sampling rate; Table I "
+            "compares with no frame readout (give --adc-rate-hz)",
+            file=sys.stderr,
+        )
     folder = out if out is not None else store.root / "report"
-    return Path(write_report(folder, report, draw_report(report), show_progress=show_progress))
+    check_report_folder(folder)  # before the figures: a refused folder costs nothing
+    return write_report(folder, report, draw_report(report), show_progress=show_progress)
+
+
+def write_report(
+    out: str | Path,
+    report: Report,
+    figures: dict[Panel, Figure],
+    *,
+    show_progress: bool = False,
+) -> Path:
+    """Render ``report`` and its ``figures`` and write the folder ``out`` whole; return the path
+    of its ``report.html``.
+
+    Raises
+    ------
+    StoreError
+        ``out`` is a file, or a non-empty folder that is not a report; or it cannot be written.
+    """
+    from importlib import metadata
+
+    from tqdm import tqdm
+
+    from pipeline.report.document import report_files
+    from storage.report import check_report_folder, write_report_folder
+
+    check_report_folder(out)
+    with tqdm(
+        total=len(figures), unit="figure", desc="report", disable=None if show_progress else True
+    ) as bar:
+        files = report_files(
+            report, figures, version=metadata.version("eskin-sweep"), on_figure=bar.update
+        )
+    return write_report_folder(out, files) / "report.html"

@@ -6,7 +6,8 @@ task waits for its own points, assembles its cube and publishes a table artifact
 point per model, so the UI shows each sweep's state as its points finish. Meanwhile the flow
 follows all points: a progress bar on the terminal, a progress artifact, and run-logger lines
 (points done, cache hits, failures). With ``report=True`` a last task writes the report and a
-link artifact to it.
+link artifact to it. :func:`flows.orchestrate.run_sweep` does the same without Prefect, on a
+Dask client the caller may give.
 
 Prefect runs only in this process; the Dask workers run the plain functions of
 :mod:`flows.work` and never call the Prefect API (worker processes that did would each start a
@@ -15,7 +16,6 @@ temporary Prefect server of their own when no real one is configured).
 
 from __future__ import annotations
 
-import contextlib
 import re
 import sys
 import time
@@ -32,8 +32,6 @@ from prefect.artifacts import (
 from prefect.cache_policies import NO_CACHE
 from prefect.task_runners import ThreadPoolTaskRunner
 
-from flows.cluster import dask_client
-from flows.environment import hermetic_environment
 from flows.orchestrate import (
     SweepFailed,
     SweepPlan,
@@ -42,12 +40,14 @@ from flows.orchestrate import (
     completed_points,
     cube_location,
     failure_message,
+    log_sweep_run,
     open_root,
     plan_sweep,
     progress_bar,
     submit_missing,
+    sweep_client,
+    sweep_summary,
 )
-from storage.runlog import append_sweep_run
 
 #: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
 REPORT_EVERY_S = 5.0
@@ -154,11 +154,9 @@ def sweep(
     # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
     with store.lock():
         plan = plan_task(grid, str(store.root), dataset)
-        with contextlib.ExitStack() as stack:
+        with sweep_client(plan, workers=workers, address=address) as client:
             futures: dict[str, Any] = {}
-            if plan.missing:
-                hermetic_environment(Path(plan.root), prefect=False)
-                client = stack.enter_context(dask_client(workers, address))
+            if client is not None:
                 summary["dashboard"] = client.dashboard_link
                 logger.info("Dask dashboard: %s", client.dashboard_link)
                 if show_progress:
@@ -173,18 +171,8 @@ def sweep(
         if failed:
             raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
         cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
-    summary |= {
-        "root": plan.root,
-        "cubes": cubes,
-        "points": len(plan.scenes),
-        "cache_hits": len(plan.cached),
-        "computed": len(futures),
-    }
-    summary["seconds"] = time.perf_counter() - start
-    try:  # before the report, which shows every logged sweep of the root
-        append_sweep_run(plan.root, {**summary, "grid": plan.grid.name})
-    except OSError as error:
-        logger.warning("sweep not logged in %s: %s", plan.root, error)
+    summary |= sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+    log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
     if report:
         summary["report"] = report_task(plan.root)
     return summary

@@ -1,9 +1,12 @@
 """Work that runs on Dask workers: plain functions, no Prefect.
 
-Each function opens the run's store, computes only the entries that are missing, and writes each
-entry complete (storage marks it complete only after its data is written). Work is keyed by the
-stage cache keys, so two points that share a spike train (a window sweep at one threshold) reuse
-it, and a worker that dies mid-task leaves nothing a later run trusts.
+:func:`ensure_entry` is the one task: it makes sure the run's store holds one level's entry of a
+scene (a level of :data:`pipeline.stages.LEVELS` that the store keeps), reading what its inputs
+need from the store and computing only the entries that are missing, inputs first. Each entry is
+written complete (storage marks it complete only after its data is written). Work is keyed by the
+levels' cache keys, so two points that share a spike train (a window sweep at one threshold)
+reuse it, and a worker that dies mid-task leaves nothing a later run trusts. The levels the store
+does not keep (the recordings and their front end) stay in memory, a few per worker process.
 
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
 oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
@@ -12,102 +15,148 @@ the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
 
 from __future__ import annotations
 
-import functools
-import json
-from typing import TYPE_CHECKING, Any
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import Any
 
 from flows.environment import tune_allocator
-from pipeline.scene import Scene, cache_key
-from storage import EntryKind, RateEntry, ResultEntry, SpikeEntry, SweepStore
+from pipeline.cube import RecordingsInfo
+from pipeline.scene import Scene
+from pipeline.stages import RATES, RECORDINGS, RESULTS, SPIKES, Level, Stopwatch, level_named
+from storage import RateEntry, ResultEntry, SpikeEntry, SweepStore
 
-if TYPE_CHECKING:
-    from pipeline.frontend import FrontEnd
-    from pipeline.recordings import Recordings
+# pipeline.training (torch, scikit-learn) is imported by the results level when it runs: the
+# coordinator imports this module only to name the function it submits, and never trains.
 
-# pipeline.simulate (torch, scikit-learn) is imported inside the functions: the coordinator
-# imports this module only to name the functions it submits, and never trains anything.
+# Outputs of the in-memory levels kept per worker process, by level and key (they are
+# immutable, and every point of a dataset needs them), with the seconds they took when made.
+_KEPT_PER_LEVEL = 4
+_kept: dict[str, OrderedDict[str, tuple[Any, dict[str, float]]]] = {}
+_kept_lock = threading.Lock()
 
-
-@functools.lru_cache(maxsize=4)
-def _prepared(
-    dataset_json: str, full_scale_v: float
-) -> tuple[Recordings, FrontEnd, dict[str, float]]:
-    """Recordings and front end of a dataset, kept per worker process (they are immutable)."""
-    from pipeline.simulate import Stopwatch, prepare
-
-    dataset = Scene.from_dict({"dataset": json.loads(dataset_json)}).dataset
-    watch = Stopwatch(None)
-    recordings, front_end = prepare(dataset, full_scale_v, stopwatch=watch)
-    return recordings, front_end, watch.seconds
+# A level of the same point, made once: its output (or entry) and the seconds that holds.
+_Made = Callable[[Level], tuple[Any, dict[str, float]]]
 
 
-def _recordings(scene: Scene) -> tuple[Recordings, FrontEnd, dict[str, float]]:
-    """Recordings keyed by exactly what they depend on: the dataset and the full scale."""
-    dataset_json = json.dumps(scene.to_dict()["dataset"], sort_keys=True)
-    return _prepared(dataset_json, scene.readout.full_scale_v)
+def _result_entry(accuracy: Any, seconds: dict[str, float], made: _Made) -> ResultEntry:
+    spikes, spike_seconds = made(SPIKES)
+    _, rate_seconds = made(RATES)
+    recordings, _ = made(RECORDINGS)
+    return ResultEntry(
+        fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
+        seconds={**spike_seconds, **rate_seconds, **seconds},
+        metrics=spikes.metrics,
+        # The cube states what the point was computed on, without reloading the dataset.
+        recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
+    )
 
 
-def compute_spikes(root: str, scene_data: dict[str, Any]) -> str:
-    """Encode the TRUE and REAL trains of a scene unless the store has them; return the key."""
-    scene = Scene.from_dict(scene_data)
-    store = SweepStore.open(root)
-    key = cache_key(scene, "spikes")
-    if store.has(EntryKind.SPIKES, key):
-        return key
-    from pipeline.simulate import Stopwatch, encode, spike_metrics
-
-    recordings, front_end, seconds = _recordings(scene)
-    watch = Stopwatch(None)
-    watch.seconds.update(seconds)
-    encoded = encode(recordings, front_end, scene, stopwatch=watch)
-    with watch.stage("metrics"):
-        metrics = spike_metrics(encoded, scene)
-    store.write_spikes(key, SpikeEntry(encoded, metrics, dict(watch.seconds)))
-    return key
+# How each stored level's output becomes its store entry (the layouts are in storage.store), given
+# the seconds the entry accounts for. A result is all a cube reads of a point, so it also carries
+# the spike metrics and the seconds of the entries it was made from.
+_ENTRIES: dict[str, Callable[[Any, dict[str, float], _Made], Any]] = {
+    SPIKES.name: lambda out, seconds, made: SpikeEntry(out.encoded, out.metrics, seconds),
+    RATES.name: lambda out, seconds, made: RateEntry(
+        out.counts, out.dropped, out.labels, out.class_names, seconds
+    ),
+    RESULTS.name: _result_entry,
+}
 
 
-def compute_point(root: str, scene_data: dict[str, Any], *after: Any) -> str:
-    """Rate-code and cross-validate one point unless the store has it; return its result key.
+def ensure_entry(root: str, level: str, scene_data: dict[str, Any], *after: Any) -> str:
+    """Make sure the store at ``root`` holds the entry of ``level`` for a scene; return its key.
 
-    ``after`` carries the futures this point waits for (its spike trains); their values are
-    not used. The result entry holds everything a cube needs of the point: fold accuracies,
-    spike metrics and the seconds of every stage (as measured when each was computed).
+    Nothing is computed if the entry is there. Otherwise the entries of the levels it runs after
+    are read from the store, or computed and written first if missing, then its own.
+
+    Parameters
+    ----------
+    root
+        The run root.
+    level
+        The name of a level the store keeps (``"spikes"``, ``"rates"``, ``"results"``).
+    scene_data
+        The scene, as :meth:`pipeline.scene.Scene.to_dict` gives it.
+    after
+        Futures this task waits for (the spike trains of a point); their values are not used.
+
+    Raises
+    ------
+    ValueError
+        ``level`` names no level the store keeps.
     """
     import torch
 
-    from pipeline.simulate import Stopwatch, classify, rate_frames
-
     torch.set_num_threads(1)
     tune_allocator()
+    wanted = level_named(level)
+    if not wanted.stored:
+        raise ValueError(f"stage {level!r} is not kept in the store")
     scene = Scene.from_dict(scene_data)
     store = SweepStore.open(root)
-    result_key = cache_key(scene, "results")
-    if store.has(EntryKind.RESULTS, result_key):
-        return result_key
-    spikes_key = cache_key(scene, "spikes")
-    spikes = store.read_valid(EntryKind.SPIKES, spikes_key)
-    if spikes is None:
-        compute_spikes(root, scene_data)
-        spikes = store.read_spikes(spikes_key)
-    rates_key = cache_key(scene, "rates")
-    rates = store.read_valid(EntryKind.RATES, rates_key)
-    if rates is None:
-        recordings, _, _ = _recordings(scene)
+    key = wanted.key(scene)
+    if not store.has(wanted.name, key):
+        _Point(store, scene).made(wanted)
+    return key
+
+
+class _Point:
+    """The levels of one scene as one task needs them: each read, recalled or computed once."""
+
+    def __init__(self, store: SweepStore, scene: Scene):
+        self.store = store
+        self.scene = scene
+        self._made: dict[str, tuple[Any, dict[str, float]]] = {}
+
+    def made(self, level: Level) -> tuple[Any, dict[str, float]]:
+        """``level``'s output (its store entry, for a stored level) and the seconds it holds."""
+        if level.name not in self._made:
+            self._made[level.name] = self._make(level)
+        return self._made[level.name]
+
+    def _make(self, level: Level) -> tuple[Any, dict[str, float]]:
+        if not level.stored:
+            return self._in_memory(level)
+        key = level.key(self.scene)
+        entry = self.store.read_valid(level.name, key)
+        if entry is None:
+            watch = Stopwatch(None)
+            output = level.run(self.scene, self._inputs(level), watch)
+            seconds = {
+                step: value
+                for upstream in _accounted(level)
+                for step, value in self.made(upstream)[1].items()
+            }
+            entry = _ENTRIES[level.name](output, {**seconds, **watch.seconds}, self.made)
+            self.store.write_entry(level.name, key, entry)
+        return entry, entry.seconds
+
+    def _in_memory(self, level: Level) -> tuple[Any, dict[str, float]]:
+        key = level.key(self.scene)
+        with _kept_lock:
+            kept = _kept.setdefault(level.name, OrderedDict())
+            if key in kept:
+                kept.move_to_end(key)
+                return kept[key]
         watch = Stopwatch(None)
-        with watch.stage("coding"):
-            counts, dropped = rate_frames(spikes.encoded.real, scene)
-        rates = RateEntry(
-            counts, dropped, recordings.labels, recordings.class_names, dict(watch.seconds)
-        )
-        store.write_rates(rates_key, rates)
-    watch = Stopwatch(None)
-    accuracy = classify(rates.counts, rates.labels, scene, rates.class_names, stopwatch=watch)
-    store.write_result(
-        result_key,
-        ResultEntry(
-            fold_accuracy={m.value: cv.fold_accuracy for m, cv in accuracy.items()},
-            seconds={**spikes.seconds, **rates.seconds, **watch.seconds},
-            metrics=spikes.metrics,
-        ),
-    )
-    return result_key
+        made = (level.run(self.scene, self._inputs(level), watch), dict(watch.seconds))
+        with _kept_lock:
+            kept[key] = made
+            while len(kept) > _KEPT_PER_LEVEL:
+                kept.popitem(last=False)
+        return made
+
+    def _inputs(self, level: Level) -> dict[str, Any]:
+        return {before.name: self.made(before)[0] for before in level.after}
+
+
+def _accounted(level: Level) -> tuple[Level, ...]:
+    """The in-memory levels whose seconds ``level``'s entry holds besides its own steps.
+
+    Those upstream of it that no stored level upstream of it needs as well: the seconds of the
+    recordings and front end go into the spike entry, not again into the rate entry.
+    """
+    upstream = level.upstream()
+    covered = {each.name for s in upstream if s.stored for each in (*s.upstream(), s)}
+    return tuple(each for each in upstream if not each.stored and each.name not in covered)

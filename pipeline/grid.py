@@ -4,8 +4,9 @@ A *sweep* varies one or more scene fields (its *axes*) around the base scene. Ax
 Cartesian product (``mode = "product"``, the default) or element by element (``mode = "zip"``,
 all axes the same length, one cube dimension named after the first axis). A sweep may also fix
 other fields for all its points (``set``) and ask for the correlation of spike metrics with
-accuracy along it (``correlate``). A grid's points are the union of its sweeps' points; points
-that are the same scene (equal result cache keys) are computed once.
+accuracy along it (``correlate``), and carry a free-text ``title`` saying what it is for, which
+its result cube keeps as its ``title`` attribute. A grid's points are the union of its sweeps'
+points; points that are the same scene (equal result cache keys) are computed once.
 
 TOML layout::
 
@@ -13,7 +14,7 @@ TOML layout::
     base = "paper"                       # a built-in scene name, a scene file, or a [base] table
 
     [sweeps.threshold]
-    title = "Fig. 7a"
+    title = "Fig. 7a"                    # free text, kept as the cube's ``title`` attribute
     axes = { "readout.threshold_v" = [0.03, 0.09, 0.2] }
 
     [sweeps.noise]
@@ -93,7 +94,7 @@ class SweepAxis:
 
 @dataclass(frozen=True)
 class Sweep:
-    """A named sweep: its axes, how they combine, fixed fields, and whether to correlate."""
+    """A named sweep: its axes, how they combine, fixed fields, whether to correlate, a title."""
 
     name: str
     axes: tuple[SweepAxis, ...]
@@ -507,6 +508,8 @@ def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep
     if not isinstance(correlate, bool):
         problems.append(f"{where}.correlate: expected true or false, got {correlate!r}")
     title = data.get("title", "")
+    if not isinstance(title, str):
+        problems.append(f"{where}.title: expected a string, got {title!r}")
     axes_data = data.get("axes")
     if not isinstance(axes_data, Mapping) or not axes_data:
         problems.append(f"{where}.axes: a sweep needs at least one axis (field = [values])")
@@ -530,7 +533,7 @@ def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep
         problems.append(f"{where}.axes: zipped axes need equal lengths ({lengths})")
     if len(problems) > count:
         return None
-    sweep = Sweep(name, _name_dims(axes), mode, dict(fixed), bool(correlate), str(title))
+    sweep = Sweep(name, _name_dims(axes), mode, dict(fixed), bool(correlate), title)
     try:
         fixed_base = base.replace(**sweep.fixed) if sweep.fixed else base
     except SceneError as exc:

@@ -37,7 +37,7 @@ asynchronous bus.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numba
@@ -46,16 +46,28 @@ import numpy as np
 from pipeline.spikes import SpikeTrains
 
 
+def _about(units: str, long_name: str) -> dict[str, str]:
+    """Field metadata: CF ``units`` and a prose name, declared once for stores and cubes."""
+    return {"units": units, "long_name": long_name}
+
+
 @dataclass(frozen=True, eq=False)
 class SpikeMetrics:
-    """Scene-level spike metrics; see :mod:`pipeline.metrics` for definitions and edge cases."""
+    """Scene-level spike metrics; see :mod:`pipeline.metrics` for definitions and edge cases.
 
-    ssnr_db: float
-    ste_s2: float
-    ste_sign_safe_s2: float
-    event_rate_hz: float
-    data_rate_bps: float
-    equivalent_bits: float
+    Each field's ``metadata`` holds its ``units`` and ``long_name``.
+    """
+
+    ssnr_db: float = field(metadata=_about("dB", "spike signal-to-noise ratio, pooled counts"))
+    ste_s2: float = field(metadata=_about("s^2", "spike timing error, mean over trains"))
+    ste_sign_safe_s2: float = field(
+        metadata=_about("s^2", "sign-safe spike timing error, mean over trains")
+    )
+    event_rate_hz: float = field(metadata=_about("Hz", "array events per second"))
+    data_rate_bps: float = field(metadata=_about("bit/s", "address-event data rate"))
+    equivalent_bits: float = field(
+        metadata=_about("bit", "equivalent resolution log2(full_scale_v / threshold_v)")
+    )
 
 
 SteVariant = Literal["paper", "sign_safe"]

@@ -1,7 +1,7 @@
 """The paper's texture classifiers, batched over cross-validation folds.
 
 Two models classify one recording's frame, an image ``(channels, taxels, windows)`` of spike
-counts with the taxels as rows in raster order (section 4.6 of the architecture):
+counts with the taxels as rows in raster order, as :func:`pipeline.coding.frames` builds it:
 
 FFNN
     ``flatten -> Linear(C*H*W, hidden_units) -> ReLU -> Linear(hidden_units, n_classes)``.
@@ -27,7 +27,7 @@ folds 20 ms, :func:`torch.func.vmap` over ``conv2d`` 27 ms (vmap cannot use ``ch
 NCHW max-pooling alone costs 4.8 ms per call on this CPU). Summing the folds' losses gives every
 fold exactly its own gradient.
 
-Measured at one thread on the paper's frames (issue 6): one training step of ten folds costs
+Measured at one thread on the paper's frames: one training step of ten folds costs
 about 6 ms, of which the two convolutions (oneDNN, forward and backward) take about 55 % and
 max-pooling, ReLU and the zero-filled pooling gradients most of the rest; the FLOP rate of the
 second convolution is already close to the CPU's. Tried and dropped, being no faster: an

@@ -18,12 +18,12 @@ Three sources (``pipeline.scene.DatasetKind``):
     ``i * segments + s`` is ``row_i[3 + s * m : 3 + (s + 1) * m]``. Cutting one continuous
     recording per texture into segments only approximates the paper's 10 recordings per class.
 ``folder``
-    ``DIR/dataset.toml`` (``sampling_rate_hz`` required, optional ``name`` and ``units``, no
-    other keys) plus one sub-folder per class, sorted by name, each holding one recording per
-    file: ``.csv`` with one numeric column and no header, or ``.npy`` holding a 1-D numeric
-    array. Hidden entries (names starting with ``.``) are ignored everywhere; other files at
-    the top level (a README, say) are ignored; any other file or folder inside a class folder
-    is an error.
+    ``DIR/dataset.toml`` (``sampling_rate_hz`` required, optional ``name``, ``units`` and
+    ``description``, no other keys) plus one sub-folder per class, sorted by name, each holding
+    one recording per file: ``.csv`` with one numeric column and no header, or ``.npy`` holding
+    a 1-D numeric array. Hidden entries (names starting with ``.``) are ignored everywhere;
+    other files at the top level (a README, say) are ignored; any other file or folder inside a
+    class folder is an error.
 
 Loading never executes code from data: ``.npy`` files are read with ``allow_pickle=False``,
 TOML with :mod:`tomllib`, CSV as text.
@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.errors import DatasetError
+from pipeline.numbers import positive_number, whole_number
 from pipeline.scene import Axis, DatasetKind, DatasetSpec
 
 __all__ = [
@@ -75,7 +76,7 @@ VIBTAC12_ROWS = 12
 VIBTAC12_DEFAULT_RATE_HZ = 200.0
 
 _FOLDER_TOML = "dataset.toml"
-_FOLDER_KEYS = ("sampling_rate_hz", "name", "units")
+_FOLDER_KEYS = ("sampling_rate_hz", "name", "units", "description")
 _VIBTAC_FILES = ("X.csv", "Y.csv", "Z.csv")
 _RECORDING_SUFFIXES = (".csv", ".npy")
 _NUMBER = re.compile(
@@ -417,10 +418,10 @@ def load_vibtac12(
         axis = Axis(str(axis.value if isinstance(axis, Axis) else axis).lower())
     except ValueError:
         raise DatasetError(f"vibtac12 axis {axis!r} is not one of 'x', 'y', 'z'") from None
-    rate = _positive_float(sampling_rate_hz)
+    rate = positive_number(sampling_rate_hz)
     if rate is None:
         raise DatasetError(f"vibtac12 sampling_rate_hz must be > 0, got {sampling_rate_hz!r}")
-    if isinstance(segments, bool) or not isinstance(segments, int | np.integer) or segments < 1:
+    if whole_number(segments, 1) is None:
         raise DatasetError(f"vibtac12 segments must be an integer >= 1, got {segments!r}")
     segments = int(segments)
     root = Path(path)
@@ -485,7 +486,8 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
     ----------
     path
         The dataset folder. ``dataset.toml`` holds ``sampling_rate_hz`` (number > 0, required),
-        ``name`` (string, default: the folder's name) and ``units`` (string, default ``"a.u."``).
+        ``name`` (string, default: the folder's name), ``units`` (string, default ``"a.u."``)
+        and ``description`` (free text for people reading the folder; not loaded).
         Each non-hidden sub-folder is a class (sorted by name; the folder name is the class
         name) holding one recording per file, sorted by file name: ``.csv`` with one numeric
         column, no header (blank lines only at the end), UTF-8; or ``.npy`` with a 1-D integer
@@ -500,12 +502,12 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
     ------
     DatasetError
         One line listing every problem found: missing or non-folder path; ``dataset.toml``
-        missing, not TOML, without a valid ``sampling_rate_hz`` or with unknown keys; no class
-        folders; a class folder without recordings; a file of another type or a folder inside
-        a class folder; a binary or non-numeric CSV (file and line), a CSV with more than one
-        column, an empty recording, a recording shorter than 2 samples, a non-finite value
-        (recording and first bad sample); a ``.npy`` that is not a valid ``.npy`` file, not 1-D
-        or not numeric.
+        missing, not TOML, without a valid ``sampling_rate_hz``, with a ``description`` that is
+        not a string or with unknown keys; no class folders; a class folder without recordings;
+        a file of another type or a folder inside a class folder; a binary or non-numeric CSV
+        (file and line), a CSV with more than one column, an empty recording, a recording
+        shorter than 2 samples, a non-finite value (recording and first bad sample); a ``.npy``
+        that is not a valid ``.npy`` file, not 1-D or not numeric.
     """
     root = Path(path)
     head = f"folder dataset {root}"
@@ -597,7 +599,7 @@ def _read_dataset_toml(file: Path, problems: list[str]) -> dict[str, Any]:
     if "sampling_rate_hz" not in data:
         problems.append(f"{where}: sampling_rate_hz is missing (required, in Hz)")
     else:
-        rate = _positive_float(data["sampling_rate_hz"])
+        rate = positive_number(data["sampling_rate_hz"])
         if rate is None:
             problems.append(
                 f"{where}: sampling_rate_hz = {data['sampling_rate_hz']!r} is not a number > 0"
@@ -610,15 +612,9 @@ def _read_dataset_toml(file: Path, problems: list[str]) -> dict[str, Any]:
                 meta[key] = data[key]
             else:
                 problems.append(f"{where}: {key} = {data[key]!r} is not a non-empty string")
+    if "description" in data and not isinstance(data["description"], str):
+        problems.append(f"{where}: description = {data['description']!r} is not a string")
     return meta
-
-
-def _positive_float(value: Any) -> float | None:
-    """``value`` as a finite float > 0, or ``None`` (booleans and strings are not numbers)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        return None
-    value = float(value)
-    return value if math.isfinite(value) and value > 0 else None
 
 
 def _read_text(file: Path, where: str) -> str:

@@ -9,7 +9,8 @@ Readout *effects* are a mapping from effect name to parameters. An effect that i
 simulated and is not part of any cache key; an ideal scene names none. The scene seed enters the
 spike-train key only when a named effect draws random numbers.
 
-Cache keys (:func:`cache_key`) hash exactly the fields a stage depends on::
+Cache keys (:func:`cache_key`) hash exactly the fields a stage depends on; which fields those are
+is declared with the stages themselves, in :mod:`pipeline.stages`::
 
     recordings : dataset
     spikes     : dataset, array, readout (+ seed if a random effect is named)
@@ -21,7 +22,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import hashlib
 import json
 import math
 import tomllib
@@ -34,6 +34,14 @@ from typing import Any, Literal
 from pipeline.errors import SceneError
 
 MAX_TAXELS_PER_SIDE = 256
+
+
+def _about(units: str, long_name: str) -> dict[str, str]:
+    """Field metadata: CF ``units`` ("1" when dimensionless or a label) and a prose name.
+
+    Declared here once; result cubes write them on every coordinate a scene field becomes.
+    """
+    return {"units": units, "long_name": long_name}
 
 
 class DatasetKind(enum.StrEnum):
@@ -100,35 +108,42 @@ class Effect(enum.StrEnum):
 class AmplifierOffset:
     """Static input offset per taxel, ``N(0, sigma_v)`` V; matters through saturation."""
 
-    sigma_v: float = 0.01
+    sigma_v: float = field(
+        default=0.01, metadata=_about("V", "standard deviation of the amplifier offset per taxel")
+    )
 
 
 @dataclass(frozen=True)
 class AmplifierNoise:
     """White Gaussian noise on every sample, ``sigma_v`` V rms."""
 
-    sigma_v: float = 0.005
+    sigma_v: float = field(default=0.005, metadata=_about("V", "rms amplifier noise per sample"))
 
 
 @dataclass(frozen=True)
 class Saturation:
     """Clip the amplified signal at the rails ``+-rail_v``; ``None`` means half the full scale."""
 
-    rail_v: float | None = None
+    rail_v: float | None = field(
+        default=None, metadata=_about("V", "saturation rail of the amplified signal")
+    )
 
 
 @dataclass(frozen=True)
 class ComparatorOffset:
     """Static offsets of the UP and DOWN comparators per taxel, each ``N(0, sigma_v)`` V."""
 
-    sigma_v: float = 0.005
+    sigma_v: float = field(
+        default=0.005,
+        metadata=_about("V", "standard deviation of the comparator offsets per taxel"),
+    )
 
 
 @dataclass(frozen=True)
 class ComparatorNoise:
     """Gaussian noise on each comparator decision (per sample), ``sigma_v`` V rms."""
 
-    sigma_v: float = 0.005
+    sigma_v: float = field(default=0.005, metadata=_about("V", "rms comparator noise per decision"))
 
 
 @dataclass(frozen=True)
@@ -139,8 +154,12 @@ class ThresholdMismatch:
     included) is clipped to that floor: a comparator cannot resolve a smaller step.
     """
 
-    sigma_rel: float = 0.05
-    floor_rel: float = 0.1
+    sigma_rel: float = field(
+        default=0.05, metadata=_about("1", "relative standard deviation of the threshold per taxel")
+    )
+    floor_rel: float = field(
+        default=0.1, metadata=_about("1", "lowest threshold per taxel, relative to threshold_v")
+    )
 
 
 EFFECT_TYPES: dict[Effect, type] = {
@@ -167,25 +186,41 @@ class DatasetSpec:
     ``sampling_rate_hz``, default 200 Hz); ``folder`` reads ``path/dataset.toml``.
     """
 
-    kind: DatasetKind = DatasetKind.SYNTHETIC
-    path: str | None = None
-    sampling_rate_hz: float | None = None
-    axis: Axis = Axis.Z
-    segments: int = 10
-    seed: int = 0
-    recordings_per_class: int = 10
-    duration_s: float = 5.0
+    kind: DatasetKind = field(
+        default=DatasetKind.SYNTHETIC, metadata=_about("1", "source of the recordings")
+    )
+    path: str | None = field(default=None, metadata=_about("1", "folder of the recordings"))
+    sampling_rate_hz: float | None = field(
+        default=None, metadata=_about("Hz", "sampling rate of the VibTac-12 recordings")
+    )
+    axis: Axis = field(
+        default=Axis.Z, metadata=_about("1", "accelerometer axis of the VibTac-12 recordings")
+    )
+    segments: int = field(
+        default=10, metadata=_about("1", "segments cut from each VibTac-12 recording")
+    )
+    seed: int = field(default=0, metadata=_about("1", "seed of the built-in recordings"))
+    recordings_per_class: int = field(
+        default=10, metadata=_about("1", "built-in recordings per class")
+    )
+    duration_s: float = field(
+        default=5.0, metadata=_about("s", "duration of each built-in recording")
+    )
 
 
 @dataclass(frozen=True)
 class ArraySpec:
     """Taxel grid ``rows x cols`` at ``pitch_mm``, scanned at ``speed_mm_s`` along ``direction``."""
 
-    rows: int = 3
-    cols: int = 3
-    pitch_mm: float = 1.0
-    speed_mm_s: float = 20.0
-    direction: ScanDirection = ScanDirection.Y
+    rows: int = field(default=3, metadata=_about("1", "taxel rows of the array"))
+    cols: int = field(default=3, metadata=_about("1", "taxel columns of the array"))
+    pitch_mm: float = field(
+        default=1.0, metadata=_about("mm", "distance between neighbouring taxels")
+    )
+    speed_mm_s: float = field(default=20.0, metadata=_about("mm/s", "scan speed across the array"))
+    direction: ScanDirection = field(
+        default=ScanDirection.Y, metadata=_about("1", "scan direction across the taxel grid")
+    )
 
     @property
     def n_taxels(self) -> int:
@@ -196,9 +231,15 @@ class ArraySpec:
 class ReadoutSpec:
     """Level-crossing readout: ``threshold_v`` of a ``full_scale_v`` range, and effects."""
 
-    threshold_v: float = 0.09
-    full_scale_v: float = 1.0
-    effects: Mapping[Effect, Any] = field(default_factory=dict)
+    threshold_v: float = field(
+        default=0.09, metadata=_about("V", "comparator threshold (level-crossing step)")
+    )
+    full_scale_v: float = field(
+        default=1.0, metadata=_about("V", "full-scale input range of the readout")
+    )
+    effects: Mapping[Effect, Any] = field(
+        default_factory=dict, metadata=_about("1", "non-ideal readout effects and their parameters")
+    )
 
     @property
     def is_ideal(self) -> bool:
@@ -217,22 +258,28 @@ class ReadoutSpec:
 class CodingSpec:
     """Rate coding: ``n_windows`` windows of ``window_s``; ``"auto"`` fits the recordings."""
 
-    window_s: float = 0.1
-    n_windows: int | Literal["auto"] = "auto"
-    polarity: Polarity = Polarity.MERGED
+    window_s: float = field(default=0.1, metadata=_about("s", "rate-coding window length"))
+    n_windows: int | Literal["auto"] = field(
+        default="auto", metadata=_about("1", "rate-coding windows per recording")
+    )
+    polarity: Polarity = field(
+        default=Polarity.MERGED, metadata=_about("1", "how ON and OFF spikes enter the rate code")
+    )
 
 
 @dataclass(frozen=True)
 class TrainingSpec:
     """Classifiers and stratified k-fold cross-validation."""
 
-    models: tuple[Model, ...] = (Model.FFNN, Model.CNN)
-    epochs: int = 100
-    learning_rate: float = 1e-3
-    hidden_units: int = 100
-    batch_size: int = 16
-    folds: int = 10
-    seed: int = 0
+    models: tuple[Model, ...] = field(
+        default=(Model.FFNN, Model.CNN), metadata=_about("1", "classifiers trained")
+    )
+    epochs: int = field(default=100, metadata=_about("1", "training epochs"))
+    learning_rate: float = field(default=1e-3, metadata=_about("1", "Adam learning rate"))
+    hidden_units: int = field(default=100, metadata=_about("1", "hidden units of the FFNN"))
+    batch_size: int = field(default=16, metadata=_about("1", "training batch size"))
+    folds: int = field(default=10, metadata=_about("1", "cross-validation folds"))
+    seed: int = field(default=0, metadata=_about("1", "training seed"))
 
 
 @dataclass(frozen=True)
@@ -240,7 +287,7 @@ class Scene:
     """One simulated situation. Build with :meth:`from_dict`, :meth:`from_toml` or :meth:`paper`."""
 
     name: str = "scene"
-    seed: int = 0
+    seed: int = field(default=0, metadata=_about("1", "scene seed (random readout effects)"))
     dataset: DatasetSpec = field(default_factory=DatasetSpec)
     array: ArraySpec = field(default_factory=ArraySpec)
     readout: ReadoutSpec = field(default_factory=ReadoutSpec)
@@ -315,26 +362,36 @@ class Scene:
         return _plain(self)
 
     def canonical(self, parts: tuple[str, ...] | None = None) -> str:
-        """Stable JSON of the scene (or of the top-level ``parts``), sorted, units in names."""
+        """Stable JSON of the scene (or of ``parts``: top-level parts such as ``"readout"``, or
+        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names."""
         data = self.to_dict()
         data.pop("name")
         if parts is not None:
-            data = {k: data[k] for k in parts}
+            data = _selected(data, parts)
         return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
-Stage = Literal["recordings", "spikes", "rates", "results"]
+def _selected(data: dict[str, Any], parts: tuple[str, ...]) -> dict[str, Any]:
+    """The ``parts`` of ``data``, nested as in ``data``; a dotted field left unset is left out."""
+    selected: dict[str, Any] = {}
+    for part in parts:
+        *parents, leaf = part.split(".")
+        source, target = data, selected
+        for name in parents:
+            source = source[name]
+            target = target.setdefault(name, {})
+        if parents and leaf not in source:  # None: the field keeps its default
+            continue
+        target[leaf] = source[leaf]
+    return selected
 
 
-def stage_fields(scene: Scene, stage: Stage) -> tuple[str, ...]:
-    """The top-level scene parts a stage's output depends on."""
-    spikes = ("dataset", "array", "readout") + (("seed",) if scene.readout.is_random else ())
-    return {
-        "recordings": ("dataset",),
-        "spikes": spikes,
-        "rates": (*spikes, "coding"),
-        "results": (*spikes, "coding", "training"),
-    }[stage]
+def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
+    """The scene parts the output of ``stage`` depends on (see :mod:`pipeline.stages`)."""
+    # Imported here: the stage registry imports this module.
+    from pipeline.stages import level_named
+
+    return level_named(stage).key_parts(scene)
 
 
 #: Revision of what the stages compute for a given scene. Bump it with any change that alters a
@@ -344,11 +401,12 @@ def stage_fields(scene: Scene, stage: Stage) -> tuple[str, ...]:
 MODEL_REVISION = 2
 
 
-def cache_key(scene: Scene, stage: Stage) -> str:
+def cache_key(scene: Scene, stage: str) -> str:
     """SHA-256 (hex, 32 chars) of :data:`MODEL_REVISION` and the canonical form of exactly the
-    fields ``stage`` uses."""
-    text = f"r{MODEL_REVISION}:{stage}:" + scene.canonical(stage_fields(scene, stage))
-    return hashlib.sha256(text.encode()).hexdigest()[:32]
+    fields ``stage`` uses (:meth:`pipeline.stages.Level.key`)."""
+    from pipeline.stages import level_named
+
+    return level_named(stage).key(scene)
 
 
 def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:

@@ -82,6 +82,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import DatasetError
+from pipeline.numbers import positive_number, whole_number
 from pipeline.recordings import Recordings
 
 __all__ = [
@@ -243,19 +244,15 @@ def synthetic_layout(
         An argument out of range (named in the message).
     """
     problems = []
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+    if whole_number(seed, 0) is None:
         problems.append(f"seed must be an integer >= 0, got {seed!r}")
-    if (
-        isinstance(recordings_per_class, bool)
-        or not isinstance(recordings_per_class, int | np.integer)
-        or recordings_per_class < 1
-    ):
+    if whole_number(recordings_per_class, 1) is None:
         problems.append(
             f"recordings_per_class must be an integer >= 1, got {recordings_per_class!r}"
         )
-    if not (_is_real(fs_hz) and fs_hz > 0):
+    if positive_number(fs_hz) is None:
         problems.append(f"fs_hz must be a finite number > 0, got {fs_hz!r}")
-    if not (_is_real(duration_s) and duration_s > 0):
+    if positive_number(duration_s) is None:
         problems.append(f"duration_s must be a finite number > 0, got {duration_s!r}")
     elif not problems and round(duration_s * fs_hz) < 2:
         problems.append(
@@ -326,14 +323,6 @@ def synthetic_recordings(
         names=layout.names,
         units="a.u.",
         name="synthetic",
-    )
-
-
-def _is_real(value: object) -> bool:
-    return (
-        not isinstance(value, bool)
-        and isinstance(value, int | float | np.integer | np.floating)
-        and math.isfinite(value)
     )
 
 

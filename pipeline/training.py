@@ -1,6 +1,6 @@
 """Stratified k-fold cross-validation of the texture classifiers, all folds trained at once.
 
-The model (architecture section 4.7):
+The procedure:
 
 * Folds: :class:`sklearn.model_selection.StratifiedKFold` with ``n_splits = training.folds``,
   ``shuffle=True`` and ``random_state = training.seed`` (seeds of ``2**32`` and above, which

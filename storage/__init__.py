@@ -10,7 +10,9 @@ from storage.store import (
     StoreError,
     SweepStore,
     open_results,
+    replace_folder,
 )
+from storage.tree import open_tree
 
 __all__ = [
     "CorruptEntryError",
@@ -22,4 +24,6 @@ __all__ = [
     "StoreError",
     "SweepStore",
     "open_results",
+    "open_tree",
+    "replace_folder",
 ]

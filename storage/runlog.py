@@ -16,7 +16,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from pipeline.report import SweepRun, sweep_run_from_record
+from pipeline.report.cost import SweepRun, sweep_run_from_record
 
 RUN_LOG = "sweep-runs.jsonl"
 

@@ -27,9 +27,12 @@ Entry groups (dimension names in parentheses; all arrays little-endian)
     ``counts`` int64 (recording, channel, taxel, window), ``dropped`` int64 (recording, taxel),
     ``labels`` int64 (recording); attrs ``class_names`` (list of str).
 ``results/<key>``
-    ``accuracy`` float64 (model, fold) with the string coordinate ``model``.
+    ``accuracy`` float64 (model, fold) with the string coordinate ``model``, and the spike metrics
+    as in ``spikes/<key>``; attrs ``dataset_name`` (str), ``class_names`` (list of str) and
+    ``sampling_rate_hz`` (float) where the writer stated them (each optional: older entries have
+    none, and a fact not stated is never guessed on reading).
 ``cubes/<name>``
-    any xarray Dataset, as the caller built it (units and provenance in its attrs).
+    any xarray Dataset, as the caller built it (:mod:`pipeline.cube` describes the result cubes).
 
 Every entry's attrs hold ``eskin_entry`` (its kind), ``seconds`` (stage name -> wall seconds,
 finite floats) and ``sha256``: one hex digest per variable, over its dtype, shape and raw bytes
@@ -95,9 +98,11 @@ import numpy as np
 import xarray as xr
 import zarr
 
+from pipeline.cube import RecordingsInfo
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
 from pipeline.spikes import Encoded, SpikeTrains, train_starts
+from pipeline.stages import LEVELS
 
 __all__ = [
     "CorruptEntryError",
@@ -109,6 +114,7 @@ __all__ = [
     "StoreError",
     "SweepStore",
     "open_results",
+    "replace_folder",
 ]
 
 STORE_NAME = "store.zarr"
@@ -125,14 +131,6 @@ _T = TypeVar("_T")
 
 _KEY = re.compile(r"[0-9a-f]{32}")
 _CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
-_METRIC_UNITS = {
-    "ssnr_db": "dB",
-    "ste_s2": "s^2",
-    "ste_sign_safe_s2": "s^2",
-    "event_rate_hz": "Hz",
-    "data_rate_bps": "bit/s",
-    "equivalent_bits": "bit",
-}
 _METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
 _OPEN_ZARR = {"consolidated": False, "zarr_format": 3, "chunks": None}
@@ -153,12 +151,14 @@ class StoreBusyError(StoreError):
     """Another sweep holds the run root's lock."""
 
 
-class EntryKind(enum.StrEnum):
-    """Kinds of cached entries; the value is the name of the kind's group."""
-
-    SPIKES = "spikes"
-    RATES = "rates"
-    RESULTS = "results"
+#: Kinds of cached entries: one per stored level of :data:`pipeline.stages.LEVELS`, in its
+#: order (``SPIKES``, ``RATES``, ``RESULTS``); the value is the level's name, which names the
+#: kind's group.
+EntryKind = enum.StrEnum(
+    "EntryKind",
+    [(level.name.upper(), level.name) for level in LEVELS if level.stored],
+    module=__name__,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,11 +220,15 @@ class ResultEntry:
         e.g. ``{"load": 0.3, ..., "coding": 0.01, "train_ffnn": 1.2, "train_cnn": 5.0}``.
     metrics : SpikeMetrics
         The point's spike metrics (copied from its spike entry, so a cube reads results only).
+    recordings : RecordingsInfo or None
+        What the point was computed on (dataset name, class names, sampling rate), for the
+        cube's attributes; None in entries written before results stated it.
     """
 
     fold_accuracy: dict[str, np.ndarray]
     seconds: dict[str, float]
     metrics: SpikeMetrics
+    recordings: RecordingsInfo | None = None
 
 
 class SweepStore:
@@ -419,6 +423,27 @@ class SweepStore:
             self.discard(kind, key)
             return None
 
+    def write_entry(self, kind: EntryKind | str, key: str, entry: Any) -> None:
+        """Store ``entry`` as ``kind/key`` (:meth:`write_spikes`, :meth:`write_rates` or
+        :meth:`write_result`, as ``kind`` says).
+
+        Raises
+        ------
+        TypeError
+            ``entry`` is not the entry type of ``kind``.
+        ValueError
+            As the writer of ``kind`` raises.
+        """
+        kind = EntryKind(kind)
+        entry_type, writer = {
+            EntryKind.SPIKES: (SpikeEntry, self.write_spikes),
+            EntryKind.RATES: (RateEntry, self.write_rates),
+            EntryKind.RESULTS: (ResultEntry, self.write_result),
+        }[kind]
+        if not isinstance(entry, entry_type):
+            raise TypeError(f"a {kind} entry must be a {entry_type.__name__}, got {type(entry)}")
+        writer(key, entry)
+
     def has(self, kind: EntryKind | str, key: str) -> bool:
         """True only if a complete entry ``kind/key`` exists (partial copies are invisible)."""
         return (self._entry_path(EntryKind(kind), key) / "zarr.json").is_file()
@@ -599,7 +624,8 @@ class SweepStore:
             "model": (("model",), np.array(models, dtype=object), {}),
             **_metric_variables(entry.metrics),
         }
-        self._write_entry(EntryKind.RESULTS, path, variables, {"seconds": _seconds(entry.seconds)})
+        attrs = {"seconds": _seconds(entry.seconds), **_recordings_attrs(entry.recordings)}
+        self._write_entry(EntryKind.RESULTS, path, variables, attrs)
 
     def read_result(self, key: str) -> ResultEntry:
         """The result entry ``key`` as written (models in their original order).
@@ -618,7 +644,9 @@ class SweepStore:
             if len(models) != accuracy.shape[0]:
                 raise ValueError("model coordinate does not match accuracy")
             fold_accuracy = {m: accuracy[i].copy() for i, m in enumerate(models)}
-            return ResultEntry(fold_accuracy, _read_seconds(attrs), _read_metrics(ds))
+            return ResultEntry(
+                fold_accuracy, _read_seconds(attrs), _read_metrics(ds), _read_recordings(attrs)
+            )
 
         return self._read_entry(EntryKind.RESULTS, key, build)
 
@@ -667,7 +695,7 @@ class SweepStore:
         partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
         try:
             cube.to_zarr(str(partial), mode="w-", **_TO_ZARR)
-            _replace_dir(partial, path)
+            replace_folder(partial, path)
         finally:
             shutil.rmtree(partial, ignore_errors=True)
 
@@ -968,17 +996,57 @@ def _seconds(seconds: Mapping[str, float]) -> dict[str, float]:
 def _metric_variables(metrics: SpikeMetrics) -> dict[str, tuple]:
     """One 0-d float64 variable per metric: attrs are JSON, which cannot hold +-inf."""
     return {
-        name: (
+        field.name: (
             (),
-            _cast(getattr(metrics, name), np.float64, name),
-            {"units": _METRIC_UNITS.get(name, "")},
+            _cast(getattr(metrics, field.name), np.float64, field.name),
+            {"units": field.metadata["units"], "long_name": field.metadata["long_name"]},
         )
-        for name in _METRICS
+        for field in dataclasses.fields(SpikeMetrics)
     }
 
 
 def _read_metrics(ds: xr.Dataset) -> SpikeMetrics:
     return SpikeMetrics(**{name: float(_variable(ds, name, (), np.float64)) for name in _METRICS})
+
+
+def _recordings_attrs(info: RecordingsInfo | None) -> dict[str, Any]:
+    """A result's recordings facts as entry attributes; a fact not known is not written."""
+    if info is None:
+        return {}
+    attrs: dict[str, Any] = {}
+    if info.dataset_name is not None:
+        attrs["dataset_name"] = str(info.dataset_name)
+    if info.class_names is not None:
+        names = list(info.class_names)
+        if not all(isinstance(name, str) for name in names):
+            raise ValueError("recordings.class_names: every name must be a str")
+        attrs["class_names"] = names
+    if info.sampling_rate_hz is not None:
+        rate = float(info.sampling_rate_hz)
+        if not (math.isfinite(rate) and rate > 0):
+            raise ValueError(f"recordings.sampling_rate_hz: {rate!r} is not a rate > 0")
+        attrs["sampling_rate_hz"] = rate
+    return attrs
+
+
+def _read_recordings(attrs: dict[str, Any]) -> RecordingsInfo | None:
+    """The recordings facts of a result entry; None for an entry that states none (older)."""
+    name, names, rate = (attrs.get(k) for k in ("dataset_name", "class_names", "sampling_rate_hz"))
+    if name is None and names is None and rate is None:
+        return None
+    if name is not None and not isinstance(name, str):
+        raise TypeError("attribute 'dataset_name' is not a str")
+    if names is not None and (
+        not isinstance(names, list) or not all(isinstance(n, str) for n in names)
+    ):
+        raise TypeError("attribute 'class_names' is not a list of str")
+    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, int | float)):
+        raise TypeError("attribute 'sampling_rate_hz' is not a number")
+    return RecordingsInfo(
+        dataset_name=name,
+        class_names=None if names is None else tuple(names),
+        sampling_rate_hz=None if rate is None else float(rate),
+    )
 
 
 def _read_seconds(attrs: dict[str, Any]) -> dict[str, float]:
@@ -1068,8 +1136,21 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(b))
 
 
-def _replace_dir(new: Path, final: Path) -> None:
-    """Put directory ``new`` at ``final``, replacing what is there; ``new`` is gone afterwards."""
+def replace_folder(new: Path, final: Path) -> None:
+    """Put directory ``new`` at ``final``, replacing what is there; ``new`` is gone afterwards.
+
+    Readers of ``final`` see the old folder or the new one whole, never a mix: where Linux offers
+    ``renameat2(RENAME_EXCHANGE)`` the two are swapped in one step, elsewhere the old folder is
+    renamed aside first (a reader may then briefly find no folder). ``new`` and ``final`` must be
+    on one file system.
+
+    Raises
+    ------
+    OSError
+        A rename failed (``final`` keeps its old folder where it had one).
+    StoreError
+        Concurrent writers of ``final`` kept replacing it (100 tries).
+    """
     for _ in range(100):  # only concurrent writers of the same name make this loop
         if not final.exists():
             try:

@@ -4,13 +4,15 @@ from collections.abc import Callable
 
 import numpy as np
 
+from pipeline.cube import RecordingsInfo, build_cube
 from pipeline.grid import Grid
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Scene
 from storage import ResultEntry
-from storage.cubes import build_cube
+from storage.cubes import SPIKE_STAGES
 
 FOLD_OFFSETS = np.array([-0.02, 0.02, -0.02, 0.02])  # std over folds (ddof 0) is 0.02
+RECORDINGS = RecordingsInfo("synthetic", tuple(f"texture{i}" for i in range(12)), 2000.0)
 
 PAPER_LIKE_SWEEPS = {
     "threshold": {"axes": {"readout.threshold_v": [0.03, 0.09, 0.2]}},
@@ -45,11 +47,14 @@ def paper_like_accuracy(scene: Scene) -> float:
 
 
 def make_cubes(
-    sweeps: dict | None = None, accuracy: Callable[[Scene], float] = paper_like_accuracy
+    sweeps: dict | None = None,
+    accuracy: Callable[[Scene], float] = paper_like_accuracy,
+    recordings: RecordingsInfo | None = RECORDINGS,
 ) -> dict:
     """``{name: cube}`` of a grid on the smoke scene with ``accuracy(scene)`` +- 0.02 per fold.
 
-    Seconds grow with the taxel count and window count; SSNR falls with noise (inf when ideal)."""
+    Seconds grow with the taxel count and window count; SSNR falls with noise (inf when ideal).
+    Every point states ``recordings`` (12 classes at 2 kHz by default)."""
     grid = Grid.from_dict({"name": "t", "base": "smoke", "sweeps": sweeps or PAPER_LIKE_SWEEPS})
     records = {}
     for key, scene in grid.unique_points().items():
@@ -72,5 +77,6 @@ def make_cubes(
                 data_rate_bps=700.0 / scene.readout.threshold_v,
                 equivalent_bits=scene.readout.equivalent_bits,
             ),
+            recordings=recordings,
         )
-    return {s.name: build_cube(grid, s, records) for s in grid.sweeps}
+    return {s.name: build_cube(grid, s, records, spike_stages=SPIKE_STAGES) for s in grid.sweeps}

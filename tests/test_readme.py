@@ -1,5 +1,6 @@
-"""The README's examples are code: its scene and grid TOML must load as documented."""
+"""The README's examples are code: its TOML must load and its Python API session must run."""
 
+import doctest
 import re
 import tomllib
 from pathlib import Path
@@ -28,3 +29,16 @@ def test_the_quick_start_has_exactly_the_two_commands():
     quick_start = README.split("## Quick start", 1)[1].split("##", 1)[0]
     commands = re.findall(r"^make \w+", quick_start, flags=re.M)
     assert commands == ["make run", "make test"]
+
+
+def test_the_python_api_session_runs_as_shown(tmp_path, monkeypatch):
+    section = README.split("\n## Python API\n", 1)[1].split("\n## ", 1)[0]
+    session = "".join(re.findall(r"```pycon\n(.*?)```", section, flags=re.S))
+    assert session.count(">>>") >= 10
+    monkeypatch.chdir(tmp_path)  # the examples write runs/api relative to where they run
+    test = doctest.DocTestParser().get_doctest(session, {}, "README Python API", "README.md", 0)
+    runner = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE)
+    report: list[str] = []
+    runner.run(test, out=report.append)
+    assert runner.summarize(verbose=False).failed == 0, "".join(report)
+    assert (tmp_path / "runs" / "api" / "report" / "report.html").is_file()

@@ -12,20 +12,24 @@ import pytest
 
 from flows.orchestrate import (
     SweepCounts,
+    SweepPlan,
+    assemble_cube,
     cost_kind,
     dry_run,
     format_dry_run,
     load_sweep_grid,
     open_root,
     training_cost,
+    with_recordings,
 )
 from pipeline.coding import MAX_AUTO_WINDOWS
+from pipeline.cube import RecordingsInfo
 from pipeline.errors import DatasetError
-from pipeline.grid import Grid, load_grid
+from pipeline.grid import DatasetFacts, Grid, load_grid
 from pipeline.metrics import SpikeMetrics
-from pipeline.scene import Scene
+from pipeline.scene import Scene, cache_key
 from storage import StoreError
-from storage.store import ResultEntry, SweepStore
+from storage.store import RateEntry, ResultEntry, SweepStore
 
 
 def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():
@@ -175,3 +179,44 @@ def test_dry_run_of_a_missing_root_has_nothing_cached_and_creates_nothing(tmp_pa
     (tmp_path / "file").write_text("x")
     with pytest.raises(StoreError, match="is a file"):
         dry_run(dry_run_grid(), tmp_path / "file", workers=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Assembling cubes
+
+
+def test_cubes_state_the_recordings_of_entries_written_before_results_did(tmp_path):
+    """Class names come from the points' rate entries, dataset name and sampling rate from the
+    facts the grid was checked against; an entry that states them itself is taken as it is."""
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
+    )
+    store = SweepStore.open_or_create(tmp_path / "run")
+    scenes = grid.unique_points()
+    for key, scene in scenes.items():
+        counts, dropped = np.zeros((2, 1, 4, 1), np.int64), np.zeros((2, 4), np.int64)
+        rates = RateEntry(counts, dropped, np.array([0, 1]), ("bark", "cloth"), {})
+        store.write_rates(cache_key(scene, "rates"), rates)
+        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+    facts = DatasetFacts(fs_hz=250.0, min_samples=100, min_class_size=1, dataset="mine")
+    plan = SweepPlan(grid, str(store.root), scenes, {}, {cache_key(grid.base, "recordings"): facts})
+    cube = assemble_cube(plan, "t")
+    stated = {k: cube.attrs.get(k) for k in ("dataset_name", "sampling_rate_hz", "class_names")}
+    assert stated == {
+        "dataset_name": "mine",
+        "sampling_rate_hz": 250.0,
+        "class_names": ["bark", "cloth"],
+    }
+    assert cube.attrs["n_classes"] == 2
+    assert store.read_cube("t").attrs["n_classes"] == 2
+    own = RecordingsInfo("theirs", ("x",), 100.0)
+    first = next(iter(scenes))
+    entry = ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own)
+    assert with_recordings(plan, store, {first: entry})[first].recordings is own
+    # Nothing known anywhere: the facts stay unknown, and out of the cube.
+    bare = SweepPlan(grid, str(tmp_path / "other"), scenes, {})
+    empty = SweepStore.open_or_create(bare.root)
+    for key in scenes:
+        empty.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+    cube = assemble_cube(bare, "t")
+    assert not {"dataset_name", "sampling_rate_hz", "class_names", "n_classes"} & set(cube.attrs)

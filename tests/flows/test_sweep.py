@@ -43,7 +43,11 @@ def test_cubes_are_labelled(smoke_sweep):
     threshold = cubes["threshold"]
     assert threshold["accuracy"].dims == ("threshold_v", "model", "fold")
     assert list(threshold["threshold_v"].values) == [0.05, 0.09]
-    assert threshold["threshold_v"].attrs == {"field": "readout.threshold_v", "units": "V"}
+    assert threshold["threshold_v"].attrs == {
+        "field": "readout.threshold_v",
+        "units": "V",
+        "long_name": "comparator threshold (level-crossing step)",
+    }
     assert list(threshold["model"].values) == ["ffnn", "cnn"]
     assert threshold.sizes["fold"] == 4
     acc = threshold["accuracy"].values
@@ -53,7 +57,14 @@ def test_cubes_are_labelled(smoke_sweep):
     assert threshold["seconds"].dims == ("threshold_v", "stage")
     assert np.all(threshold["seconds"].values >= 0)
     assert threshold.attrs["grid"] == "smoke" and threshold.attrs["sweep"] == "threshold"
-    assert "package_version" in threshold.attrs and "base_scene" in threshold.attrs
+    assert "package_version" in threshold.attrs and threshold["array.rows"].item() == 2
+    # What the recordings were, from the points' entries (and the store, for older entries).
+    assert threshold.attrs["n_classes"] == len(threshold.attrs["class_names"]) == 12
+    assert (threshold.attrs["dataset_name"], threshold.attrs["sampling_rate_hz"]) == (
+        "synthetic",
+        2000.0,
+    )
+    assert threshold["result_key"].dims == ("threshold_v",)
     np.testing.assert_allclose(
         threshold["equivalent_bits"].values, np.log2(1 / np.array([0.05, 0.09]))
     )
@@ -256,7 +267,9 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
     assert Path(summary["report"]).is_file()
     cube = open_results(root)["t"]
     assert cube.sizes["threshold_v"] == 2
-    assert "three textures" in cube.attrs["base_scene"]
+    assert "three textures" in cube["dataset.path"].item()
+    assert (cube.attrs["dataset_name"], cube.attrs["sampling_rate_hz"]) == ("three", 500.0)
+    assert cube.attrs["class_names"] == ["coarse", "fine", "medium"]
 
     api = server.status().api_url  # the suite's server, which this sweep used
     request = urllib.request.Request(

@@ -109,6 +109,15 @@ def test_every_problem_is_reported_before_any_work():
         assert expected in message
 
 
+def test_sweep_title_is_free_text_kept_in_the_description():
+    axes = {"readout.threshold_v": [0.05, 0.1]}
+    grid = Grid.from_dict({"base": "smoke", "sweeps": {"t": {"title": "Fig. 7a", "axes": axes}}})
+    assert sweep(grid, "t").title == "Fig. 7a"
+    assert sweep(Grid.from_dict(grid.describe()), "t").title == "Fig. 7a"
+    with pytest.raises(SceneError, match=r"sweeps\.t\.title: expected a string, got 7"):
+        Grid.from_dict({"base": "smoke", "sweeps": {"t": {"title": 7, "axes": axes}}})
+
+
 def test_grid_file_with_a_relative_base_scene(tmp_path):
     (tmp_path / "base.toml").write_text("[array]\nrows = 1\ncols = 1\n")
     (tmp_path / "g.toml").write_text(

@@ -214,6 +214,23 @@ def test_folder_round_trip_is_exact_for_any_finite_values(values):
 # Folder datasets: errors, each naming what and where
 
 
+def test_dataset_toml_description_is_free_text_and_not_loaded(tmp_path):
+    classes = {"c": {"a.csv": [1.0, 2.0]}}
+    plain = load_folder(make_folder(tmp_path / "plain", classes))
+    for name, text in [("long", '"""Bench rig, 2024.\n\nSecond paragraph."""'), ("empty", '""')]:
+        toml = f"sampling_rate_hz = 100\ndescription = {text}\n"
+        described = load_folder(make_folder(tmp_path / name, classes, toml))
+        assert (described.fs_hz, described.units, described.name) == (100.0, "a.u.", name)
+        np.testing.assert_array_equal(described.signals[0], plain.signals[0])
+
+
+def test_dataset_toml_unknown_keys_are_still_refused(tmp_path):
+    toml = 'sampling_rate_hz = 1\ndescriptoin = "typo"\n'
+    message = dataset_error(make_folder(tmp_path / "ds", {"c": {"a.csv": [1.0, 2.0]}}, toml))
+    known = "sampling_rate_hz, name, units, description"
+    assert f"dataset.toml: unknown key 'descriptoin' (known: {known})" in message
+
+
 def test_missing_path_and_not_a_directory(tmp_path):
     with pytest.raises(DatasetError, match=re.escape(f"{tmp_path / 'nope'} does not exist")):
         load_folder(tmp_path / "nope")
@@ -237,6 +254,11 @@ def test_missing_path_and_not_a_directory(tmp_path):
         ("sampling_rate_hz = 1\nrate = 2\n", "dataset.toml: unknown key 'rate'"),
         ('sampling_rate_hz = 1\nunits = ""\n', "units = '' is not a non-empty string"),
         ("sampling_rate_hz = 1\nname = 3\n", "name = 3 is not a non-empty string"),
+        ("sampling_rate_hz = 1\ndescription = 3\n", "toml: description = 3 is not a string"),
+        (
+            "sampling_rate_hz = 1\n[description]\ntext = 'x'\n",
+            "dataset.toml: description = {'text': 'x'} is not a string",
+        ),
     ],
 )
 def test_malformed_dataset_toml(tmp_path, toml, expected):

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 import storage
 import storage.store as store_module
+from pipeline.cube import RecordingsInfo
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Model
@@ -121,7 +122,8 @@ def spike_entry() -> SpikeEntry:
 
 
 def test_public_names_are_reexported():
-    assert set(storage.__all__) == set(store_module.__all__)
+    # The package is the store's public names plus the run root as one DataTree.
+    assert set(storage.__all__) == set(store_module.__all__) | {"open_tree"}
     assert issubclass(CorruptEntryError, StoreError) and issubclass(StoreError, EskinError)
     assert [k.value for k in EntryKind] == ["spikes", "rates", "results"]
 
@@ -276,6 +278,37 @@ def test_results_round_trip_keeps_model_order(store):
     with xr.open_zarr(store.path / "results" / KEY, consolidated=False, zarr_format=3) as ds:
         assert ds["accuracy"].dims == ("model", "fold")
         assert ds["model"].values.tolist() == ["ffnn", "cnn"]
+    assert read.recordings is None  # stated nothing: read as unknown, never as empty
+
+
+@pytest.mark.parametrize(
+    "info",
+    [
+        RecordingsInfo("three", ("bark", "cloth", "µ-foam"), 500),
+        RecordingsInfo(class_names=("a",)),  # what an entry does not state stays unknown
+    ],
+)
+def test_results_round_trip_what_they_state_of_their_recordings(store, info):
+    store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), info))
+    read = store.read_result(KEY).recordings
+    assert read == info
+    assert read.sampling_rate_hz is None or type(read.sampling_rate_hz) is float
+
+
+def test_malformed_recordings_facts_are_refused_or_corrupt(store):
+    negative = RecordingsInfo(sampling_rate_hz=-1.0)
+    with pytest.raises(ValueError, match="sampling_rate_hz"):
+        store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), negative))
+    store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), RecordingsInfo("d")))
+    meta_path = store.path / "results" / KEY / "zarr.json"
+    meta = json.loads(meta_path.read_text())
+    meta["attributes"]["dataset_name"] = 3
+    digests = meta["attributes"].pop("sha256")
+    digests["@attrs"] = store_module._attrs_digest(meta["attributes"])  # a consistent writer
+    meta["attributes"]["sha256"] = digests
+    meta_path.write_text(json.dumps(meta))
+    with pytest.raises(CorruptEntryError, match="dataset_name"):
+        store.read_result(KEY)
 
 
 def make_cube(scale: float = 1.0) -> xr.Dataset:

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from pipeline.figures import draw_report
 from pipeline.report import Panel, build_report
+from pipeline.report.figures import draw_report
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 

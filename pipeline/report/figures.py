@@ -1,12 +1,14 @@
 """Figures of the report, drawn with matplotlib's object API from a report's numbers.
 
 Every function returns a new :class:`matplotlib.figure.Figure` on its own Agg canvas: no pyplot,
-no global state, nothing written (:mod:`storage.report` saves them). Error bars are the
-population standard deviation of accuracy over folds; both models are drawn on every panel.
+no global state, nothing written (:func:`figure_images` renders one to PNG and SVG in memory).
+Error bars are the population standard deviation of accuracy over folds; both models are drawn
+on every panel.
 """
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,16 +24,13 @@ from matplotlib.ticker import (
     NullFormatter,
 )
 
-from pipeline.report import (
-    PANEL_TITLES,
-    PAPER_THRESHOLD_V,
-    PAPER_WINDOW_S,
-    CostPoint,
-    Curve,
-    MetricFit,
-    Panel,
-    Report,
-)
+from pipeline.report.analysis import Report
+from pipeline.report.claims import PAPER_THRESHOLD_V, PAPER_WINDOW_S
+from pipeline.report.cost import CostPoint
+from pipeline.report.curves import Curve, MetricFit
+from pipeline.report.panels import PANEL_TITLES, Panel
+
+PNG_DPI = 150
 
 _COLORS = {"ffnn": "tab:blue", "cnn": "tab:orange"}
 _MARKERS = ("o", "s", "^", "D")
@@ -73,6 +72,14 @@ def draw_report(report: Report) -> dict[Panel, Figure]:
         ),
     }
     return {panel: draw[panel]() for panel in report.panels}
+
+
+def figure_images(figure: Figure) -> tuple[bytes, str]:
+    """``figure`` as PNG bytes (:data:`PNG_DPI`) and as an SVG document (text, no date in it)."""
+    png, svg = io.BytesIO(), io.BytesIO()
+    figure.savefig(png, format="png", dpi=PNG_DPI)
+    figure.savefig(svg, format="svg", metadata={"Date": None})
+    return png.getvalue(), svg.getvalue().decode("utf-8")
 
 
 def threshold_figure(curves: Sequence[Curve], full_scale_v: float) -> Figure:

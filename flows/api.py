@@ -1,0 +1,41 @@
+"""The Python API for notebooks and scripts: everything ``eskin`` does, as plain calls.
+
+- Describe a scene and run it: :class:`Scene` (``Scene.load("smoke")``, ``scene.replace(...)``
+  with dotted fields) and :func:`run_scene`; :func:`result_summary` and :func:`format_summary`
+  give what ``eskin run --json`` and ``eskin run`` print.
+- Sweep a grid: :func:`run_sweep` on a ``distributed.Client`` you give (or a local cluster it
+  starts), without Prefect; the Prefect flow ``flows.sweep.sweep`` does the same with a UI.
+- Open the results: :func:`open_results` (a dict of cubes by sweep name) or :func:`open_tree`
+  (one ``xarray.DataTree``), and :func:`best_points` of a cube.
+- Write the report: :func:`write_run_report`.
+
+Nothing here imports Prefect.
+"""
+
+from flows.orchestrate import SweepFailed, best_points, run_sweep
+from flows.report import write_run_report
+from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
+from pipeline.errors import EskinError
+from pipeline.grid import Grid, load_grid
+from pipeline.scene import Scene
+from pipeline.simulate import SceneResult, run_scene
+from storage import open_results, open_tree
+
+__all__ = [
+    "EskinError",
+    "Grid",
+    "Scene",
+    "SceneResult",
+    "SweepFailed",
+    "best_points",
+    "format_summary",
+    "format_sweep_summary",
+    "json_safe",
+    "load_grid",
+    "open_results",
+    "open_tree",
+    "result_summary",
+    "run_scene",
+    "run_sweep",
+    "write_run_report",
+]

@@ -1,0 +1,142 @@
+"""Summaries of a scene's run and of a sweep: plain functions the command line prints.
+
+A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.simulate.RunResult`
+into the JSON-able dict of ``eskin run --json``, :func:`format_summary` prints it as
+``eskin run`` does, and :func:`format_sweep_summary` prints a sweep's summary (what
+:func:`flows.orchestrate.run_sweep` and the ``sweep`` flow return) with the best point per model
+of each cube. :func:`json_safe` writes infinite numbers as the strings ``"inf"`` and ``"-inf"``
+(JSON has none; ``float("inf")`` reads them back).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the command line imports this module; xarray loads only when a sweep prints
+    import xarray as xr
+
+
+def result_summary(result: Any) -> dict[str, Any]:
+    """The JSON object of ``eskin run --json`` (its keys are documented in the README).
+
+    Parameters
+    ----------
+    result
+        What :func:`pipeline.simulate.run_scene` returned.
+
+    Returns
+    -------
+    dict
+        Plain numbers, strings, lists and dicts; ``ssnr_db`` may be infinite (see
+        :func:`json_safe`). Accuracies are fractions in [0, 1], ``timings_s`` seconds per stage.
+    """
+    scene = result.scene
+    m = result.metrics
+    return {
+        "scene": scene.name,
+        "dataset": scene.dataset.kind.value,
+        "n_recordings": result.n_recordings,
+        "n_classes": result.n_classes,
+        "chance": 1.0 / result.n_classes,
+        "taxels": scene.array.n_taxels,
+        "threshold_v": scene.readout.threshold_v,
+        "window_s": scene.coding.window_s,
+        "n_windows": result.n_windows,
+        "dropped_spikes": result.dropped_spikes,
+        "accuracy": {
+            model.value: {
+                "mean": cv.mean,
+                "std": cv.std,
+                "folds": [float(a) for a in cv.fold_accuracy],
+            }
+            for model, cv in result.accuracy.items()
+        },
+        "ssnr_db": m.ssnr_db,
+        "ste_s2": m.ste_s2,
+        "ste_sign_safe_s2": m.ste_sign_safe_s2,
+        "event_rate_hz": m.event_rate_hz,
+        "data_rate_bps": m.data_rate_bps,
+        "equivalent_bits": m.equivalent_bits,
+        "timings_s": dict(result.timings_s),
+    }
+
+
+def format_summary(s: Mapping[str, Any]) -> str:
+    """The text ``eskin run`` prints for a :func:`result_summary` (no trailing newline)."""
+    lines = [
+        f"scene {s['scene']!r} on {s['dataset']} data: {s['n_recordings']} recordings, "
+        f"{s['n_classes']} classes (chance {100 * s['chance']:.1f} %)",
+        f"  {s['taxels']} taxels, threshold {s['threshold_v']:g} V "
+        f"({s['equivalent_bits']:.2f} equivalent bits), "
+        f"{s['n_windows']} windows of {s['window_s']:g} s",
+    ]
+    for model, acc in s["accuracy"].items():
+        lines.append(
+            f"  {model.upper():5s} accuracy {100 * acc['mean']:5.1f} % "
+            f"+- {100 * acc['std']:.1f} % over {len(acc['folds'])} folds"
+        )
+    ssnr = "inf (REAL = TRUE)" if math.isinf(s["ssnr_db"]) else f"{s['ssnr_db']:.2f}"
+    lines += [
+        f"  SSNR {ssnr} dB, STE {s['ste_s2']:.3g} s^2 (sign-safe {s['ste_sign_safe_s2']:.3g})",
+        f"  event rate {s['event_rate_hz']:.4g} spikes/s, "
+        f"data rate {s['data_rate_bps']:.4g} bit/s (address-event)",
+        "  seconds: "
+        + ", ".join(f"{stage} {sec:.2f}" for stage, sec in s["timings_s"].items())
+        + f" (total {sum(s['timings_s'].values()):.1f})",
+    ]
+    return "\n".join(lines)
+
+
+def format_sweep_summary(
+    summary: Mapping[str, Any], cubes: Mapping[str, xr.Dataset] | None = None
+) -> str:
+    """The text ``eskin sweep`` prints: counts, each cube's best point per model, where it is.
+
+    Parameters
+    ----------
+    summary
+        A sweep's summary: ``root``, ``cubes`` (names in order), ``points``, ``cache_hits``,
+        ``computed`` and ``seconds``, optionally ``report`` and ``flow_run_url``.
+    cubes
+        The sweep's cubes by name; default: read from ``summary["root"]``
+        (:func:`storage.open_results`).
+    """
+    from flows.orchestrate import best_points
+    from storage import open_results
+
+    if cubes is None:
+        cubes = open_results(summary["root"])
+    lines = [
+        f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
+        f"computed) in {summary['seconds']:.1f} s",
+        f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
+    ]
+    for name in summary["cubes"]:
+        cube = cubes[name]
+        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy"].dims[:-2])
+        for row in best_points(cube):
+            at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
+            lines.append(
+                f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
+            )
+    lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
+    lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
+    if summary.get("report"):
+        lines.append(f"report: {summary['report']}")
+    if summary.get("flow_run_url"):
+        lines.append(f"Prefect flow run: {summary['flow_run_url']}")
+    return "\n".join(lines)
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float as ``"inf"``, ``"-inf"`` or ``"nan"`` (nested)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "inf" if value > 0 else "-inf" if value < 0 else "nan"
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [json_safe(v) for v in value]
+    return value

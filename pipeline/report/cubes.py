@@ -1,0 +1,107 @@
+"""Reading result cubes (the layout of :mod:`pipeline.cube`): swept fields, values, point keys.
+
+Which panel a cube feeds is decided by the scene fields its one dimension sweeps, read from the
+``field`` attribute of its coordinates, never by its name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.report.panels import PANEL_FIELDS, Panel
+
+
+def swept_fields(cube: xr.Dataset) -> frozenset[str]:
+    """The scene fields a cube sweeps (the ``field`` attribute of its axes' coordinates)."""
+    return frozenset(str(c.attrs["field"]) for c in cube.coords.values() if "field" in c.attrs)
+
+
+def is_one_dimensional(cube: xr.Dataset) -> bool:
+    return "accuracy" in cube and cube["accuracy"].ndim == 3
+
+
+def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
+    """Names of the cubes that feed ``panel``, in the mapping's order."""
+    if panel is Panel.COST:
+        return [name for name, cube in cubes.items() if "seconds" in cube]
+    if panel is Panel.SPIKE_METRICS:
+        return [name for name, cube in cubes.items() if "correlation_r" in cube]
+    wanted = PANEL_FIELDS[panel]
+    return [
+        name
+        for name, cube in cubes.items()
+        if is_one_dimensional(cube) and set(swept_fields(cube)) in wanted
+    ]
+
+
+def field_values(cube: xr.Dataset, field: str) -> np.ndarray:
+    """The value of scene ``field`` at every point of a one-dimensional cube, shape (n,).
+
+    The cube's coordinate ``field`` (a dotted scene field) holds it: along the dimension where
+    the field varies, a scalar where every point has the same value.
+    """
+    dim = cube["accuracy"].dims[0]
+    return cube[field].broadcast_like(cube[dim]).values
+
+
+def base_value(cube: xr.Dataset, field: str) -> Any:
+    """Scene ``field`` where every point of the cube has the same value, as a Python scalar.
+
+    Raises
+    ------
+    KeyError
+        The cube has no coordinate ``field``.
+    ValueError
+        The field varies along the cube.
+    """
+    value = cube[field]
+    if value.ndim:
+        raise ValueError(f"{field} varies along the cube")
+    return value.item()
+
+
+def panel_x(panel: Panel, cube: xr.Dataset) -> np.ndarray:
+    """The abscissa of ``panel`` at every point of a one-dimensional cube, float64 (n,)."""
+    if panel is Panel.THRESHOLD:
+        return field_values(cube, "readout.threshold_v").astype(np.float64)
+    if panel is Panel.WINDOW:
+        return field_values(cube, "coding.window_s").astype(np.float64)
+    if panel is Panel.TAXELS:
+        rows = field_values(cube, "array.rows").astype(np.float64)
+        return rows * field_values(cube, "array.cols").astype(np.float64)
+    if panel is Panel.MISMATCH:
+        return field_values(cube, "readout.effects.threshold_mismatch.sigma_rel").astype(np.float64)
+    if panel is Panel.OBSERVATION:
+        windows = field_values(cube, "coding.n_windows").astype(np.float64)
+        return windows * field_values(cube, "coding.window_s").astype(np.float64)
+    raise ValueError(f"panel {panel} has no single abscissa")
+
+
+def point_keys(cube: xr.Dataset) -> list[str]:
+    """Result cache keys (the cube's ``result_key``) of its points in C order over its swept
+    dimensions; points shared by two sweeps have one key."""
+    dims = cube["seconds"].dims[:-1]
+    return [str(k) for k in cube["result_key"].transpose(*dims).values.ravel()]
+
+
+def dataset_kind(cubes: Mapping[str, xr.Dataset]) -> str:
+    """The recordings' kinds (``dataset.kind``) of all cubes, sorted and comma-separated."""
+    kinds = {
+        str(kind)
+        for cube in cubes.values()
+        if "dataset.kind" in cube.coords
+        for kind in np.ravel(cube["dataset.kind"].values)
+    }
+    return ", ".join(sorted(kinds)) or "unknown"
+
+
+def sampling_rate_hz(cubes: Mapping[str, xr.Dataset]) -> float | None:
+    """The recordings' sampling rate (Hz) the cubes state (the first that does), or None."""
+    for cube in cubes.values():
+        if "sampling_rate_hz" in cube.attrs:
+            return float(cube.attrs["sampling_rate_hz"])
+    return None

@@ -1,0 +1,104 @@
+"""``flows.api`` and ``flows.orchestrate.run_sweep``: a sweep on a given Dask client, no Prefect."""
+
+import subprocess
+import sys
+
+import pytest
+import xarray as xr
+
+import flows.api
+from flows import orchestrate
+from flows.api import SweepFailed, open_results, run_sweep
+from flows.cluster import ClusterError
+from flows.work import ensure_entry
+from storage.runlog import RUN_LOG
+
+GRID = """
+name = "api"
+base = "smoke"
+
+[sweeps.threshold]
+axes = { "readout.threshold_v" = [0.05, 0.09] }
+
+[sweeps.window]
+axes = { "coding.window_s" = [0.1, 0.2] }
+"""
+
+
+@pytest.fixture
+def grid(tmp_path):
+    path = tmp_path / "api.toml"
+    path.write_text(GRID)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def client():
+    from distributed import Client, LocalCluster
+
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+def test_every_name_of_the_api_resolves_without_importing_prefect():
+    assert all(getattr(flows.api, name) is not None for name in flows.api.__all__)
+    code = "import sys, flows.api; sys.exit('prefect' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"workers": 0}, r"^workers 0: need a whole number"),
+        ({"workers": 1, "client": object()}, r"not both"),
+    ],
+)
+def test_bad_workers_are_refused_before_the_root_is_made(tmp_path, grid, kwargs, message):
+    with pytest.raises(ClusterError, match=message):
+        run_sweep(grid, tmp_path / "run", **kwargs)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_sweep_on_a_given_client_writes_cubes_and_leaves_the_client_open(
+    tmp_path, grid, client, monkeypatch
+):
+    root = tmp_path / "run"
+    summary = run_sweep(grid, root, client=client)
+    assert client.status == "running"
+    assert {k: summary[k] for k in ("points", "cache_hits", "computed")} == {
+        "points": 3,  # the window sweep's 0.1 s point is the threshold sweep's 0.09 V one
+        "cache_hits": 0,
+        "computed": 3,
+    }
+    cubes = open_results(root)
+    assert list(summary["cubes"]) == ["threshold", "window"] == sorted(cubes)
+    assert cubes["window"]["accuracy"].dims == ("window_s", "model", "fold")
+    assert len((root / RUN_LOG).read_text().splitlines()) == 1
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a cluster started with nothing to compute")
+
+    monkeypatch.setattr(orchestrate, "dask_client", no_cluster)
+    again = run_sweep(grid, root)
+    assert (again["cache_hits"], again["computed"], again["dashboard"]) == (3, 0, None)
+    xr.testing.assert_identical(open_results(root)["threshold"], cubes["threshold"])
+
+
+def failing_at_5_mv(root, level, scene_data, *after):
+    if scene_data["readout"]["threshold_v"] == 0.05:
+        raise RuntimeError("broken point")
+    return ensure_entry(root, level, scene_data, *after)
+
+
+def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
+    tmp_path, grid, client, monkeypatch
+):
+    monkeypatch.setattr(orchestrate, "ensure_entry", failing_at_5_mv)
+    with pytest.raises(SweepFailed, match=r"^1 of 3 points failed .*broken point"):
+        run_sweep(grid, tmp_path / "run", client=client)
+    assert sorted(open_results(tmp_path / "run")) == ["window"]

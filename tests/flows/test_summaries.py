@@ -1,0 +1,76 @@
+"""``flows.summaries``: what ``eskin run`` and ``eskin sweep`` print, as plain functions."""
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import xarray as xr
+
+from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
+from pipeline.scene import Model, Scene
+
+
+def fake_result(ssnr_db: float) -> SimpleNamespace:
+    cv = SimpleNamespace(mean=0.5, std=0.1, fold_accuracy=np.array([0.4, 0.6]))
+    metrics = SimpleNamespace(
+        ssnr_db=ssnr_db,
+        ste_s2=0.0,
+        ste_sign_safe_s2=0.0,
+        event_rate_hz=10.0,
+        data_rate_bps=30.0,
+        equivalent_bits=3.5,
+    )
+    return SimpleNamespace(
+        scene=Scene.load("smoke"),
+        n_recordings=48,
+        n_classes=12,
+        n_windows=15,
+        dropped_spikes=0,
+        metrics=metrics,
+        accuracy={Model.FFNN: cv},
+        timings_s={"load": 0.25, "train_ffnn": 1.0},
+    )
+
+
+def test_result_summary_is_plain_json_once_infinities_are_strings():
+    summary = result_summary(fake_result(math.inf))
+    assert summary["accuracy"] == {"ffnn": {"mean": 0.5, "std": 0.1, "folds": [0.4, 0.6]}}
+    assert (summary["taxels"], summary["chance"]) == (4, 1 / 12)
+    text = json.dumps(json_safe(summary), allow_nan=False)
+    assert json.loads(text)["ssnr_db"] == "inf"
+
+
+def test_json_safe_names_every_non_finite_number_nested():
+    value = {"a": [-math.inf, math.nan, 1.5], "b": {"c": math.inf}, "d": "inf"}
+    assert json_safe(value) == {"a": ["-inf", "nan", 1.5], "b": {"c": "inf"}, "d": "inf"}
+
+
+def test_format_summary_names_models_and_an_infinite_ssnr():
+    text = format_summary(result_summary(fake_result(math.inf)))
+    assert "FFNN  accuracy  50.0 % +- 10.0 % over 2 folds" in text
+    assert "SSNR inf (REAL = TRUE) dB" in text and "(total 1.2)" in text
+    assert "SSNR 12.35 dB" in format_summary(result_summary(fake_result(12.345)))
+
+
+def test_format_sweep_summary_uses_the_given_cubes_and_their_best_points(tmp_path):
+    accuracy = np.array([[[0.2, 0.4], [0.9, 0.7]], [[0.6, 0.6], [0.1, 0.1]]])
+    cube = xr.Dataset(
+        {"accuracy": (("threshold_v", "model", "fold"), accuracy)},
+        coords={"threshold_v": [0.05, 0.09], "model": ["ffnn", "cnn"]},
+    )
+    summary = {
+        "root": str(tmp_path),
+        "cubes": {"threshold": "somewhere"},
+        "points": 2,
+        "cache_hits": 1,
+        "computed": 1,
+        "seconds": 3.04,
+        "report": "r.html",
+    }
+    lines = format_sweep_summary(summary, {"threshold": cube}).splitlines()
+    assert lines[0] == "2 points (1 cached, 1 computed) in 3.0 s"
+    best_ffnn = ["threshold", "threshold_v=2", "ffnn", "60.0", "%", "at", "threshold_v=0.09"]
+    assert lines[2].split() == best_ffnn
+    assert lines[3].split()[2:4] == ["cnn", "80.0"]
+    assert lines[-1] == "report: r.html"

@@ -1,0 +1,49 @@
+"""What accuracy costs: distinct points priced per model, the Pareto front, observation time."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from pipeline.report import Panel, build_report
+from pipeline.report.cost import pareto_front, time_to_accuracy
+from tests.report_helpers import make_cubes
+
+
+def test_cost_points_are_distinct_and_priced_per_model():
+    cubes = make_cubes()
+    report = build_report(cubes)
+    keys = [(p.key, p.model) for p in report.cost_points]
+    assert len(keys) == len(set(keys))
+    shared = [p for p in report.cost_points if len(p.sweeps) > 1]
+    assert shared, "the operating point is in several sweeps and must be counted once"
+    one = next(p for p in report.cost_points if p.model == "ffnn" and p.label.startswith("taxels"))
+    # load + readout (per taxel) + coding + train_ffnn; train_cnn is not the FFNN's cost.
+    assert one.seconds == 0.1 + 0.01 * 1 + 0.02 + 0.5
+    cost = report.sweep_cost
+    assert cost.n_points == len({p.key for p in report.cost_points})
+    assert dict(cost.stage_seconds)["load"] == pytest.approx(0.1 * cost.n_points)
+
+
+@given(st.lists(st.tuples(st.integers(0, 20), st.integers(0, 20)), min_size=1, max_size=30))
+def test_pareto_front_is_the_cheapest_design_per_accuracy(pairs):
+    seconds = np.array([float(s) for s, _ in pairs])
+    accuracy = np.array([a / 20 for _, a in pairs])
+    front = pareto_front(seconds, accuracy)
+    for i in range(len(pairs)):
+        cheaper_or_equal = (seconds <= seconds[i]) & (np.arange(len(pairs)) != i)
+        beaten = np.any(cheaper_or_equal & (accuracy >= accuracy[i]) & front)
+        if front[i]:
+            assert not np.any(cheaper_or_equal & (accuracy > accuracy[i]))
+        else:
+            assert beaten  # every point off the front has a front point as good and as cheap
+    assert front[np.argmax(accuracy)] or np.sum(accuracy == accuracy.max()) > 1
+
+
+def test_time_to_accuracy_finds_the_first_swept_time():
+    report = build_report(make_cubes())
+    (curve, *_) = report.curves[Panel.OBSERVATION]
+    # n_windows 1, 2, 5 of 0.1 s; accuracy 0.6 - 0.2 / n: 0.4, 0.5, 0.56.
+    np.testing.assert_allclose(curve.x, [0.1, 0.2, 0.5])
+    rows = {r.fraction: r.seconds for r in time_to_accuracy([curve], (0.7, 0.85, 1.0, 1.1))}
+    assert rows == {0.7: 0.1, 0.85: 0.2, 1.0: 0.5, 1.1: None}

@@ -1,0 +1,63 @@
+"""The report document: its Markdown for fixed cubes is a committed golden file; its files.
+
+To accept a deliberate change of the report's text, rewrite the golden file with
+``.venv/bin/python -c "from tests.pipeline.report.test_document import golden_markdown as g;
+g(write=True)"`` and review the diff.
+"""
+
+from pathlib import Path
+
+import pytest
+
+from pipeline.report import FrameReadout, Panel, SweepRun, build_report
+from pipeline.report.document import report_blocks, report_files
+from pipeline.report.figures import draw_report
+from pipeline.report.render import render_markdown
+from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
+
+GOLDEN = Path(__file__).parents[2] / "data" / "report_golden.md"
+VERSION = "0.0.0-golden"  # not the installed version: the golden file outlives releases
+
+
+def golden_markdown(write: bool = False) -> str:
+    """report.md of :func:`make_cubes` with a 12-bit frame readout and one logged run."""
+    runs = (SweepRun("2024-01-01T00:00:00+00:00", "t|x", 10, 2, 8, 12.5),)
+    report = build_report(make_cubes(), frame=FrameReadout(12, 2000.0), runs=runs)
+    text = render_markdown(report_blocks(report, set(report.panels), version=VERSION))
+    if write:
+        GOLDEN.write_text(text, encoding="utf-8")
+    return text
+
+
+def test_markdown_of_fixed_cubes_equals_the_golden_file():
+    assert golden_markdown() == GOLDEN.read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def small():
+    report = build_report(make_cubes({k: PAPER_LIKE_SWEEPS[k] for k in ("threshold", "mismatch")}))
+    return report, draw_report(report)
+
+
+def test_report_files_are_the_pages_and_every_figure_twice(small):
+    report, figures = small
+    calls = []
+    files = report_files(report, figures, version=VERSION, on_figure=lambda: calls.append(1))
+    stems = [p.value for p in figures]
+    assert set(files) == {"report.md", "report.html"} | {
+        f"figures/{s}.{ext}" for s in stems for ext in ("png", "svg")
+    }
+    assert len(calls) == len(figures) == 3
+    assert all(files[f"figures/{s}.png"].startswith(b"\x89PNG") for s in stems)
+    html = files["report.html"].decode()
+    assert html.count("<svg") == len(figures) and "<?xml" not in html
+    markdown = files["report.md"].decode()
+    assert f"eskin-sweep {VERSION}." in markdown
+
+
+def test_a_panel_not_drawn_says_so():
+    report = build_report(make_cubes({"threshold": PAPER_LIKE_SWEEPS["threshold"]}))
+    markdown = render_markdown(report_blocks(report, {Panel.COST}, version=VERSION))
+    assert f"{Panel.THRESHOLD.value}.png" not in markdown
+    assert "Fig. 7a: accuracy against the readout threshold: not drawn." in markdown
+    assert f"(figures/{Panel.COST.value}.png)" in markdown

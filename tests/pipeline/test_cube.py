@@ -1,0 +1,311 @@
+"""Result cubes from point results: layout, gaps, correlations, and what they say of themselves."""
+
+import dataclasses
+import math
+import types
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.cube import (
+    CUBE_VARIABLES,
+    RecordingsInfo,
+    build_cube,
+    field_attrs,
+    metric_attrs,
+)
+from pipeline.grid import Grid, sweep_points
+from pipeline.metrics import SpikeMetrics
+from pipeline.scene import ReadoutSpec, ThresholdMismatch
+from storage.cubes import SPIKE_STAGES
+from storage.store import ResultEntry
+from tests import golden_cubes as golden
+
+
+def metrics(ssnr_db: float = math.inf, ste_s2: float = 0.0) -> SpikeMetrics:
+    return SpikeMetrics(
+        ssnr_db=ssnr_db,
+        ste_s2=ste_s2,
+        ste_sign_safe_s2=abs(ste_s2),
+        event_rate_hz=100.0,
+        data_rate_bps=300.0,
+        equivalent_bits=3.0,
+    )
+
+
+def entries(grid, sweep, make):
+    return {p.key: make(p) for p in sweep_points(grid.base, sweep)}
+
+
+def build(grid, sweep, records):
+    return build_cube(grid, sweep, records, spike_stages=SPIKE_STAGES)
+
+
+def built() -> dict[str, xr.Dataset]:
+    """The golden grid's cubes, built now."""
+    grid = golden.grid()
+    records = golden.entries(grid)
+    return {s.name: build(grid, s, records) for s in grid.sweeps}
+
+
+# ---------------------------------------------------------------------------------------------
+# Nothing that cubes held before changed
+
+
+def test_cubes_reproduce_the_golden_variables_exactly():
+    """Values, dtypes, dimensions and the coordinates cubes had before they described
+    themselves, as ``storage.cubes.build_cube`` of that time built them from the same entries."""
+    expected = golden.read_golden()
+    cubes = built()
+    assert set(cubes) == set(expected)
+    for name, cube in cubes.items():
+        xr.testing.assert_identical(golden.existing_part(cube, expected[name]), expected[name])
+
+
+def test_the_golden_comparison_sees_a_changed_value():
+    expected = golden.read_golden()["threshold"]
+    cube = built()["threshold"]
+    cube["ssnr_db"].values[0] = 1.0
+    with pytest.raises(AssertionError):
+        xr.testing.assert_identical(golden.existing_part(cube, expected), expected)
+
+
+# ---------------------------------------------------------------------------------------------
+# Layout
+
+
+def test_product_cube_layout_and_units():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "two": {
+                    "axes": {"readout.threshold_v": [0.05, 0.1], "coding.window_s": [0.1, 0.2, 0.3]}
+                }
+            },
+        }
+    )
+    sweep = grid.sweeps[0]
+
+    def make(point):
+        i, j = point.index
+        folds = np.full(4, 0.1 * i + 0.01 * j)
+        return ResultEntry({"ffnn": folds, "cnn": folds / 2}, {"train_ffnn": 1.0}, metrics())
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    assert cube["accuracy"].dims == ("threshold_v", "window_s", "model", "fold")
+    assert cube["accuracy"].shape == (2, 3, 2, 4)
+    assert cube["accuracy"].sel(threshold_v=0.1, window_s=0.3, model="ffnn").values[0] == 0.1 + 0.02
+    assert cube["accuracy"].sel(model="cnn").max() == pytest.approx(0.06)
+    assert cube["window_s"].attrs == {
+        "field": "coding.window_s",
+        "units": "s",
+        "long_name": "rate-coding window length",
+    }
+    assert cube["accuracy"].attrs["units"] == "1"
+    assert cube["ssnr_db"].attrs["units"] == "dB"
+    assert np.all(np.isinf(cube["ssnr_db"].values))
+    assert cube["seconds"].sel(stage="train_ffnn").values.tolist() == [[1.0] * 3] * 2
+    assert np.all(np.isnan(cube["seconds"].sel(stage="coding").values))  # not measured
+    # Each swept field also under its dotted name, along its own dimension only.
+    assert cube["readout.threshold_v"].dims == ("threshold_v",)
+    assert cube["coding.window_s"].values.tolist() == [0.1, 0.2, 0.3]
+    assert cube["readout.equivalent_bits"].dims == ("threshold_v",)
+    np.testing.assert_array_equal(
+        cube["readout.equivalent_bits"].values, [math.log2(1 / 0.05), math.log2(1 / 0.1)]
+    )
+    assert "correlation_r" not in cube
+
+
+def test_every_point_has_its_result_key():
+    grid = golden.grid()
+    cube = built()["product"]
+    sweep = next(s for s in grid.sweeps if s.name == "product")
+    assert cube["result_key"].dims == ("threshold_v", "n_windows")
+    for point in sweep_points(grid.base, sweep):
+        assert cube["result_key"].values[point.index] == point.key
+
+
+def test_base_and_fixed_fields_are_scalar_coordinates():
+    grid = golden.grid()
+    cubes = built()
+    noise = cubes["noise"]
+    assert noise["array.rows"].ndim == 0 and noise["array.rows"].item() == 1  # the sweep's set
+    assert noise["array.cols"].item() == 1
+    assert noise["training.folds"].item() == grid.base.training.folds  # the base scene's
+    assert noise["coding.n_windows"].item() == "auto"
+    assert noise["dataset.kind"].item() == "synthetic"
+    assert noise["readout.effects.comparator_noise.sigma_v"].dims == ("amplifier_noise_sigma_v",)
+    assert "dataset.path" not in noise.coords  # unset: the built-in data
+    assert "name" not in noise.coords
+    threshold = cubes["threshold"]
+    assert threshold["array.rows"].item() == grid.base.array.rows
+    assert threshold["readout.effects"].item() == "{}"  # ideal readout
+    # A point's implied effect parameter is described although no one wrote it down.
+    assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].item() == 0.1
+
+
+def test_equivalent_bits_coordinate_is_derived_from_the_threshold():
+    cube = built()["threshold"]
+    bits = cube["readout.equivalent_bits"]
+    assert bits.dims == ("threshold_v",)
+    np.testing.assert_array_equal(bits.values, np.log2(1.0 / cube["threshold_v"].values))
+    np.testing.assert_array_equal(bits.values, cube["equivalent_bits"].values)  # the variable
+    assert built()["window"]["readout.equivalent_bits"].ndim == 0
+
+
+def test_models_and_folds_a_point_did_not_train_are_nan():
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"m": {"axes": {"training.models": [["ffnn"], ["cnn"]]}}}}
+    )
+    sweep = grid.sweeps[0]
+
+    def make(point):
+        model = point.scene.training.models[0].value
+        return ResultEntry({model: np.full(4, 0.5)}, {}, metrics())
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    assert list(cube["models"].values) == ['["ffnn"]', '["cnn"]']  # tables become JSON labels
+    assert list(cube["training.models"].values) == ['["ffnn"]', '["cnn"]']
+    accuracy = cube["accuracy"]
+    assert np.all(np.isnan(accuracy.isel(models=0).sel(model="cnn")))
+    assert np.all(accuracy.isel(models=1).sel(model="cnn") == 0.5)
+
+
+def test_correlations_along_a_noise_sweep():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "noise": {
+                    "correlate": True,
+                    "axes": {"readout.effects.amplifier_noise.sigma_v": [0.0, 0.01, 0.02, 0.04]},
+                }
+            },
+        }
+    )
+    sweep = grid.sweeps[0]
+    ssnr = [math.inf, 30.0, 20.0, 10.0]
+    accuracy = [0.9, 0.8, 0.6, 0.3]
+
+    def make(point):
+        i = point.index[0]
+        return ResultEntry(
+            {"ffnn": np.full(4, accuracy[i]), "cnn": np.full(4, accuracy[i])},
+            {},
+            metrics(ssnr_db=ssnr[i], ste_s2=1e-6 * i),
+        )
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    r = cube["correlation_r"]
+    assert r.dims == ("model", "metric", "coefficient")
+    assert r.sel(model="ffnn", metric="ssnr_db", coefficient="pearson") > 0.9
+    assert r.sel(model="ffnn", metric="ste_s2", coefficient="spearman") == pytest.approx(-1.0)
+    assert cube["correlation_n"].sel(model="ffnn", metric="ssnr_db") == 3  # +inf left out
+    assert cube["correlation_n"].sel(model="ffnn", metric="ste_s2") == 4
+    assert np.all(np.isfinite(cube["correlation_p"].values))
+    assert "correlation_notes" not in cube.attrs
+
+
+def test_a_correlation_that_cannot_be_computed_keeps_its_note():
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"n": {"correlate": True, "axes": {"seed": [1, 2, 3]}}}}
+    )
+    sweep = grid.sweeps[0]
+    cube = build(
+        grid,
+        sweep,
+        entries(grid, sweep, lambda p: ResultEntry({"ffnn": np.full(4, 0.5)}, {}, metrics())),
+    )
+    assert "ffnn/ssnr_db/pearson" in cube.attrs["correlation_notes"]
+
+
+# ---------------------------------------------------------------------------------------------
+# Units, names and attributes
+
+
+def test_every_variable_and_coordinate_has_units_and_a_long_name():
+    for name, cube in built().items():
+        for var, variable in cube.variables.items():
+            assert variable.attrs.get("units"), f"{name}: {var} has no units"
+            assert variable.attrs.get("long_name"), f"{name}: {var} has no long_name"
+
+
+def test_units_are_those_of_the_one_declaration():
+    for cube in built().values():
+        for var, variable in cube.variables.items():
+            described = {k: variable.attrs[k] for k in ("units", "long_name")}
+            if "field" in variable.attrs:
+                assert described == field_attrs(variable.attrs["field"])
+            elif var in CUBE_VARIABLES:
+                assert described == CUBE_VARIABLES[var]
+            elif var == "readout.equivalent_bits":
+                assert described == metric_attrs("equivalent_bits")
+            elif var in {f.name for f in dataclasses.fields(SpikeMetrics)}:
+                assert described == metric_attrs(str(var))
+            else:
+                assert described == field_attrs(str(var))
+    assert field_attrs("readout.threshold_v")["units"] == "V"
+    assert metric_attrs("event_rate_hz")["units"] == "Hz"
+
+
+def redeclare(monkeypatch, cls, name, **metadata):
+    field = next(f for f in dataclasses.fields(cls) if f.name == name)
+    monkeypatch.setattr(field, "metadata", types.MappingProxyType({**field.metadata, **metadata}))
+
+
+def test_a_changed_declaration_changes_the_cube(monkeypatch):
+    redeclare(monkeypatch, ReadoutSpec, "threshold_v", units="mV", long_name="the threshold")
+    redeclare(monkeypatch, ReadoutSpec, "full_scale_v", units="kV")
+    redeclare(monkeypatch, ThresholdMismatch, "floor_rel", long_name="floor")
+    redeclare(monkeypatch, SpikeMetrics, "event_rate_hz", units="events/s")
+    cubes = built()
+    threshold = cubes["threshold"]
+    assert threshold["threshold_v"].attrs["units"] == "mV"
+    assert threshold["readout.threshold_v"].attrs["long_name"] == "the threshold"
+    assert threshold["readout.full_scale_v"].attrs["units"] == "kV"
+    assert threshold["event_rate_hz"].attrs["units"] == "events/s"
+    assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].attrs == {
+        "units": "1",
+        "long_name": "floor",
+    }
+
+
+def test_unknown_fields_are_refused():
+    for field in ("readout.treshold_v", "readout.effects.wobble.sigma_v", "name"):
+        with pytest.raises(KeyError):
+            field_attrs(field)
+    assert field_attrs("readout.effects.saturation")["units"] == "1"
+
+
+def test_what_every_point_says_of_its_recordings_is_in_the_attributes():
+    grid = golden.grid()
+    sweep = next(s for s in grid.sweeps if s.name == "threshold")
+    info = RecordingsInfo("synthetic", ("a", "b", "c"), 2000.0)
+    records = {k: dataclasses.replace(e, recordings=info) for k, e in golden.entries(grid).items()}
+    cube = build(grid, sweep, records)
+    assert cube.attrs["n_classes"] == 3
+    assert cube.attrs["class_names"] == ["a", "b", "c"]
+    assert cube.attrs["sampling_rate_hz"] == 2000.0
+    assert cube.attrs["dataset_name"] == "synthetic"
+    # One point that does not say, or says otherwise: the fact is left out, not guessed.
+    first, second = (p.key for p in sweep_points(grid.base, sweep))
+    records[first] = dataclasses.replace(records[first], recordings=None)
+    records[second] = dataclasses.replace(
+        records[second], recordings=RecordingsInfo("synthetic", ("a", "b"), None)
+    )
+    cube = build(grid, sweep, records)
+    assert not {"n_classes", "class_names", "sampling_rate_hz", "dataset_name"} & set(cube.attrs)
+    records[first] = records[second]
+    cube = build(grid, sweep, records)
+    assert cube.attrs["n_classes"] == 2 and "sampling_rate_hz" not in cube.attrs
+
+
+def test_provenance_attributes_are_plain_values():
+    cube = built()["noise"]
+    assert {"grid": "golden", "sweep": "noise", "mode": "zip", "seed": 0}.items() <= (
+        cube.attrs.items()
+    )
+    assert not {"axes", "fixed", "base_scene", "grid_description"} & set(cube.attrs)
+    assert all(isinstance(v, str | int | float | list) for v in cube.attrs.values())

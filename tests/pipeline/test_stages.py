@@ -1,0 +1,196 @@
+"""The stage registry: keys of earlier stores stay valid, a key follows exactly what its level
+reads, and a scene run reports exactly the registry's steps."""
+
+import inspect
+
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from pipeline.scene import Scene, cache_key
+from pipeline.simulate import run_scene, stage_names
+from pipeline.stages import (
+    FRONT_END,
+    LEVELS,
+    RECORDINGS,
+    SPIKES,
+    Level,
+    Read,
+    Stopwatch,
+    _checked,
+    level_named,
+    steps_through,
+)
+
+SMOKE = Scene.builtin("smoke")
+PAPER = Scene.paper()
+NOISY = SMOKE.replace(
+    seed=5, **{"readout.effects": {"amplifier_noise": {"sigma_v": 0.01}, "saturation": {}}}
+)
+SATURATING = PAPER.replace(
+    **{"readout.effects": {"saturation": {"rail_v": 0.4}}, "coding.polarity": "split"}
+)
+
+# The keys of earlier stores (printed by the code before the registry): they must stay valid,
+# or every store made so far would be recomputed instead of reused.
+EARLIER_KEYS = {
+    "smoke": (
+        SMOKE,
+        {
+            "recordings": "077ee3a2bb79c16b1e3fa0034c18a4e5",
+            "spikes": "7defbe2fbe0f581b45b8c326970c3730",
+            "rates": "2ebb0be99a9e4af86a64fe6fc6622dad",
+            "results": "40b619ca868ac7cdc2cde0fef1d2e98a",
+        },
+    ),
+    "paper": (
+        PAPER,
+        {
+            "recordings": "ba64ff729956041176c4142eebad12fd",
+            "spikes": "ad344470c92746c6b8bf91610a93f3b3",
+            "rates": "54ef09fc9b640f660196d29ed6ede007",
+            "results": "4cab1fc0238a615dcaebb4b5a6c2660a",
+        },
+    ),
+    "noisy": (
+        NOISY,
+        {
+            "recordings": "077ee3a2bb79c16b1e3fa0034c18a4e5",
+            "spikes": "4ed76f67b007f7dcf97f7b43c69b0ba6",
+            "rates": "6c94c5f3fc6483e49ffc60bfb048eb82",
+            "results": "fd777e02c7e4879d77b14d6a5445e3f2",
+        },
+    ),
+    "saturating": (
+        SATURATING,
+        {
+            "recordings": "ba64ff729956041176c4142eebad12fd",
+            "spikes": "339c132467e629b27e09a5e746ebc5cc",
+            "rates": "b1dbc0991be7c62255ad020b37ce37db",
+            "results": "e299de0908d0ce18e40cf881409d4aa2",
+        },
+    ),
+}
+
+
+@pytest.mark.parametrize("name", EARLIER_KEYS)
+def test_keys_of_earlier_stores_stay_valid(name):
+    scene, keys = EARLIER_KEYS[name]
+    assert {stage: level_named(stage).key(scene) for stage in keys} == keys
+    assert {stage: cache_key(scene, stage) for stage in keys} == keys
+
+
+# Which levels read each scene part, stated independently of the registry.
+READ_BY = {
+    "dataset": {"recordings", "front_end", "spikes", "rates", "results"},
+    "array": {"spikes", "rates", "results"},
+    "readout": {"spikes", "rates", "results"},
+    "coding": {"rates", "results"},
+    "training": {"results"},
+    "name": set(),
+}
+FIELDS = {
+    "dataset.duration_s": st.floats(0.5, 20.0),
+    "dataset.seed": st.integers(0, 2**40),
+    "array.rows": st.integers(1, 8),
+    "array.pitch_mm": st.floats(0.1, 5.0),
+    "readout.threshold_v": st.floats(0.01, 0.5),
+    "readout.full_scale_v": st.floats(0.6, 5.0),
+    "coding.window_s": st.floats(0.01, 1.0),
+    "coding.polarity": st.sampled_from(["merged", "split"]),
+    "training.epochs": st.integers(1, 500),
+    "training.seed": st.integers(0, 2**40),
+    "seed": st.integers(0, 2**40),
+    "name": st.text(min_size=1, max_size=8),
+}
+
+
+def _readers(scene: Scene, field: str) -> set[str]:
+    """The levels whose key must change with ``field``."""
+    if field == "seed":  # the scene seed only seeds random readout effects
+        return {"spikes", "rates", "results"} if scene.readout.is_random else set()
+    if field == "readout.full_scale_v":  # the front end scales to the full scale
+        return READ_BY["readout"] | {"front_end"}
+    return READ_BY[field.split(".")[0]]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    base=st.sampled_from([SMOKE, NOISY, SATURATING]),
+    field_and_value=st.sampled_from(sorted(FIELDS)).flatmap(
+        lambda field: st.tuples(st.just(field), FIELDS[field])
+    ),
+)
+def test_a_key_changes_exactly_when_a_field_its_level_reads_changes(base, field_and_value):
+    field, value = field_and_value
+    old = base.to_dict()
+    for part in field.split("."):
+        old = old[part]
+    assume(old != value)
+    changed = base.replace(**{field: value})
+    differs = {level.name for level in LEVELS if level.key(changed) != level.key(base)}
+    assert differs == _readers(base, field)
+
+
+def test_a_compute_function_takes_only_what_its_level_declares():
+    for level in LEVELS:
+        parameters = inspect.signature(level.compute).parameters
+        declared = {b.name for b in level.after} | {r.argument for r in level.reads} | {"watch"}
+        assert set(parameters) == declared, level.name
+        assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in parameters.values())
+
+
+def test_the_seed_is_passed_only_when_a_random_effect_is_named():
+    seed = next(read for read in SPIKES.reads if read.path == "seed")
+    assert seed.value(SMOKE.replace(seed=3)) is None
+    assert seed.value(NOISY) == 5
+    assert "seed" not in SPIKES.key_parts(SATURATING)
+
+
+def test_spike_steps_are_those_of_the_levels_up_to_the_spike_trains():
+    assert steps_through("spikes") == ("load", "front_end", "taxels", "readout", "metrics")
+    with pytest.raises(ValueError, match="models"):
+        steps_through("results")
+
+
+def test_stage_names_follow_the_registry_and_the_models():
+    scene = SMOKE.replace(**{"training.models": ["cnn"]})
+    assert stage_names(scene) == (
+        "load",
+        "front_end",
+        "taxels",
+        "readout",
+        "metrics",
+        "coding",
+        "train_cnn",
+    )
+
+
+def test_run_scene_times_exactly_the_stage_names():
+    scene = SMOKE.replace(
+        **{
+            "dataset.recordings_per_class": 2,
+            "dataset.duration_s": 1.0,
+            "training.epochs": 1,
+            "training.folds": 2,
+        }
+    )
+    started = []
+    result = run_scene(scene, on_stage=started.append)
+    assert tuple(result.timings_s) == stage_names(scene) == tuple(started)
+    assert set(result.accuracy) == set(scene.training.models)
+
+
+def test_a_level_that_times_an_undeclared_step_fails():
+    def compute(*, dataset, watch):
+        with watch.stage("elsewhere"):
+            return dataset
+
+    level = Level("odd", (Read("dataset"),), (), compute, ("load",), stored=False)
+    with pytest.raises(RuntimeError, match="elsewhere"):
+        level.run(SMOKE, {}, Stopwatch(None))
+
+
+def test_the_registry_refuses_a_level_before_its_inputs():
+    with pytest.raises(ValueError, match="runs after 'recordings'"):
+        _checked(FRONT_END, RECORDINGS)
