@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import functools
+import hashlib
 import json
 import logging
 import re
@@ -165,9 +166,12 @@ def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
 
     Largest points first, so that no long point starts last while the other workers idle. A
     spike train that several points share is submitted once, and one already in the store not
-    at all.
+    at all. Task keys name the root as well as the entry: Dask hands a task whose key it still
+    holds the earlier result, so a sweep of another root on the same cluster would otherwise
+    skip writing its entries.
     """
     store = SweepStore.open(plan.root)
+    root = hashlib.sha256(str(Path(plan.root).resolve()).encode()).hexdigest()[:12]
     spike_futures: dict[str, Any] = {}
     point_futures = {}
     priorities = {key: training_cost(plan.scenes[key]) for key in plan.missing}
@@ -182,7 +186,7 @@ def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
                 plan.root,
                 SPIKES.name,
                 data,
-                key=f"spikes-{spikes_key}",
+                key=f"spikes-{spikes_key}-{root}",
                 pure=False,
                 priority=priority + 1,
             )
@@ -193,7 +197,7 @@ def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
             RESULTS.name,
             data,
             *after,
-            key=f"point-{key}",
+            key=f"point-{key}-{root}",
             pure=False,
             priority=priority,
         )

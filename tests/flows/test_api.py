@@ -102,3 +102,22 @@ def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     with pytest.raises(SweepFailed, match=r"^1 of 3 points failed .*broken point"):
         run_sweep(grid, tmp_path / "run", client=client)
     assert sorted(open_results(tmp_path / "run")) == ["window"]
+
+
+def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, client):
+    """Dask hands a task whose key it still holds the earlier result: keys must name the root."""
+    from distributed import wait
+
+    from storage import EntryKind, SweepStore
+
+    plans = []
+    for name in ("a", "b"):
+        store = SweepStore.open_or_create(tmp_path / name)
+        with store.lock():
+            plans.append(orchestrate.plan_sweep(grid, str(store.root)))
+    held = [orchestrate.submit_missing(plan, client) for plan in plans]  # both held at once
+    assert {f.key for f in held[0].values()}.isdisjoint(f.key for f in held[1].values())
+    wait([f for futures in held for f in futures.values()])
+    for plan in plans:
+        store = SweepStore.open(plan.root)
+        assert all(store.has(EntryKind.RESULTS, key) for key in plan.scenes)
