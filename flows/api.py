@@ -7,6 +7,9 @@
   starts), without Prefect; the Prefect flow ``flows.sweep.sweep`` does the same with a UI.
 - Open the results: :func:`open_results` (a dict of cubes by sweep name) or :func:`open_tree`
   (one ``xarray.DataTree``), and :func:`best_points` of a cube.
+- Compare two designs recording by recording: :func:`compare` (a paired difference in accuracy
+  with its 95 % interval and an exact McNemar test); :mod:`pipeline.stats` has the statistics
+  themselves (accuracy intervals, paired comparisons, Holm's correction, trends).
 - Write the report: :func:`write_run_report`.
 
 Nothing here imports Prefect.
@@ -17,6 +20,7 @@ from flows.report import write_run_report
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 from pipeline.grid import Grid, load_grid
+from pipeline.report.evidence import compare_points as compare
 from pipeline.scene import Scene
 from pipeline.simulate import SceneResult, run_scene
 from storage import open_results, open_tree
@@ -28,6 +32,7 @@ __all__ = [
     "SceneResult",
     "SweepFailed",
     "best_points",
+    "compare",
     "format_summary",
     "format_sweep_summary",
     "json_safe",

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from flows import cluster
-from flows.report import DEFAULT_ADC_BITS
+from flows.report import DEFAULT_ADC_BITS, ENERGY_OPTIONS, energy_argument
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 
@@ -171,9 +171,13 @@ def build_parser() -> argparse.ArgumentParser:
     report = commands.add_parser(
         "report",
         parents=[common],
-        help="turn a sweep's cubes into the paper's figures and Table I, and the cost of accuracy",
+        help="turn a sweep's cubes into the cheapest design as accurate as the best, the paper's "
+        "claims, figures and Table I, and the cost of accuracy",
         description="Write figures (PNG, SVG), report.md and a self-contained report.html from "
-        "the result cubes of a run root, and print the path of report.html.",
+        "the result cubes of a run root, and print the path of report.html. The report opens "
+        "with, per model, the cheapest design (by data rate and by estimated readout power) "
+        "whose accuracy is not significantly below the run's best, against a frame-based ADC "
+        "readout of the same array.",
     )
     report.add_argument("--root", required=True, metavar="DIR", help="the run root of a sweep")
     report.add_argument(
@@ -184,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=DEFAULT_ADC_BITS,
         metavar="N",
-        help="resolution of the frame-based ADC readout Table I compares with "
+        help="resolution of the frame-based ADC readout the report compares with "
         f"(default {DEFAULT_ADC_BITS})",
     )
     report.add_argument(
@@ -193,6 +197,22 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="HZ",
         help="its frame rate per taxel (default: the recordings' sampling rate)",
     )
+    from pipeline.hardware import EnergyModel
+
+    defaults = EnergyModel()
+    for option, what, unit in (
+        ("--event-energy-pj", "energy per spike event of the event readout", "pJ"),
+        ("--adc-fom-fj", "Walden figure of merit of the frame readout's ADC", "fJ per step"),
+        ("--link-energy-pj-per-bit", "energy per bit sent on the link (both readouts)", "pJ"),
+    ):
+        field, factor = ENERGY_OPTIONS[option]
+        report.add_argument(
+            option,
+            type=energy_argument(option),
+            metavar=unit.split()[0].upper(),
+            help=f"{what}, in {unit}, for the readout power estimate (default "
+            f"{getattr(defaults, field) / factor:g}, an order-of-magnitude assumption)",
+        )
     report.set_defaults(handler=_report)
     return parser
 
@@ -329,6 +349,9 @@ def _report(args: argparse.Namespace) -> int:
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,
+        event_energy_pj=args.event_energy_pj,
+        adc_fom_fj=args.adc_fom_fj,
+        link_energy_pj_per_bit=args.link_energy_pj_per_bit,
         show_progress=not args.quiet,
     )
     print(path)

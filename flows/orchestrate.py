@@ -328,7 +328,7 @@ def cube_location(plan: SweepPlan, name: str) -> str:
 
 
 def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
-    """Per model, the best mean accuracy over folds of a cube and the swept values it is at.
+    """Per model, the best accuracy (``accuracy_mean``) of a cube and the swept values it is at.
 
     Returns
     -------
@@ -336,7 +336,7 @@ def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
         ``{"model", "accuracy", "at"}`` per model, ``at`` mapping each swept dimension to its
         value at the best point (the first of equals, in the cube's order).
     """
-    mean = cube["accuracy"].mean("fold")
+    mean = cube["accuracy_mean"]
     rows = []
     for model in cube["model"].values:
         per_model = mean.sel(model=model)

@@ -1,14 +1,19 @@
 """Write a run root's report: the plain function behind ``eskin report`` and the flow's report task.
 
-It wires three layers together: :mod:`pipeline.report` turns the cubes into curves, claims and
-tables (:mod:`pipeline.report.analysis`), draws them (:mod:`pipeline.report.figures`) and renders
-the files of the report (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the
-folder whole.
+It wires three layers together: :mod:`pipeline.report` turns the cubes into the design answer,
+claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
+(:mod:`pipeline.report.figures`) and renders the files of the report
+(:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
+line's frame-readout and energy options become a :class:`~pipeline.report.FrameReadout` and a
+:class:`~pipeline.hardware.EnergyModel` here, checked before anything is read or written.
 """
 
 from __future__ import annotations
 
+import argparse
+import math
 import sys
+from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -18,9 +23,76 @@ from pipeline.errors import EskinError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from pipeline.report import Panel, Report
+    from pipeline.hardware import EnergyModel
+    from pipeline.report import Report
 
 DEFAULT_ADC_BITS = 12
+# The energy options, in the units the command line takes them, and the EnergyModel field (in
+# SI units) each sets: option -> (field, factor to SI).
+ENERGY_OPTIONS = {
+    "--event-energy-pj": ("event_energy_j", 1e-12),
+    "--adc-fom-fj": ("adc_fom_j_per_step", 1e-15),
+    "--link-energy-pj-per-bit": ("link_energy_j_per_bit", 1e-12),
+}
+
+
+def energy_problem(option: str, value: float) -> str | None:
+    """Why ``value`` is not a valid ``option`` (one of :data:`ENERGY_OPTIONS`), or None."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return f"{option} {value!r}: need a number >= 0"
+    if not math.isfinite(value) or value < 0:
+        return f"{option} {value:g}: need a finite number >= 0"
+    return None
+
+
+def energy_argument(option: str) -> Callable[[str], float]:
+    """An argparse ``type`` for an energy option: a finite number >= 0 (argparse names the
+    option in its one-line error)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        problem = energy_problem(option, value)
+        if problem is not None:
+            raise argparse.ArgumentTypeError(problem.removeprefix(f"{option} "))
+        return value
+
+    return parse
+
+
+def energy_model(
+    event_energy_pj: float | None = None,
+    adc_fom_fj: float | None = None,
+    link_energy_pj_per_bit: float | None = None,
+) -> EnergyModel:
+    """The energy model of the command line's options (None: the default of that constant).
+
+    Raises
+    ------
+    EskinError
+        A value is not a finite number >= 0; the message names every such option.
+    """
+    from pipeline.hardware import EnergyModel
+
+    given = dict(
+        zip(ENERGY_OPTIONS, (event_energy_pj, adc_fom_fj, link_energy_pj_per_bit), strict=True)
+    )
+    problems = [
+        problem
+        for option, value in given.items()
+        if value is not None and (problem := energy_problem(option, value)) is not None
+    ]
+    if problems:
+        raise EskinError("; ".join(problems))
+    return EnergyModel(
+        **{
+            ENERGY_OPTIONS[option][0]: value * ENERGY_OPTIONS[option][1]
+            for option, value in given.items()
+            if value is not None
+        }
+    )
 
 
 def write_run_report(
@@ -29,6 +101,9 @@ def write_run_report(
     *,
     adc_bits: int = DEFAULT_ADC_BITS,
     adc_rate_hz: float | None = None,
+    event_energy_pj: float | None = None,
+    adc_fom_fj: float | None = None,
+    link_energy_pj_per_bit: float | None = None,
     show_progress: bool = False,
 ) -> Path:
     """Write the report of the sweep store at ``root``; return the path of its ``report.html``.
@@ -41,23 +116,34 @@ def write_run_report(
         The report folder (default ``<root>/report``), replaced whole; a folder that is not an
         earlier report is refused.
     adc_bits, adc_rate_hz
-        The frame-based ADC readout that Table I compares with: bits per sample and frame rate
-        per taxel in Hz (default: the recordings' sampling rate, as the cubes state it).
+        The frame-based ADC readout the answer, Table I and the fronts compare with: bits per
+        sample and frame rate per taxel in Hz (default: the recordings' sampling rate, as the
+        cubes state it).
+    event_energy_pj, adc_fom_fj, link_energy_pj_per_bit
+        The readout power estimate's constants: energy per event (pJ), the ADC's Walden figure
+        of merit (fJ per conversion step), energy per link bit (pJ); None takes the default of
+        :class:`pipeline.hardware.EnergyModel`.
 
     Raises
     ------
     EskinError
-        Bad ADC figures, a root that is not a sweep store, or a store with no cubes.
+        Bad ADC or energy figures (before anything is read or written), a root that is not a
+        sweep store, or a store with no cubes.
     """
     from flows.environment import hermetic_environment
+    from pipeline.hardware import MAX_BITS
     from pipeline.numbers import positive_number
     from storage import SweepStore, open_results
 
     problems = []
-    if adc_bits < 1:
-        problems.append(f"--adc-bits {adc_bits}: need at least 1")
+    if not 1 <= adc_bits <= MAX_BITS:
+        problems.append(f"--adc-bits {adc_bits}: need 1 to {MAX_BITS}")
     if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
         problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
+    try:
+        energy = energy_model(event_energy_pj, adc_fom_fj, link_energy_pj_per_bit)
+    except EskinError as exc:
+        problems.append(str(exc))
     if problems:
         raise EskinError("; ".join(problems))
     store = SweepStore.open(root)
@@ -73,10 +159,10 @@ def write_run_report(
 
     rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
     frame = FrameReadout(adc_bits, rate_hz) if rate_hz else None
-    report = build_report(cubes, frame=frame, runs=read_sweep_runs(store.root))
+    report = build_report(cubes, frame=frame, energy=energy, runs=read_sweep_runs(store.root))
     if rate_hz is None:
         print(
-            "eskin: warning: the cubes do not state the recordings' sampling rate; Table I "
+            "eskin: warning: the cubes do not state the recordings' sampling rate; the report "
             "compares with no frame readout (give --adc-rate-hz)",
             file=sys.stderr,
         )
@@ -88,12 +174,12 @@ def write_run_report(
 def write_report(
     out: str | Path,
     report: Report,
-    figures: dict[Panel, Figure],
+    figures: dict[str, Figure],
     *,
     show_progress: bool = False,
 ) -> Path:
-    """Render ``report`` and its ``figures`` and write the folder ``out`` whole; return the path
-    of its ``report.html``.
+    """Render ``report`` and its ``figures`` (by file stem) and write the folder ``out`` whole;
+    return the path of its ``report.html``.
 
     Raises
     ------

@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 if TYPE_CHECKING:  # the command line imports this module; xarray loads only when a sweep prints
     import xarray as xr
 
@@ -50,7 +52,9 @@ def result_summary(result: Any) -> dict[str, Any]:
             model.value: {
                 "mean": cv.mean,
                 "std": cv.std,
-                "folds": [float(a) for a in cv.fold_accuracy],
+                "folds": [float(a) for a in np.ravel(cv.fold_accuracy)],
+                "repeats": int(np.atleast_2d(cv.fold_accuracy).shape[0]),
+                **_interval(cv, result.labels),
             }
             for model, cv in result.accuracy.items()
         },
@@ -64,6 +68,17 @@ def result_summary(result: Any) -> dict[str, Any]:
     }
 
 
+def _interval(cv: Any, labels: np.ndarray | None) -> dict[str, Any]:
+    """The 95 % interval of a model's accuracy over recordings, where its predictions are known."""
+    predicted = getattr(cv, "predicted", None)
+    if predicted is None or labels is None:
+        return {}
+    from pipeline.stats import accuracy_interval
+
+    interval = accuracy_interval(predicted == labels, labels, rng=np.random.default_rng(0))
+    return {"low": interval.low, "high": interval.high, "interval": interval.method}
+
+
 def format_summary(s: Mapping[str, Any]) -> str:
     """The text ``eskin run`` prints for a :func:`result_summary` (no trailing newline)."""
     lines = [
@@ -75,8 +90,15 @@ def format_summary(s: Mapping[str, Any]) -> str:
     ]
     for model, acc in s["accuracy"].items():
         lines.append(
-            f"  {model.upper():5s} accuracy {100 * acc['mean']:5.1f} % "
-            f"+- {100 * acc['std']:.1f} % over {len(acc['folds'])} folds"
+            f"  {model.upper():5s} accuracy {100 * acc['mean']:5.1f} %"
+            + (
+                f" (95 % interval {100 * acc['low']:.1f}-{100 * acc['high']:.1f} %)"
+                if "low" in acc
+                else ""
+            )
+            + f", fold spread +- {100 * acc['std']:.1f} % over "
+            + f"{len(acc['folds']) // acc['repeats']} folds"
+            + (f" x {acc['repeats']} repeats" if acc["repeats"] > 1 else "")
         )
     ssnr = "inf (REAL = TRUE)" if math.isinf(s["ssnr_db"]) else f"{s['ssnr_db']:.2f}"
     lines += [
@@ -116,7 +138,7 @@ def format_sweep_summary(
     ]
     for name in summary["cubes"]:
         cube = cubes[name]
-        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy"].dims[:-2])
+        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy_mean"].dims[:-1])
         for row in best_points(cube):
             at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
             lines.append(

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 from flows.environment import tune_allocator
-from pipeline.cube import RecordingsInfo
+from pipeline.cube import OutOfFold, RecordingsInfo
 from pipeline.scene import Scene
 from pipeline.stages import RATES, RECORDINGS, RESULTS, SPIKES, Level, Stopwatch, level_named
 from storage import RateEntry, ResultEntry, SpikeEntry, SweepStore
@@ -49,6 +49,12 @@ def _result_entry(accuracy: Any, seconds: dict[str, float], made: _Made) -> Resu
         metrics=spikes.metrics,
         # The cube states what the point was computed on, without reloading the dataset.
         recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
+        out_of_fold=OutOfFold(
+            recording_names=tuple(recordings.names),
+            labels=recordings.labels,
+            predicted={model.value: cv.predicted for model, cv in accuracy.items()},
+            test_fold=next(iter(accuracy.values())).test_fold,
+        ),
     )
 
 

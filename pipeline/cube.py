@@ -2,12 +2,23 @@
 
 Pure: the cube is a function of the grid, the sweep and the results of its points (no store, no
 recordings); :mod:`storage.store` persists it. Dimensions are the sweep's axes (a zipped sweep has
-one dimension, named after its first axis), plus ``model`` and ``fold`` for accuracy, ``stage``
-for compute time and ``metric``, ``coefficient`` for correlations.
+one dimension, named after its first axis), plus ``model``, ``repeat``, ``fold`` and
+``recording`` for accuracy, ``stage`` for compute time and ``metric``, ``coefficient`` for
+correlations.
 
 Data variables
 
-``accuracy``          (axes..., model, fold)  fraction of test recordings classified correctly
+``accuracy``          (axes..., model, repeat, fold)  fraction of a fold's test recordings
+                      classified correctly
+``accuracy_mean``     (axes..., model)        fraction of (recording, repeat) pairs classified
+                      correctly (the mean over folds for points without predictions)
+``accuracy_low``,     (axes..., model)        95 % interval of ``accuracy_mean``: Wilson score
+``accuracy_high``                             over recordings for one repeat, class-stratified
+                      bootstrap over recordings for several (attribute ``interval`` says which)
+``predicted``         (axes..., model, repeat, recording)  int16 out-of-fold predicted class
+``correct``           (axes..., model, repeat, recording)  int8 1 where ``predicted`` is the
+                      recording's ``label``, 0 where not
+``test_fold``         (axes..., repeat, recording)  int16 fold that tested the recording
 ``ssnr_db``           (axes...)               pooled SSNR (``+inf``: REAL trains equal TRUE)
 ``ste_s2``            (axes...)               the paper's STE, mean over trains
 ``ste_sign_safe_s2``  (axes...)               STE with ``|N_real - N_true|``
@@ -18,10 +29,13 @@ Data variables
 
 A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
 metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of
-SSNR and STE with fold-averaged accuracy across the sweep's points (infinite metrics left out).
+SSNR and STE with ``accuracy_mean`` across the sweep's points (infinite metrics left out).
 Accuracy of a model or fold a point did not train is NaN; so are the seconds of a stage a point
-did not measure. Every variable but ``seconds`` is a deterministic function of the grid and its
-seeds; ``seconds`` are measurements.
+did not measure; ``predicted``, ``correct`` and ``test_fold`` are -1 where a point has no
+prediction (a model, repeat or recording it did not run; no out-of-fold variables at all when no
+point kept its predictions). The ``recording`` dimension is the union of the points' recordings
+(coordinate: names; ``label`` along it: class index). Every variable but ``seconds`` is a
+deterministic function of the grid and its seeds; ``seconds`` are measurements.
 
 Coordinates
 
@@ -52,6 +66,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import platform
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
@@ -69,6 +84,15 @@ CORRELATED_METRICS = ("ssnr_db", "ste_s2")
 #: ``units`` and ``long_name`` of the cube's own variables and coordinates.
 CUBE_VARIABLES: dict[str, dict[str, str]] = {
     "accuracy": {"units": "1", "long_name": "fraction of test recordings classified correctly"},
+    "accuracy_mean": {"units": "1", "long_name": "fraction of recordings classified correctly"},
+    "accuracy_low": {"units": "1", "long_name": "lower end of the 95 % interval of accuracy"},
+    "accuracy_high": {"units": "1", "long_name": "upper end of the 95 % interval of accuracy"},
+    "predicted": {"units": "1", "long_name": "out-of-fold predicted class (-1: none)"},
+    "correct": {"units": "1", "long_name": "out-of-fold prediction correct (1, 0; -1: none)"},
+    "test_fold": {"units": "1", "long_name": "fold that tested the recording (-1: none)"},
+    "repeat": {"units": "1", "long_name": "cross-validation repeat"},
+    "recording": {"units": "1", "long_name": "recording"},
+    "label": {"units": "1", "long_name": "class index of the recording"},
     "seconds": {"units": "s", "long_name": "wall time of the stage, as measured when computed"},
     "correlation_r": {"units": "1", "long_name": "correlation of the metric with mean accuracy"},
     "correlation_p": {"units": "1", "long_name": "two-sided p-value of the correlation"},
@@ -115,6 +139,45 @@ class RecordingsInfo:
     sampling_rate_hz: float | None = None
 
 
+@dataclass(frozen=True, eq=False)
+class OutOfFold:
+    """Every recording's out-of-fold prediction of one point, per model and repeat.
+
+    Attributes
+    ----------
+    recording_names : tuple[str, ...]
+        ``n`` distinct recording names (:attr:`pipeline.recordings.Recordings.names`).
+    labels : int64 (n,)
+        Class index of each recording.
+    predicted : dict[str, int64 (repeats, n)]
+        Model name -> the class index each recording got from the fold that tested it.
+    test_fold : int64 (repeats, n)
+        The fold that tested each recording, per repeat (the same for every model).
+    """
+
+    recording_names: tuple[str, ...]
+    labels: np.ndarray
+    predicted: Mapping[str, np.ndarray]
+    test_fold: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.recording_names)
+        labels = np.asarray(self.labels)
+        test_fold = np.asarray(self.test_fold)
+        problems = []
+        if len(set(self.recording_names)) != n:
+            problems.append("recording names repeat")
+        if labels.shape != (n,):
+            problems.append(f"labels {labels.shape} do not match {n} recordings")
+        if test_fold.ndim != 2 or test_fold.shape[1] != n:
+            problems.append(f"test_fold {test_fold.shape} is not (repeats, {n})")
+        for model, values in self.predicted.items():
+            if np.shape(values) != test_fold.shape:
+                problems.append(f"predicted[{model!r}] {np.shape(values)} != {test_fold.shape}")
+        if problems:
+            raise ValueError("out-of-fold predictions: " + "; ".join(problems))
+
+
 class PointResult(Protocol):
     """What the cube needs of one point (:class:`storage.ResultEntry` is one)."""
 
@@ -129,6 +192,9 @@ class PointResult(Protocol):
 
     @property
     def recordings(self) -> RecordingsInfo | None: ...
+
+    @property
+    def out_of_fold(self) -> OutOfFold | None: ...
 
 
 def build_cube(
@@ -158,9 +224,10 @@ def build_cube(
     points = sweep_points(grid.base, sweep)
     models = [m.value for m in Model if any(m in p.scene.training.models for p in points)]
     n_folds = max(p.scene.training.folds for p in points)
+    n_repeats = max(p.scene.training.repeats for p in points)
     stages = [*spike_stages, "coding", *(f"train_{m}" for m in models)]
     shape = sweep.shape
-    accuracy = np.full((*shape, len(models), n_folds), np.nan)
+    accuracy = np.full((*shape, len(models), n_repeats, n_folds), np.nan)
     metrics = {name: np.full(shape, np.nan) for name in METRICS}
     seconds = np.full((*shape, len(stages)), np.nan)
     for point in points:
@@ -168,22 +235,34 @@ def build_cube(
         for m, model in enumerate(models):
             folds = record.fold_accuracy.get(model)
             if folds is not None:
-                accuracy[(*point.index, m, slice(0, len(folds)))] = folds
+                folds = np.atleast_2d(folds)
+                accuracy[(*point.index, m, slice(0, folds.shape[0]), slice(0, folds.shape[1]))] = (
+                    folds
+                )
         for name in METRICS:
             metrics[name][point.index] = getattr(record.metrics, name)
         for s, stage in enumerate(stages):
             seconds[(*point.index, s)] = record.seconds.get(stage, np.nan)
     dims = sweep.dims
     data_vars: dict[str, Any] = {
-        "accuracy": ((*dims, "model", "fold"), accuracy),
+        "accuracy": ((*dims, "model", "repeat", "fold"), accuracy),
         **{name: (dims, values) for name, values in metrics.items()},
         "seconds": ((*dims, "stage"), seconds),
     }
     coords: dict[str, Any] = {
         "model": ("model", models),
+        "repeat": ("repeat", np.arange(n_repeats)),
         "fold": ("fold", np.arange(n_folds)),
         "stage": ("stage", stages),
     }
+    out_of_fold = _out_of_fold_variables(points, records, models, n_repeats, dims, shape)
+    correct = label = None
+    if out_of_fold is not None:
+        predictions, recording_coords = out_of_fold
+        data_vars.update(predictions)
+        coords.update(recording_coords)
+        correct, label = predictions["correct"][1], recording_coords["label"][1]
+    data_vars.update(_accuracy_summary(accuracy, correct, label, dims, points))
     for position, axis in enumerate(sweep.axes):
         dim = dims[0] if sweep.mode == "zip" else dims[position]
         coords[axis.dim] = (dim, _coordinate(axis.values), {"field": axis.field})
@@ -287,7 +366,7 @@ def _correlations(cube: xr.Dataset, models: list[str]) -> xr.Dataset:
     n = np.zeros(shape[:2], dtype=np.int64)
     notes = []
     for i, model in enumerate(models):
-        mean_accuracy = cube["accuracy"].sel(model=model).mean("fold").values.ravel()
+        mean_accuracy = cube["accuracy_mean"].sel(model=model).values.ravel()
         for j, metric in enumerate(CORRELATED_METRICS):
             result = correlate_with_accuracy(cube[metric].values.ravel(), mean_accuracy)
             for k, method in enumerate(CORRELATION_METHODS):
@@ -304,6 +383,105 @@ def _correlations(cube: xr.Dataset, models: list[str]) -> xr.Dataset:
         coords={"metric": list(CORRELATED_METRICS), "coefficient": list(CORRELATION_METHODS)},
         attrs={"correlation_notes": "; ".join(notes)} if notes else {},
     )
+
+
+def _out_of_fold_variables(
+    points: list[GridPoint],
+    records: Mapping[str, PointResult],
+    models: list[str],
+    n_repeats: int,
+    dims: tuple[str, ...],
+    shape: tuple[int, ...],
+) -> tuple[dict[str, Any], dict[str, Any]] | None:
+    """``predicted``, ``correct``, ``test_fold`` and the ``recording`` coordinates of a sweep.
+
+    The ``recording`` dimension is the union of the points' recordings, in the order first met
+    (points of a ``dataset.recordings_per_class`` sweep hold different numbers of recordings);
+    None when no point kept its predictions.
+    """
+    kept = [(p, records[p.key].out_of_fold) for p in points]
+    kept = [(p, oof) for p, oof in kept if oof is not None]
+    if not kept:
+        return None
+    position: dict[str, int] = {}
+    labels: list[int] = []
+    for _, oof in kept:
+        for name, label in zip(oof.recording_names, np.asarray(oof.labels), strict=True):
+            if name not in position:
+                position[name] = len(position)
+                labels.append(int(label))
+    n = len(position)
+    predicted = np.full((*shape, len(models), n_repeats, n), -1, dtype=np.int16)
+    test_fold = np.full((*shape, n_repeats, n), -1, dtype=np.int16)
+    for point, oof in kept:
+        columns = np.array([position[name] for name in oof.recording_names], dtype=np.int64)
+        repeats = np.asarray(oof.test_fold).shape[0]
+        test_fold[(*point.index, slice(0, repeats))][:, columns] = oof.test_fold
+        for m, model in enumerate(models):
+            if model in oof.predicted:
+                predicted[(*point.index, m, slice(0, repeats))][:, columns] = oof.predicted[model]
+    label = np.asarray(labels, dtype=np.int16)
+    tested = predicted >= 0
+    correct = np.where(tested, (predicted == label).astype(np.int8), np.int8(-1))
+    variables = {
+        "predicted": ((*dims, "model", "repeat", "recording"), predicted),
+        "correct": ((*dims, "model", "repeat", "recording"), correct),
+        "test_fold": ((*dims, "repeat", "recording"), test_fold),
+    }
+    coordinates = {
+        "recording": ("recording", np.asarray(list(position), dtype=str)),
+        "label": ("recording", label),
+    }
+    return variables, coordinates
+
+
+def _accuracy_summary(
+    accuracy: np.ndarray,
+    correct: np.ndarray | None,
+    label: np.ndarray | None,
+    dims: tuple[str, ...],
+    points: list[GridPoint],
+) -> dict[str, Any]:
+    """``accuracy_mean``, ``accuracy_low``, ``accuracy_high`` (axes..., model) of every point.
+
+    With out-of-fold predictions: the fraction of (recording, repeat) pairs classified correctly
+    and its 95 % interval (:func:`pipeline.stats.accuracy_interval`: Wilson score for one repeat,
+    a class-stratified bootstrap over recordings for several, its generator seeded from the
+    point's training seed and index). Without: the mean over folds, and no interval (NaN).
+    """
+    from pipeline.stats import accuracy_interval
+
+    shape = accuracy.shape[:-2]
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an untrained model: all-NaN folds
+        mean = np.nanmean(accuracy.reshape(*shape, -1), axis=-1)
+    low, high = np.full(shape, np.nan), np.full(shape, np.nan)
+    methods = set()
+    if correct is not None and label is not None:
+        for point in points:
+            for m in range(shape[-1]):
+                # (repeat, recording) of this point and model: -1 where it has no prediction
+                # (a recording it did not hold, a repeat or model it did not run).
+                cell = correct[(*point.index, m)]
+                cell = cell[(cell >= 0).any(axis=1)]
+                held = (cell >= 0).all(axis=0)
+                if cell.size == 0 or not held.any():
+                    continue
+                interval = accuracy_interval(
+                    cell[:, held] == 1,
+                    label[held],
+                    rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
+                )
+                mean[(*point.index, m)] = interval.estimate
+                low[(*point.index, m)] = interval.low
+                high[(*point.index, m)] = interval.high
+                methods.add(interval.method)
+    attrs = {"interval": "; ".join(sorted(methods)) or "none", "confidence": 0.95}
+    return {
+        "accuracy_mean": ((*dims, "model"), mean),
+        "accuracy_low": ((*dims, "model"), low, attrs),
+        "accuracy_high": ((*dims, "model"), high, attrs),
+    }
 
 
 def _coordinate(values: Sequence[Any]) -> np.ndarray:

@@ -279,6 +279,9 @@ class TrainingSpec:
     hidden_units: int = field(default=100, metadata=_about("1", "hidden units of the FFNN"))
     batch_size: int = field(default=16, metadata=_about("1", "training batch size"))
     folds: int = field(default=10, metadata=_about("1", "cross-validation folds"))
+    repeats: int = field(
+        default=1, metadata=_about("1", "cross-validation repeats, each a fresh stratified split")
+    )
     seed: int = field(default=0, metadata=_about("1", "training seed"))
 
 
@@ -398,7 +401,9 @@ def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
 #: stage's output for the same fields (a different random stream, a fixed bug, a new training
 #: step), so that stores made before the change are recomputed instead of mixed with new points.
 #: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
-MODEL_REVISION = 2
+#: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
+#: follow the statistics measured on real texture recordings.
+MODEL_REVISION = 3
 
 
 def cache_key(scene: Scene, stage: str) -> str:
@@ -626,6 +631,7 @@ class _Reader:
             hidden_units=(_int, lambda v: 1 <= v <= 100_000, "between 1 and 100000"),
             batch_size=(_int, lambda v: 1 <= v <= 1_000_000, ">= 1"),
             folds=(_int, lambda v: 2 <= v <= 1000, "between 2 and 1000"),
+            repeats=(_int, lambda v: 1 <= v <= 100, "between 1 and 100"),
             seed=(_seed, None, ""),
         )
 

@@ -53,6 +53,8 @@ class SceneResult:
     metrics: SpikeMetrics
     accuracy: dict[Model, CrossValidation]
     timings_s: dict[str, float] = field(default_factory=dict)
+    labels: np.ndarray | None = None
+    """int64 ``(n_recordings,)``: class of each recording, for intervals of the accuracy."""
 
 
 def stage_names(scene: Scene) -> tuple[str, ...]:
@@ -100,6 +102,7 @@ def run_scene(
         metrics=outputs[SPIKES.name].metrics,
         accuracy=outputs[RESULTS.name],
         timings_s=watch.seconds,
+        labels=recordings.labels,
     )
 
 

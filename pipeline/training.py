@@ -14,9 +14,14 @@ The procedure:
   betas 0.9/0.999, eps 1e-8), mean cross-entropy on logits per mini-batch
   (:func:`fold_loss`), ``training.epochs`` epochs of mini-batches of ``training.batch_size``
   drawn in a fresh random order every epoch.
-* Evaluation: accuracy of ``argmax(logits)`` on each fold's test recordings.
+* Evaluation: accuracy of ``argmax(logits)`` on each fold's test recordings, and the
+  out-of-fold prediction of every recording (each recording is tested in exactly one fold), so
+  two designs evaluated on the same recordings can be compared recording by recording.
+* Repeats: ``training.repeats`` independent cross-validations, each a fresh stratified split.
+  Repeat 0 uses ``training.seed`` itself (one repeat is the paper's procedure); repeat ``r > 0``
+  uses the seed :func:`repeat_seed` derives from ``(training.seed, r)``.
 
-Randomness comes only from generators derived from ``(training.seed, fold index)``
+Randomness comes only from generators derived from ``(repeat seed, fold index)``
 (:func:`pipeline.models.fold_generator`), so a fold's result does not depend on which other
 folds it is trained with.
 
@@ -53,6 +58,7 @@ __all__ = [
     "FoldAdam",
     "cross_validate",
     "fold_loss",
+    "repeat_seed",
     "standardize",
     "stratified_folds",
 ]
@@ -67,37 +73,52 @@ class CrossValidation:
     model
         The classifier.
     fold_accuracy
-        float64 ``(folds,)``, read-only: fraction of each fold's test recordings classified
-        correctly, in ``[0, 1]``; index ``f`` is fold ``f`` of :func:`stratified_folds`.
+        float64 ``(repeats, folds)``, read-only: fraction of each fold's test recordings
+        classified correctly, in ``[0, 1]``; ``[r, f]`` is fold ``f`` of repeat ``r``'s split.
     seconds
         Wall time (s) of standardization, training and evaluation of all folds.
     train_loss
-        float64 ``(folds,)``, read-only, or ``None``: each fold's mean training cross-entropy
-        (nats) over the mini-batches of its last epoch; a diagnostic (``log(n_classes)`` is the
-        loss of a model that learned nothing but the class frequencies of a balanced set).
+        float64 ``(repeats, folds)``, read-only, or ``None``: each fold's mean training
+        cross-entropy (nats) over the mini-batches of its last epoch; a diagnostic
+        (``log(n_classes)`` is the loss of a model that learned nothing but the class frequencies
+        of a balanced set).
+    predicted
+        int64 ``(repeats, n_recordings)``, read-only, or ``None``: the label (as given in
+        ``labels``) each recording got from the model of the fold that tested it.
+    test_fold
+        int64 ``(repeats, n_recordings)``, read-only, or ``None``: the fold that tested each
+        recording.
     """
 
     model: Model
     fold_accuracy: np.ndarray
     seconds: float
     train_loss: np.ndarray | None = None
+    predicted: np.ndarray | None = None
+    test_fold: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("fold_accuracy", "train_loss"):
+        for name, dtype in (
+            ("fold_accuracy", np.float64),
+            ("train_loss", np.float64),
+            ("predicted", np.int64),
+            ("test_fold", np.int64),
+        ):
             value = getattr(self, name)
             if value is not None:
-                value = np.array(value, dtype=np.float64)
+                value = np.array(value, dtype=dtype)
+                value = value.reshape(1, -1) if value.ndim == 1 else value
                 value.setflags(write=False)
                 object.__setattr__(self, name, value)
 
     @property
     def mean(self) -> float:
-        """Mean accuracy over folds."""
+        """Mean accuracy over repeats and folds."""
         return float(np.mean(self.fold_accuracy))
 
     @property
     def std(self) -> float:
-        """Population standard deviation (``ddof=0``) of the accuracy over folds."""
+        """Population standard deviation (``ddof=0``) of the accuracy over folds (and repeats)."""
         return float(np.std(self.fold_accuracy, ddof=0))
 
 
@@ -255,6 +276,18 @@ class FoldAdam:
         )
 
 
+def repeat_seed(seed: int, repeat: int) -> int:
+    """The training seed of cross-validation repeat ``repeat`` (``seed`` itself for repeat 0).
+
+    Repeat ``r > 0`` takes ``SeedSequence([seed, r, 0x5EED])``'s first 63-bit state word, so
+    repeats are independent of each other and of the fold streams drawn from each repeat's seed.
+    """
+    if repeat == 0:
+        return int(seed)
+    state = np.random.SeedSequence([seed, repeat, 0x5EED]).generate_state(1, dtype=np.uint64)
+    return int(state[0] >> np.uint64(1))
+
+
 def stratified_folds(
     labels: np.ndarray, n_folds: int, seed: int
 ) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -318,7 +351,9 @@ def cross_validate(
     Returns
     -------
     CrossValidation
-        Per-fold accuracy (fold ``f`` of :func:`stratified_folds`) and the wall time.
+        Per-fold accuracy (``[r, f]``: fold ``f`` of :func:`stratified_folds` seeded with
+        :func:`repeat_seed` ``(training.seed, r)``), every recording's out-of-fold prediction and
+        test fold per repeat, and the wall time.
 
     Raises
     ------
@@ -357,27 +392,45 @@ def cross_validate(
             f"{'have' if len(short) > 1 else 'has'} fewer recordings than "
             f"training.folds = {training.folds}"
         )
-    splits = stratified_folds(y, training.folds, training.seed)
-    train_x, test_x = zip(*(standardize(frames[tr], frames[te]) for tr, te in splits), strict=True)
-    train_y = [y[tr] for tr, _ in splits]
-    test_y = [y[te] for _, te in splits]
-    groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
-    results = [
-        _train_and_evaluate(
-            [train_x[f] for f in group],
-            [train_y[f] for f in group],
-            [test_x[f] for f in group],
-            [test_y[f] for f in group],
-            group,
-            model,
-            len(classes),
-            training,
+    accuracy, train_loss = [], []
+    predicted = np.zeros((training.repeats, len(y)), dtype=np.int64)
+    test_fold = np.zeros((training.repeats, len(y)), dtype=np.int64)
+    for repeat in range(training.repeats):
+        seed = repeat_seed(training.seed, repeat)
+        splits = stratified_folds(y, training.folds, seed)
+        train_x, test_x = zip(
+            *(standardize(frames[tr], frames[te]) for tr, te in splits), strict=True
         )
-        for group in groups
-    ]
-    accuracy = np.concatenate([a for a, _ in results])
-    train_loss = np.concatenate([loss for _, loss in results])
-    return CrossValidation(model, accuracy, time.perf_counter() - start, train_loss)
+        groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
+        fold_accuracy, fold_loss_, fold_predicted = [], [], []
+        for group in groups:
+            a, loss, guess = _train_and_evaluate(
+                [train_x[f] for f in group],
+                [y[splits[f][0]] for f in group],
+                [test_x[f] for f in group],
+                [y[splits[f][1]] for f in group],
+                group,
+                model,
+                len(classes),
+                training,
+                seed,
+            )
+            fold_accuracy.append(a)
+            fold_loss_.append(loss)
+            fold_predicted.extend(guess)
+        for f, (_, test) in enumerate(splits):
+            predicted[repeat, test] = classes[fold_predicted[f]]
+            test_fold[repeat, test] = f
+        accuracy.append(np.concatenate(fold_accuracy))
+        train_loss.append(np.concatenate(fold_loss_))
+    return CrossValidation(
+        model,
+        np.stack(accuracy),
+        time.perf_counter() - start,
+        np.stack(train_loss),
+        predicted,
+        test_fold,
+    )
 
 
 def _stack_padded(
@@ -400,12 +453,14 @@ def _train_and_evaluate(
     model: Model,
     n_classes: int,
     training: TrainingSpec,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Train the given folds as one batch (``F = len(folds)``); return accuracy and loss.
+    seed: int,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions.
 
     ``train_x[i]`` is float32 ``(n_i, C, H, W)``, ``train_y[i]`` int ``(n_i,)`` for fold
-    ``folds[i]``, likewise the test sets. Returns float64 ``(F,)`` test accuracy and float64
-    ``(F,)`` mean training loss of the last epoch.
+    ``folds[i]``, likewise the test sets; ``seed`` is the repeat's training seed. Returns float64
+    ``(F,)`` test accuracy, float64 ``(F,)`` mean training loss of the last epoch, and per fold
+    the int64 ``(n_test_i,)`` predicted class indices of its test set, in test-set order.
     """
     n_folds = len(folds)
     sample_shape = tuple(train_x[0].shape[1:])
@@ -415,7 +470,6 @@ def _train_and_evaluate(
     x_rows = x.reshape(n_folds * n_max, *sample_shape)
     target_rows = target.reshape(n_folds * n_max)
 
-    seed = training.seed
     net = build_model(
         model,
         sample_shape,
@@ -473,4 +527,5 @@ def _train_and_evaluate(
     real_test = torch.arange(xt.shape[1]).reshape(1, -1) < torch.from_numpy(n_test).reshape(-1, 1)
     correct = ((predicted == yt) & real_test).sum(dim=1).numpy()
     train_loss = (last_loss / active_batches).numpy().astype(np.float64)
-    return correct.astype(np.float64) / n_test.astype(np.float64), train_loss
+    guesses = [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]
+    return correct.astype(np.float64) / n_test.astype(np.float64), train_loss, guesses

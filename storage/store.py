@@ -27,8 +27,12 @@ Entry groups (dimension names in parentheses; all arrays little-endian)
     ``counts`` int64 (recording, channel, taxel, window), ``dropped`` int64 (recording, taxel),
     ``labels`` int64 (recording); attrs ``class_names`` (list of str).
 ``results/<key>``
-    ``accuracy`` float64 (model, fold) with the string coordinate ``model``, and the spike metrics
-    as in ``spikes/<key>``; attrs ``dataset_name`` (str), ``class_names`` (list of str) and
+    ``accuracy`` float64 (model, repeat, fold) with the string coordinate ``model``; where the
+    writer kept them, the out-of-fold predictions: ``predicted`` int64 (model, repeat, recording),
+    ``test_fold`` int64 (repeat, recording), ``labels`` int64 (recording) and the string
+    coordinate ``recording`` (names); and the spike metrics as in ``spikes/<key>``. Entries written
+    before repeats existed hold ``accuracy`` (model, fold): read as one repeat. Attrs
+    ``dataset_name`` (str), ``class_names`` (list of str) and
     ``sampling_rate_hz`` (float) where the writer stated them (each optional: older entries have
     none, and a fact not stated is never guessed on reading).
 ``cubes/<name>``
@@ -98,7 +102,7 @@ import numpy as np
 import xarray as xr
 import zarr
 
-from pipeline.cube import RecordingsInfo
+from pipeline.cube import OutOfFold, RecordingsInfo
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
 from pipeline.spikes import Encoded, SpikeTrains, train_starts
@@ -213,8 +217,9 @@ class ResultEntry:
     Attributes
     ----------
     fold_accuracy : dict[str, np.ndarray]
-        Model name (e.g. ``"ffnn"``) -> float64 (folds,) accuracy in [0, 1]; every model has
-        the same number of folds; insertion order is kept.
+        Model name (e.g. ``"ffnn"``) -> float64 (repeats, folds) accuracy in [0, 1] (a 1-D
+        ``(folds,)`` array is one repeat); every model has the same shape; insertion order is
+        kept.
     seconds : dict[str, float]
         Wall seconds of every stage of the point (finite), as measured when each was computed,
         e.g. ``{"load": 0.3, ..., "coding": 0.01, "train_ffnn": 1.2, "train_cnn": 5.0}``.
@@ -223,12 +228,17 @@ class ResultEntry:
     recordings : RecordingsInfo or None
         What the point was computed on (dataset name, class names, sampling rate), for the
         cube's attributes; None in entries written before results stated it.
+    out_of_fold : OutOfFold or None
+        Every recording's out-of-fold prediction per model and repeat (models as in
+        ``fold_accuracy``), for paired comparisons; None in entries written before results kept
+        them.
     """
 
     fold_accuracy: dict[str, np.ndarray]
     seconds: dict[str, float]
     metrics: SpikeMetrics
     recordings: RecordingsInfo | None = None
+    out_of_fold: OutOfFold | None = None
 
 
 class SweepStore:
@@ -606,22 +616,26 @@ class SweepStore:
         Raises
         ------
         ValueError
-            No model, models with different fold counts, non-finite seconds.
+            No model, models with different (repeats, folds) shapes, out-of-fold predictions
+            that do not match the models and repeats, non-finite seconds.
         """
         path = self._entry_path(EntryKind.RESULTS, key)
         if not entry.fold_accuracy:
             raise ValueError("fold_accuracy: no model")
         models = [str(model) for model in entry.fold_accuracy]
         rows = [
-            _cast(values, np.float64, f"fold_accuracy[{model!r}]")
+            np.atleast_2d(_cast(values, np.float64, f"fold_accuracy[{model!r}]"))
             for model, values in zip(models, entry.fold_accuracy.values(), strict=True)
         ]
-        if any(row.ndim != 1 or row.shape != rows[0].shape for row in rows):
+        if any(row.ndim != 2 or row.shape != rows[0].shape for row in rows):
             shapes = {m: r.shape for m, r in zip(models, rows, strict=True)}
-            raise ValueError(f"fold_accuracy: every model needs the same (folds,) shape: {shapes}")
+            raise ValueError(
+                f"fold_accuracy: every model needs the same (repeats, folds) shape: {shapes}"
+            )
         variables = {
-            "accuracy": (("model", "fold"), np.stack(rows), {"units": "1"}),
+            "accuracy": (("model", "repeat", "fold"), np.stack(rows), {"units": "1"}),
             "model": (("model",), np.array(models, dtype=object), {}),
+            **_out_of_fold_variables(entry.out_of_fold, models, rows[0].shape[0]),
             **_metric_variables(entry.metrics),
         }
         attrs = {"seconds": _seconds(entry.seconds), **_recordings_attrs(entry.recordings)}
@@ -639,13 +653,20 @@ class SweepStore:
         """
 
         def build(ds: xr.Dataset, attrs: dict[str, Any]) -> ResultEntry:
-            accuracy = _variable(ds, "accuracy", ("model", "fold"), np.float64)
+            if ds.variables["accuracy"].ndim == 2:  # written before repeats: one repeat
+                accuracy = _variable(ds, "accuracy", ("model", "fold"), np.float64)[:, None]
+            else:
+                accuracy = _variable(ds, "accuracy", ("model", "repeat", "fold"), np.float64)
             models = _strings(ds.variables["model"].values).tolist()
             if len(models) != accuracy.shape[0]:
                 raise ValueError("model coordinate does not match accuracy")
             fold_accuracy = {m: accuracy[i].copy() for i, m in enumerate(models)}
             return ResultEntry(
-                fold_accuracy, _read_seconds(attrs), _read_metrics(ds), _read_recordings(attrs)
+                fold_accuracy,
+                _read_seconds(attrs),
+                _read_metrics(ds),
+                _read_recordings(attrs),
+                _read_out_of_fold(ds, models),
             )
 
         return self._read_entry(EntryKind.RESULTS, key, build)
@@ -1007,6 +1028,45 @@ def _metric_variables(metrics: SpikeMetrics) -> dict[str, tuple]:
 
 def _read_metrics(ds: xr.Dataset) -> SpikeMetrics:
     return SpikeMetrics(**{name: float(_variable(ds, name, (), np.float64)) for name in _METRICS})
+
+
+def _out_of_fold_variables(
+    out_of_fold: OutOfFold | None, models: list[str], repeats: int
+) -> dict[str, tuple]:
+    """The variables of a result's out-of-fold predictions; none when it kept none."""
+    if out_of_fold is None:
+        return {}
+    if list(out_of_fold.predicted) != models:
+        raise ValueError(
+            f"out_of_fold: predictions of {list(out_of_fold.predicted)}, accuracy of {models}"
+        )
+    test_fold = _cast(out_of_fold.test_fold, np.int64, "out_of_fold.test_fold")
+    if test_fold.shape[0] != repeats:
+        raise ValueError(f"out_of_fold: {test_fold.shape[0]} repeats, accuracy has {repeats}")
+    predicted = np.stack(
+        [_cast(v, np.int64, f"predicted[{m!r}]") for m, v in out_of_fold.predicted.items()]
+    )
+    return {
+        "predicted": (("model", "repeat", "recording"), predicted, {}),
+        "test_fold": (("repeat", "recording"), test_fold, {}),
+        "labels": (("recording",), _cast(out_of_fold.labels, np.int64, "out_of_fold.labels"), {}),
+        "recording": (("recording",), np.array(out_of_fold.recording_names, dtype=object), {}),
+    }
+
+
+def _read_out_of_fold(ds: xr.Dataset, models: list[str]) -> OutOfFold | None:
+    """The out-of-fold predictions of a result entry; None for an entry that kept none."""
+    if "predicted" not in ds.variables:
+        return None
+    predicted = _variable(ds, "predicted", ("model", "repeat", "recording"), np.int64)
+    if predicted.shape[0] != len(models):
+        raise ValueError("model coordinate does not match predicted")
+    return OutOfFold(
+        recording_names=tuple(_strings(ds.variables["recording"].values).tolist()),
+        labels=_variable(ds, "labels", ("recording",), np.int64),
+        predicted={m: predicted[i].copy() for i, m in enumerate(models)},
+        test_fold=_variable(ds, "test_fold", ("repeat", "recording"), np.int64),
+    )
 
 
 def _recordings_attrs(info: RecordingsInfo | None) -> dict[str, Any]:

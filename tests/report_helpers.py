@@ -1,18 +1,29 @@
-"""Result cubes with chosen accuracies, for the report tests (no training: exact numbers)."""
+"""Result cubes with chosen accuracies, for the report tests (no training: exact numbers).
+
+Every point gets hand-made out-of-fold predictions of :data:`N_RECORDINGS` recordings (classes
+``i % n_classes``, fold ``i % 4``): for a chosen accuracy ``a`` the first ``round(a * n)``
+recordings are right and the others wrong. Points are therefore *nested*: of two points with
+``k_a >= k_b`` right recordings, the first ``k_b`` recordings are right in both, the next
+``k_a - k_b`` right only in the first, so a paired comparison has exactly ``k_a - k_b`` discordant
+recordings, all one way, and the exact McNemar p-value is ``binomtest(k_a - k_b, k_a - k_b)``.
+Fold accuracies are those of the same predictions, fold by fold.
+"""
 
 from collections.abc import Callable
 
 import numpy as np
 
-from pipeline.cube import RecordingsInfo, build_cube
+from pipeline.cube import OutOfFold, RecordingsInfo, build_cube
 from pipeline.grid import Grid
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Scene
 from storage import ResultEntry
 from storage.cubes import SPIKE_STAGES
 
-FOLD_OFFSETS = np.array([-0.02, 0.02, -0.02, 0.02])  # std over folds (ddof 0) is 0.02
+N_RECORDINGS = 120
+N_FOLDS = 4
 RECORDINGS = RecordingsInfo("synthetic", tuple(f"texture{i}" for i in range(12)), 2000.0)
+CNN_BONUS = 0.05  # the CNN is this much more accurate than the FFNN at every point
 
 PAPER_LIKE_SWEEPS = {
     "threshold": {"axes": {"readout.threshold_v": [0.03, 0.09, 0.2]}},
@@ -46,37 +57,91 @@ def paper_like_accuracy(scene: Scene) -> float:
     return acc
 
 
+def n_right(accuracy: float, n: int = N_RECORDINGS) -> int:
+    """Recordings a point with ``accuracy`` gets right (the first ones, see the module)."""
+    return int(np.clip(round(accuracy * n), 0, n))
+
+
+def out_of_fold(accuracies: dict[str, float], n_classes: int, repeats: int = 1) -> OutOfFold:
+    """Predictions with ``n_right(a)`` right recordings per model, the same in every repeat."""
+    labels = np.arange(N_RECORDINGS) % n_classes
+    wrong = (labels + 1) % n_classes if n_classes > 1 else np.full_like(labels, 1)
+    predicted = {}
+    for model, a in accuracies.items():
+        row = np.where(np.arange(N_RECORDINGS) < n_right(a), labels, wrong)
+        predicted[model] = np.tile(row, (repeats, 1))
+    return OutOfFold(
+        recording_names=tuple(f"rec{i:03d}" for i in range(N_RECORDINGS)),
+        labels=labels,
+        predicted=predicted,
+        test_fold=np.tile(np.arange(N_RECORDINGS) % N_FOLDS, (repeats, 1)),
+    )
+
+
+def fold_accuracy(oof: OutOfFold) -> dict[str, np.ndarray]:
+    """Accuracy of every fold of every repeat, (repeats, folds), from the predictions."""
+    result = {}
+    for model, predicted in oof.predicted.items():
+        right = np.asarray(predicted) == oof.labels
+        result[model] = np.array(
+            [
+                [right[r][oof.test_fold[r] == k].mean() for k in range(N_FOLDS)]
+                for r in range(len(right))
+            ]
+        )
+    return result
+
+
 def make_cubes(
     sweeps: dict | None = None,
     accuracy: Callable[[Scene], float] = paper_like_accuracy,
     recordings: RecordingsInfo | None = RECORDINGS,
+    *,
+    predictions: bool = True,
+    models: tuple[str, ...] = ("ffnn", "cnn"),
+    repeats: int = 1,
+    rates: Callable[[Scene], tuple[float, float]] | None = None,
 ) -> dict:
-    """``{name: cube}`` of a grid on the smoke scene with ``accuracy(scene)`` +- 0.02 per fold.
+    """``{name: cube}`` of a grid on the smoke scene: the FFNN gets ``accuracy(scene)`` and the
+    CNN :data:`CNN_BONUS` more, as exact out-of-fold predictions (see the module docstring).
 
-    Seconds grow with the taxel count and window count; SSNR falls with noise (inf when ideal).
-    Every point states ``recordings`` (12 classes at 2 kHz by default)."""
-    grid = Grid.from_dict({"name": "t", "base": "smoke", "sweeps": sweeps or PAPER_LIKE_SWEEPS})
+    Seconds grow with the taxel count and window count; SSNR falls with noise (inf when ideal);
+    event and data rates fall with the threshold (``rates(scene)`` gives ``(event_rate_hz,
+    data_rate_bps)`` instead, when given). Every point states ``recordings`` (12 classes at
+    2 kHz by default). ``predictions=False`` makes cubes of a run that predates per-recording
+    results (fold accuracies only, no intervals)."""
+    base = Scene.load("smoke").to_dict()
+    base["training"] |= {"models": list(models), "repeats": repeats}
+    grid = Grid.from_dict({"name": "t", "base": base, "sweeps": sweeps or PAPER_LIKE_SWEEPS})
+    n_classes = len(recordings.class_names) if recordings and recordings.class_names else 12
     records = {}
     for key, scene in grid.unique_points().items():
         noise = sum(getattr(p, "sigma_v", 0.0) for p in scene.readout.effects.values())
         a = accuracy(scene)
+        event_rate, data_rate = (
+            rates(scene)
+            if rates
+            else (100.0 / scene.readout.threshold_v, 700.0 / scene.readout.threshold_v)
+        )
+        bonus = {"ffnn": 0.0, "cnn": CNN_BONUS}
+        oof = out_of_fold({m: a + bonus[m] for m in models}, n_classes, repeats)
         records[key] = ResultEntry(
-            fold_accuracy={"ffnn": a + FOLD_OFFSETS, "cnn": a + 0.05 + FOLD_OFFSETS},
+            fold_accuracy=fold_accuracy(oof),
             seconds={
                 "load": 0.1,
                 "readout": 0.01 * scene.array.n_taxels,
                 "coding": 0.02,
-                "train_ffnn": 0.5,
-                "train_cnn": 2.0 + 0.1 * scene.array.n_taxels,
+                **{"train_ffnn": 0.5, "train_cnn": 2.0 + 0.1 * scene.array.n_taxels},
             },
             metrics=SpikeMetrics(
                 ssnr_db=-20 * np.log10(noise) if noise else np.inf,
                 ste_s2=noise**2,
                 ste_sign_safe_s2=noise**2,
-                event_rate_hz=100.0 / scene.readout.threshold_v,
-                data_rate_bps=700.0 / scene.readout.threshold_v,
+                event_rate_hz=event_rate,
+                data_rate_bps=data_rate,
                 equivalent_bits=scene.readout.equivalent_bits,
             ),
             recordings=recordings,
+            out_of_fold=oof if predictions else None,
         )
     return {s.name: build_cube(grid, s, records, spike_stages=SPIKE_STAGES) for s in grid.sweeps}

@@ -1,13 +1,24 @@
-"""The report: the numbers behind the paper's Figs. 7-10 and Table I, and what accuracy costs.
+"""The report: which design to build, the paper's claims judged by tests, and what accuracy costs.
 
 Stages, each a module with the frozen dataclasses it returns:
 
-- :mod:`~pipeline.report.panels`: the figures (:class:`Panel`) and the swept fields that feed them;
+- :mod:`~pipeline.report.paper`: the paper's numbers (claims, Table I), in one place;
+- :mod:`~pipeline.report.panels`: the paper's figures (:class:`Panel`) and the fields that feed
+  them;
 - :mod:`~pipeline.report.cubes`: reading result cubes (the layout of :mod:`pipeline.cube`);
+- :mod:`~pipeline.report.evidence`: the run's per-recording results and the paired and trend
+  tests on them (fixed seeds);
+- :mod:`~pipeline.report.designs`: the run's distinct designs, their accuracy and costs, the
+  frame-based readout (:class:`FrameReadout`);
+- :mod:`~pipeline.report.answer`: per model, the cheapest design not significantly below the
+  best (Holm-corrected paired tests);
 - :mod:`~pipeline.report.curves`: accuracy curves along a sweep and Fig. 9's lines;
-- :mod:`~pipeline.report.claims`: the paper's claims beside this run's numbers;
-- :mod:`~pipeline.report.tables`: Table I;
-- :mod:`~pipeline.report.cost`: compute seconds, the Pareto front, observation time;
+- :mod:`~pipeline.report.sweeps`: a curve for any other 1-D sweep, a heat map for a 2-D sweep;
+- :mod:`~pipeline.report.claims`: the paper's claims, each judged by a paired or trend test;
+- :mod:`~pipeline.report.tables`: Table I, the paper's rows beside this run's answer designs;
+- :mod:`~pipeline.report.fronts`: accuracy against data rate, event rate, bits, compute time
+  and readout power, with designs indistinguishable from the front marked;
+- :mod:`~pipeline.report.cost`: the front rule, observation time, the sweep's own cost;
 - :mod:`~pipeline.report.analysis`: :func:`build_report`, all of the above from the cubes;
 - :mod:`~pipeline.report.figures`: matplotlib figures of a :class:`Report`;
 - :mod:`~pipeline.report.blocks`, :mod:`~pipeline.report.render`: typed document blocks and
@@ -15,18 +26,19 @@ Stages, each a module with the frozen dataclasses it returns:
 - :mod:`~pipeline.report.document`: the report's blocks and the files of its folder.
 
 All of it is pure: cubes in, numbers, text and file contents out. Everything is read from the
-cubes themselves: scene fields from their coordinates, the class count from their attributes.
-Which figure a cube feeds is decided by the scene fields its one dimension sweeps
-(``readout.threshold_v`` for Fig. 7a, ``coding.window_s`` for 7b, ``array.rows``/``array.cols``
-for 8, a ``correlate`` sweep for 9, ``readout.effects.threshold_mismatch.sigma_rel`` for 10,
-``coding.n_windows`` alone for the observation time), not by its name; a figure with no such cube
-is "not in this run". The equations are in each stage's docstring.
+cubes themselves: scene fields from their coordinates, the class count from their attributes,
+per-recording results from ``correct``. Which paper figure a cube feeds is decided by the scene
+fields its one dimension sweeps (``readout.threshold_v`` for Fig. 7a, ``coding.window_s`` for 7b,
+``array.rows``/``array.cols`` for 8, a ``correlate`` sweep for 9,
+``readout.effects.threshold_mismatch.sigma_rel`` for 10, ``coding.n_windows`` alone for the
+observation time), not by its name; a figure with no such cube is "not in this run". Any other
+sweep gets its own curve or heat map. The equations are in each stage's docstring.
 """
 
 from pipeline.report.analysis import Report, build_report
 from pipeline.report.cost import SweepRun
 from pipeline.report.cubes import sampling_rate_hz
+from pipeline.report.designs import FrameReadout
 from pipeline.report.panels import Panel
-from pipeline.report.tables import FrameReadout
 
 __all__ = ["FrameReadout", "Panel", "Report", "SweepRun", "build_report", "sampling_rate_hz"]

@@ -8,60 +8,96 @@ from dataclasses import dataclass
 import xarray as xr
 
 from pipeline.errors import EskinError
+from pipeline.hardware import EnergyModel
+from pipeline.report import paper
+from pipeline.report.answer import ModelAnswer, design_answers
 from pipeline.report.claims import (
-    PAPER_THRESHOLD_V,
-    PAPER_WINDOW_S,
     Claim,
     metric_claim,
     mismatch_claim,
     optimum_claim,
-    taxel_claim,
+    sides_claim,
+    taxel_gain_claim,
+    taxel_saturation_claim,
 )
-from pipeline.report.cost import (
-    CostPoint,
-    SweepCost,
-    SweepRun,
-    TimeToAccuracy,
-    cost_points,
-    sweep_cost,
-    time_to_accuracy,
+from pipeline.report.cost import SweepCost, SweepRun, TimeToAccuracy, sweep_cost, time_to_accuracy
+from pipeline.report.cubes import (
+    base_value,
+    dataset_kind,
+    n_classes,
+    panel_x,
+    sweep_dims,
+    sweeps_for,
 )
-from pipeline.report.cubes import base_value, dataset_kind, panel_x, sweeps_for
 from pipeline.report.curves import Curve, MetricFit, metric_fits, sweep_curves
+from pipeline.report.designs import Design, FrameReadout, gather_designs
+from pipeline.report.evidence import Evidence, gather_evidence
+from pipeline.report.fronts import Front, hardware_fronts
 from pipeline.report.panels import PANEL_FIELDS, Panel, absent
-from pipeline.report.tables import FrameReadout, RunRow, run_row
+from pipeline.report.paper import TableRow
+from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
+from pipeline.report.tables import run_rows
 
 
 @dataclass(frozen=True)
 class Report:
     """Everything the report shows, as numbers and sentences.
 
-    ``curves`` and ``fits`` hold the figures' data by panel; ``missing`` says, for every panel
-    without data, why it is "not in this run".
+    ``curves`` and ``fits`` hold the paper's figures' data by panel; ``missing`` says, for every
+    panel without data, why it is "not in this run". ``sweep_plots`` and ``heatmaps`` picture the
+    other sweeps; ``undrawn`` says which cubes get no picture and why. ``designs`` are the run's
+    distinct points; ``untested`` counts those without per-recording results (no interval, no
+    paired test).
     """
 
     grids: tuple[str, ...]
     dataset: str
+    n_classes: int | None
+    interval_methods: tuple[str, ...]
+    designs: tuple[Design, ...]
+    untested: int
     curves: Mapping[Panel, tuple[Curve, ...]]
     fits: tuple[MetricFit, ...]
     full_scale_v: float
     claims: tuple[Claim, ...]
-    run_row: RunRow | None
-    cost_points: tuple[CostPoint, ...]
+    answers: tuple[ModelAnswer, ...]
+    frame: FrameReadout | None
+    energy: EnergyModel
+    run_rows: tuple[TableRow, ...]
+    fronts: tuple[Front, ...]
+    sweep_plots: tuple[SweepPlot, ...]
+    heatmaps: tuple[Heatmap, ...]
+    undrawn: tuple[str, ...]
     sweep_cost: SweepCost
     time_to_accuracy: tuple[TimeToAccuracy, ...]
     missing: Mapping[Panel, str]
 
     @property
     def panels(self) -> tuple[Panel, ...]:
-        """Panels with data, in report order."""
+        """The paper's panels with data, in report order."""
         return tuple(p for p in Panel if p not in self.missing)
+
+    @property
+    def figure_stems(self) -> tuple[str, ...]:
+        """File stems of every figure the report has data for, in report order."""
+        return (
+            *(p.value for p in self.panels),
+            *(s.stem for s in self.sweep_plots),
+            *(h.stem for h in self.heatmaps),
+            *(f.cost.stem for f in self.fronts),
+        )
+
+    @property
+    def chance(self) -> float | None:
+        """Accuracy of guessing, ``1 / n_classes`` (None when the class count is unknown)."""
+        return 1.0 / self.n_classes if self.n_classes else None
 
 
 def build_report(
     cubes: Mapping[str, xr.Dataset],
     *,
     frame: FrameReadout | None = None,
+    energy: EnergyModel | None = None,
     runs: Sequence[SweepRun] = (),
 ) -> Report:
     """All the report's numbers and sentences from a run root's cubes.
@@ -71,22 +107,33 @@ def build_report(
     cubes
         ``{sweep name: cube}`` as :func:`storage.open_results` returns them.
     frame
-        The frame-based ADC readout Table I compares with; None leaves that cell unknown.
+        The frame-based ADC readout the answer, Table I and the fronts compare with; None leaves
+        that comparison unknown.
+    energy
+        Constants of the readout power estimate (default: :class:`EnergyModel`'s).
     runs
         The run log's sweeps of this root (the sweep's own cost).
 
     Raises
     ------
     EskinError
-        A cube was written by a version whose cubes did not describe themselves.
+        A cube was written by a version whose cubes did not describe themselves or hold no
+        ``accuracy_mean``.
     """
-    older = [name for name, cube in cubes.items() if "result_key" not in cube.coords]
+    older = [
+        name
+        for name, cube in cubes.items()
+        if "result_key" not in cube.coords or "accuracy_mean" not in cube
+    ]
     if older:
         raise EskinError(
             f"cube(s) {', '.join(older)} were written by an older eskin-sweep and do not "
             "describe themselves: run 'eskin sweep' on this root again to rebuild them (points "
             "already in the store are not recomputed)"
         )
+    energy = energy if energy is not None else EnergyModel()
+    evidence = gather_evidence(cubes)
+    designs = gather_designs(cubes)
     curves: dict[Panel, tuple[Curve, ...]] = {}
     missing: dict[Panel, str] = {}
     for panel in PANEL_FIELDS:
@@ -101,43 +148,90 @@ def build_report(
     )
     if not fits:
         missing[Panel.SPIKE_METRICS] = absent(Panel.SPIKE_METRICS)
-    points = cost_points(cubes)
-    if not points:
-        missing[Panel.COST] = "not in this run: no cube holds compute seconds"
+    plots, maps, undrawn = _other_pictures(cubes)
     threshold = sweeps_for(Panel.THRESHOLD, cubes)
-    row = run_row(threshold[0], cubes[threshold[0]], frame) if threshold else None
-    claims = (
-        optimum_claim(
-            Panel.THRESHOLD,
-            curves.get(Panel.THRESHOLD, ()),
-            PAPER_THRESHOLD_V,
-            "V",
-            f"the optimum threshold near {PAPER_THRESHOLD_V:g} V (3.47 bits)",
-        ),
-        optimum_claim(
-            Panel.WINDOW,
-            curves.get(Panel.WINDOW, ()),
-            PAPER_WINDOW_S,
-            "s",
-            f"the optimum window near {PAPER_WINDOW_S:g} s",
-        ),
-        taxel_claim(curves.get(Panel.TAXELS, ())),
-        metric_claim(fits),
-        mismatch_claim(curves.get(Panel.MISMATCH, ())),
-    )
     full_scale = 1.0
     if threshold:
         full_scale = float(base_value(cubes[threshold[0]], "readout.full_scale_v"))
+    answers = design_answers(designs, evidence, energy, frame)
+    dataset = dataset_kind(cubes)
+    classes = n_classes(cubes)
     return Report(
         grids=tuple(dict.fromkeys(str(c.attrs.get("grid", "?")) for c in cubes.values())),
-        dataset=dataset_kind(cubes),
+        dataset=dataset,
+        n_classes=classes,
+        interval_methods=_interval_methods(cubes),
+        designs=designs,
+        untested=sum(1 for d in designs if not any(evidence.has(d.key, m) for m in d.accuracy)),
         curves=curves,
         fits=fits,
         full_scale_v=full_scale,
-        claims=claims,
-        run_row=row,
-        cost_points=points,
+        claims=_claims(curves, fits, evidence),
+        answers=answers,
+        frame=frame,
+        energy=energy,
+        run_rows=run_rows(answers, dataset, classes),
+        fronts=hardware_fronts(designs, evidence, energy, frame),
+        sweep_plots=plots,
+        heatmaps=maps,
+        undrawn=undrawn,
         sweep_cost=sweep_cost(cubes, runs),
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
     )
+
+
+def _claims(
+    curves: Mapping[Panel, tuple[Curve, ...]], fits: Sequence[MetricFit], evidence: Evidence
+) -> tuple[Claim, ...]:
+    threshold = curves.get(Panel.THRESHOLD, ())
+    window = curves.get(Panel.WINDOW, ())
+    taxels = curves.get(Panel.TAXELS, ())
+    return (
+        optimum_claim(
+            Panel.THRESHOLD, threshold, evidence, paper.THRESHOLD_V, "V", paper.CLAIMS["threshold"]
+        ),
+        sides_claim(
+            Panel.THRESHOLD, threshold, evidence, ("lower",), "V", paper.CLAIMS["threshold_lower"]
+        ),
+        optimum_claim(Panel.WINDOW, window, evidence, paper.WINDOW_S, "s", paper.CLAIMS["window"]),
+        sides_claim(
+            Panel.WINDOW, window, evidence, ("lower", "higher"), "s", paper.CLAIMS["window_sides"]
+        ),
+        taxel_gain_claim(taxels, evidence),
+        taxel_saturation_claim(taxels, evidence),
+        metric_claim(fits),
+        mismatch_claim(curves.get(Panel.MISMATCH, ()), evidence),
+    )
+
+
+def _other_pictures(
+    cubes: Mapping[str, xr.Dataset],
+) -> tuple[tuple[SweepPlot, ...], tuple[Heatmap, ...], tuple[str, ...]]:
+    """A curve for every 1-D cube no paper panel plots against its axis, a heat map per 2-D
+    cube, and why any other cube has no picture."""
+    plotted = {n for panel in PANEL_FIELDS for n in sweeps_for(panel, cubes)}
+    plots, maps, undrawn = [], [], []
+    for name, cube in cubes.items():
+        dims = sweep_dims(cube)
+        if len(dims) == 1 and name not in plotted:
+            if (plot := sweep_plot(name, cube)) is not None:
+                plots.append(plot)
+        elif len(dims) == 2:
+            if (found := heatmap(name, cube)) is not None:
+                maps.append(found)
+        elif len(dims) > 2:
+            undrawn.append(
+                f"Sweep {name} has {len(dims)} dimensions ({', '.join(dims)}): no picture; its "
+                "designs are in the answer and the fronts, and its cube holds every number."
+            )
+    return tuple(plots), tuple(maps), tuple(undrawn)
+
+
+def _interval_methods(cubes: Mapping[str, xr.Dataset]) -> tuple[str, ...]:
+    methods = {
+        part.strip()
+        for cube in cubes.values()
+        for part in str(cube["accuracy_low"].attrs.get("interval", "none")).split(";")
+    }
+    return tuple(sorted(methods - {"none", ""}))

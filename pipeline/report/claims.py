@@ -1,53 +1,72 @@
-"""The paper's claims beside what this run's cubes say about them, one sentence each.
+"""The paper's claims beside what this run's cubes say about them, each judged by a test.
 
-Along a sweep the optimum is ``x* = argmax a(x)``; the paper's value ``x_p`` *holds* when
-``a(x_p) >= a(x*) - s(x*)``, i.e. it is within one fold standard deviation of the best
-(differences smaller than that are fold-to-fold noise).
+Every claim is judged by a paired test on the same recordings
+(:meth:`pipeline.report.evidence.Evidence.compare`, exact McNemar for one repeat, bootstrap
+otherwise) or a trend test (:meth:`~pipeline.report.evidence.Evidence.trend`), at ``ALPHA`` =
+0.05, never by the spread over folds. A claim over several comparisons Holm-corrects their
+p-values (:func:`pipeline.stats.holm`) and says so. The verdicts: *supports*, *does not
+support*, *cannot tell* (no significant difference: the interval includes 0, or no per-recording
+results), per model and sweep, tallied over them.
 
-Taxel gain from ``n1`` to ``n2`` taxels: ``g = a(n2) / a(n1) - 1`` (the paper: +63 % from 1 to 16,
-then saturation); the array *rises* when ``a(n2) - a(n1) > s(n2)`` and *saturates* after 16 when
-``|a(25) - a(16)| <= s(25)``.
-
-Trend with mismatch: the least-squares line of ``a`` on ``sigma_rel`` over the sweep's points
-(:func:`scipy.stats.linregress`), its slope and two-sided p-value. SSNR should correlate
-positively and STE negatively with accuracy (the cube's Pearson r, p < :data:`SIGNIFICANCE`).
+* Optimum at the paper's value ``x_p`` (threshold 0.09 V, window 0.1 s), a "best of N" claim:
+  every other swept value ``x_j`` is compared with ``x_p``; the run supports the claim when no
+  ``x_j`` is significantly more accurate (Holm over the ``N - 1`` comparisons), and does not when
+  one is.
+* Loss on the sides of the optimum ``x*`` (lower thresholds; shorter and longer windows): the
+  lowest (and highest) swept value against ``x*`` (Holm over the sides); supported when the side
+  is significantly less accurate, not supported when the optimum is at that end of the sweep.
+* Taxel gain from 1 to 16 taxels: 16 against 1 (relative gain ``a(16) / a(1) - 1`` beside the
+  paper's +63 %); saturation: every count above 16 against 16 (Holm), supported when none differs
+  significantly. Without 1 or 16 in the sweep: its smallest and largest counts, and its last step.
+* SSNR and STE (Fig. 9): the cube's Pearson ``r`` and two-sided ``p`` of accuracy against the
+  metric; SSNR should correlate positively and STE negatively (p < 0.05).
+* Mismatch: the least-squares slope of accuracy on ``sigma_rel`` with its paired bootstrap
+  interval and p-value; supported when significantly negative.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import enum
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.report import paper
 from pipeline.report.curves import Curve, MetricFit
+from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import PANEL_TITLES, Panel
-from pipeline.report.text import pct, pct_pm
-
-PAPER_THRESHOLD_V = 0.09
-PAPER_WINDOW_S = 0.1
-PAPER_TAXEL_GAIN = 0.63  # from 1 to 16 taxels
-PAPER_TAXELS = (1, 16)
-SATURATION_TAXELS = 25
-SIGNIFICANCE = 0.05
+from pipeline.report.text import (
+    NO_INTERVAL_WHY,
+    comparison,
+    p_value,
+    pct_interval,
+    signed_points,
+)
+from pipeline.stats import PairedComparison, holm
 
 _METRIC_NAMES = {"ssnr_db": "SSNR", "ste_s2": "STE"}
+_NOT_SIGNIFICANT = "no significant difference (the interval includes 0)"
 
 
 class Verdict(enum.StrEnum):
-    """How this run's cube compares with one of the paper's claims."""
+    """How this run's cubes bear on one of the paper's claims."""
 
-    AGREES = "agrees"
-    PARTLY = "agrees only in part"
-    DISAGREES = "disagrees"
-    UNCLEAR = "can neither confirm nor refute it"
+    SUPPORTS = "supports it"
+    # No test goes against the claim, but none confirms it either: absence of a significant
+    # difference is what the claim predicts, and also what too few recordings give.
+    CONSISTENT = "is consistent with it (no significant difference either way)"
+    PARTLY = "supports it only in part"
+    CONTRADICTS = "does not support it"
+    UNCLEAR = "cannot tell"
     ABSENT = "not in this run"
 
 
 @dataclass(frozen=True)
 class Claim:
-    """One of the paper's claims beside what this run's cube says about it."""
+    """One of the paper's claims beside what this run's cubes say about it."""
 
     panel: Panel
     paper: str
@@ -62,111 +81,333 @@ class Claim:
 
 
 def optimum_claim(
-    panel: Panel, curves: Sequence[Curve], reference: float, unit: str, paper: str
+    panel: Panel,
+    curves: Sequence[Curve],
+    evidence: Evidence,
+    reference: float,
+    unit: str,
+    paper_text: str,
 ) -> Claim:
-    """Is the paper's optimum ``reference`` within one fold std of each model's best?"""
+    """Is no swept value significantly more accurate than the paper's optimum ``reference``?"""
     if not curves:
-        return Claim(panel, paper, f"{PANEL_TITLES[panel]} is not in this run", Verdict.ABSENT)
-    parts, holds = [], []
+        return _absent(panel, paper_text)
+    parts, verdicts = [], []
     for curve in curves:
+        name = _name(curve, curves)
         b = curve.best
-        at = f"{curve.model.upper()} is best at {curve.x[b]:g} {unit} ({pct_pm(curve, b)})"
+        at = f"{name} is most accurate at {curve.x[b]:g} {unit} ({_acc(curve, b)})"
         ref = curve.index(reference)
-        close = int(np.sum(curve.mean >= curve.mean[b] - curve.std[b]))
         if ref is None:
-            parts.append(f"{at}, {reference:g} {unit} was not swept")
+            parts.append(f"{at}; {reference:g} {unit} was not swept")
+            verdicts.append(Verdict.UNCLEAR)
             continue
-        holds.append(bool(curve.mean[ref] >= curve.mean[b] - curve.std[b]))
-        within = "within" if holds[-1] else "outside"
-        parts.append(
-            f"{at} and {reference:g} {unit} ({pct(curve.mean[ref])}) is {within} one fold "
-            f"standard deviation of it, as are {close} of {curve.x.size} points"
-        )
-    return Claim(panel, paper, "; ".join(parts), _tally(holds))
+        others = [j for j in range(curve.x.size) if j != ref]
+        if not others:
+            parts.append(f"{at}; it is the only value swept")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        tests = _holm_tests(curve, evidence, [(j, ref) for j in others])
+        if tests is None:
+            parts.append(f"{at}; {NO_INTERVAL_WHY}")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        better = [(j, t, p) for j, (t, p) in zip(others, tests, strict=True) if _up(t, p)]
+        family = _family(len(others)).removeprefix(", ")
+        if better:
+            j, t, p = max(better, key=lambda item: item[1].difference)
+            parts.append(
+                f"{at}, and {curve.x[j]:g} {unit} is significantly more accurate than "
+                f"{reference:g} {unit} ({_compared(t, p, len(others))}; {family})"
+            )
+            verdicts.append(Verdict.CONTRADICTS)
+        else:
+            parts.append(
+                f"{at}, and no swept value is significantly more accurate than {reference:g} "
+                f"{unit} ({_acc(curve, ref)}; {_others(len(others))} compared with it, {family})"
+            )
+            verdicts.append(Verdict.CONSISTENT)
+    return Claim(panel, paper_text, "; ".join(parts), _tally(verdicts))
 
 
-def taxel_claim(curves: Sequence[Curve]) -> Claim:
-    """The paper's +63 % from 1 to 16 taxels and the saturation after it."""
-    paper = "accuracy rising by 63 % from 1 to 16 taxels, then saturating"
-    usable = [c for c in curves if all(c.index(n) is not None for n in PAPER_TAXELS)]
-    if not usable:
-        swept = sorted({int(x) for c in curves for x in c.x})
-        what = f"only {swept} taxels were swept" if curves else "no taxel sweep is in this run"
-        return Claim(Panel.TAXELS, paper, what, Verdict.ABSENT if not curves else Verdict.UNCLEAR)
-    parts, rises, saturates = [], [], []
-    for curve in usable:
-        i1, i16 = (curve.index(n) for n in PAPER_TAXELS)
-        gain = curve.mean[i16] / curve.mean[i1] - 1.0
-        rises.append(bool(curve.mean[i16] - curve.mean[i1] > curve.std[i16]))
-        text = (
-            f"{curve.model.upper()} ({curve.sweep}) goes from {pct(curve.mean[i1])} to "
-            f"{pct_pm(curve, i16)} ({gain:+.0%})"
-        )
-        i25 = curve.index(SATURATION_TAXELS)
-        if i25 is not None:
-            saturates.append(bool(abs(curve.mean[i25] - curve.mean[i16]) <= curve.std[i25]))
-            text += f" and then {pct(curve.mean[i25])} at {SATURATION_TAXELS}"
-        parts.append(text)
-    verdict = _tally([r and s for r, s in zip(rises, saturates, strict=False)] or rises)
-    if not any(rises):
-        verdict = Verdict.DISAGREES
-    return Claim(Panel.TAXELS, paper, "; ".join(parts), verdict)
+def sides_claim(
+    panel: Panel,
+    curves: Sequence[Curve],
+    evidence: Evidence,
+    sides: Sequence[str],
+    unit: str,
+    paper_text: str,
+) -> Claim:
+    """Do the ``sides`` ("lower", "higher") of the sweep lose accuracy against its optimum?
+
+    Each side's end of the sweep is compared with the optimum. When the optimum is itself that
+    end, it is compared with its neighbour instead: significantly more accurate means accuracy
+    rises towards that end (the claim is not supported), otherwise the run cannot tell. The
+    comparisons of one curve are Holm-corrected together.
+    """
+    if not curves:
+        return _absent(panel, paper_text)
+    parts, verdicts = [], []
+    for curve in curves:
+        name = _name(curve, curves)
+        b, last = curve.best, curve.x.size - 1
+        if last == 0:
+            parts.append(f"{name} has only one value")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        pairs = []  # (side, index compared, index it is compared with)
+        for side in sides:
+            end = 0 if side == "lower" else last
+            if end != b:
+                pairs.append((side, end, b))
+            else:
+                pairs.append((side, b, b + 1 if side == "lower" else b - 1))
+        # With two values both sides may be the same pair of points: tested once, read twice.
+        distinct = list(dict.fromkeys((min(i, j), max(i, j)) for _, i, j in pairs))
+        found = _holm_tests(curve, evidence, distinct)
+        if found is None:
+            parts.append(f"{name}: {NO_INTERVAL_WHY}")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        tests = [
+            _oriented(found[distinct.index((min(i, j), max(i, j)))], i > j) for _, i, j in pairs
+        ]
+        family = _family(len(distinct))
+        texts, mine = [], []
+        for (side, i, j), (t, p) in zip(pairs, tests, strict=True):
+            significant = p < ALPHA
+            if i == b:
+                word = "lowest" if side == "lower" else "highest"
+                rises = significant and t.difference > 0
+                state = "significantly more accurate" if rises else _NOT_SIGNIFICANT
+                texts.append(
+                    f"the optimum is the {word} value swept ({curve.x[b]:g} {unit}, "
+                    f"{_acc(curve, b)}); against {curve.x[j]:g} {unit} next to it: {state} "
+                    f"({_compared(t, p, len(distinct))}{family})"
+                )
+                mine.append(Verdict.CONTRADICTS if rises else Verdict.UNCLEAR)
+                continue
+            lost = significant and t.difference < 0
+            state = "significantly less accurate" if lost else _NOT_SIGNIFICANT
+            texts.append(
+                f"{curve.x[i]:g} {unit} ({_acc(curve, i)}) against the optimum {curve.x[b]:g} "
+                f"{unit}: {state} ({_compared(t, p, len(distinct))}{family})"
+            )
+            mine.append(Verdict.SUPPORTS if lost else Verdict.UNCLEAR)
+        parts.append(f"{name}: " + "; ".join(texts))
+        verdicts.append(_tally(mine))
+    return Claim(panel, paper_text, "; ".join(parts), _tally(verdicts))
+
+
+def taxel_gain_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
+    """Accuracy rising from 1 to 16 taxels (the paper: +63 %): 16 against 1, paired."""
+    text = paper.CLAIMS["taxel_gain"]
+    if not curves:
+        return _absent(Panel.TAXELS, text)
+    parts, verdicts = [], []
+    for curve in curves:
+        name = _name(curve, curves)
+        if curve.x.size < 2:
+            parts.append(f"{name} has only {curve.x[0]:g} taxels")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        i1 = curve.index(paper.TAXELS[0])
+        i2 = curve.index(paper.TAXELS[1])
+        note = ""
+        if i1 is None or i2 is None:
+            i1, i2 = 0, curve.x.size - 1
+            note = " (1 and 16 were not both swept: its smallest and largest arrays)"
+        start = f"{name} goes from {_acc(curve, i1)} at {curve.x[i1]:g} to {_acc(curve, i2)} "
+        start += f"at {curve.x[i2]:g} taxels{note}"
+        if curve.mean[i1] > 0:
+            start += f", {curve.mean[i2] / curve.mean[i1] - 1:+.0%} (the paper: +63%)"
+        tests = _holm_tests(curve, evidence, [(i2, i1)])
+        if tests is None:
+            parts.append(f"{start}; {NO_INTERVAL_WHY}")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        ((t, p),) = tests
+        if p < ALPHA:
+            state = "a significant gain" if t.difference > 0 else "a significant loss"
+            verdicts.append(Verdict.SUPPORTS if t.difference > 0 else Verdict.CONTRADICTS)
+        else:
+            state = _NOT_SIGNIFICANT
+            verdicts.append(Verdict.UNCLEAR)
+        parts.append(f"{start}: {state} ({_compared(t, p, 1)})")
+    return Claim(Panel.TAXELS, text, "; ".join(parts), _tally(verdicts))
+
+
+def taxel_saturation_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
+    """No significant change above 16 taxels (or along the sweep's last step), Holm-corrected."""
+    text = paper.CLAIMS["taxel_saturation"]
+    if not curves:
+        return _absent(Panel.TAXELS, text)
+    parts, verdicts = [], []
+    for curve in curves:
+        name = _name(curve, curves)
+        ref = curve.index(paper.TAXELS[1])
+        if ref is None or ref == curve.x.size - 1:
+            if curve.x.size < 2:
+                parts.append(f"{name} has only {curve.x[0]:g} taxels")
+                verdicts.append(Verdict.UNCLEAR)
+                continue
+            ref = curve.x.size - 2  # no array above 16: the sweep's last step
+        above = list(range(ref + 1, curve.x.size))
+        tests = _holm_tests(curve, evidence, [(j, ref) for j in above])
+        start = f"{name} at {curve.x[ref]:g} taxels: {_acc(curve, ref)}"
+        if tests is None:
+            parts.append(f"{start}; {NO_INTERVAL_WHY}")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        family = _family(len(above))
+        changes = [
+            f"{curve.x[j]:g} taxels {_acc(curve, j)} ({_compared(t, p, len(above))}{family})"
+            for j, (t, p) in zip(above, tests, strict=True)
+        ]
+        moved = [t for t, p in tests if p < ALPHA]
+        if moved:
+            way = "keeps rising" if all(t.difference > 0 for t in moved) else "changes"
+            parts.append(f"{start}; it {way} significantly: " + "; ".join(changes))
+            verdicts.append(Verdict.CONTRADICTS)
+        else:
+            parts.append(
+                f"{start}; no significant change above it, consistent with saturation: "
+                + "; ".join(changes)
+            )
+            verdicts.append(Verdict.CONSISTENT)
+    return Claim(Panel.TAXELS, text, "; ".join(parts), _tally(verdicts))
 
 
 def metric_claim(fits: Sequence[MetricFit]) -> Claim:
     """SSNR should correlate positively with accuracy and STE negatively (Pearson, p < 0.05)."""
-    paper = "SSNR correlating positively and STE negatively with accuracy"
+    text = paper.CLAIMS["metrics"]
     if not fits:
-        return Claim(
-            Panel.SPIKE_METRICS, paper, "no correlate sweep is in this run", Verdict.ABSENT
-        )
-    parts, ok = [], []
-    for fit in fits:
-        sign = 1.0 if fit.metric == "ssnr_db" else -1.0
-        ok.append(bool(sign * fit.r > 0 and fit.p < SIGNIFICANCE))
-        parts.append(
-            f"{_METRIC_NAMES[fit.metric]} gives r = {fit.r:+.2f} (p = {fit.p:.2g}) for the "
-            f"{fit.model.upper()}"
-        )
-    return Claim(Panel.SPIKE_METRICS, paper, "; ".join(parts), _tally(ok))
-
-
-def mismatch_claim(curves: Sequence[Curve]) -> Claim:
-    """Does accuracy fall with threshold mismatch (least-squares slope < 0, p < 0.05)?"""
-    from scipy import stats
-
-    paper = "accuracy falling as threshold mismatch grows"
-    if not curves:
-        return Claim(Panel.MISMATCH, paper, "no mismatch sweep is in this run", Verdict.ABSENT)
+        return Claim(Panel.SPIKE_METRICS, text, "no correlate sweep is in this run", Verdict.ABSENT)
     parts, verdicts = [], []
-    for curve in curves:
-        if curve.x.size < 3:
-            parts.append(f"{curve.model.upper()} has only {curve.x.size} mismatch levels")
+    for fit in fits:
+        metric = _METRIC_NAMES[fit.metric]
+        if not (math.isfinite(fit.r) and math.isfinite(fit.p)):
+            parts.append(
+                f"{metric} has no correlation for the {fit.model.upper()} (too few points)"
+            )
             verdicts.append(Verdict.UNCLEAR)
             continue
-        fit = stats.linregress(curve.x, curve.mean)
-        direction = "falls" if fit.slope < 0 else "rises"
-        parts.append(
-            f"{curve.model.upper()} accuracy {direction} ({pct(curve.mean[0])} at "
-            f"{curve.x[0]:.0%} to {pct(curve.mean[-1])} at {curve.x[-1]:.0%}; slope "
-            f"{fit.slope * 0.1:+.1%} per 10 % mismatch, p = {fit.pvalue:.2g})"
-        )
-        if fit.pvalue >= SIGNIFICANCE:
+        sign = 1.0 if fit.metric == "ssnr_db" else -1.0
+        if fit.p >= ALPHA:
             verdicts.append(Verdict.UNCLEAR)
         else:
-            verdicts.append(Verdict.AGREES if fit.slope < 0 else Verdict.DISAGREES)
-    if len(set(verdicts)) == 1:
-        verdict = verdicts[0]
-    elif Verdict.AGREES in verdicts:
-        verdict = Verdict.PARTLY
-    else:
-        verdict = Verdict.DISAGREES if Verdict.DISAGREES in verdicts else Verdict.UNCLEAR
-    return Claim(Panel.MISMATCH, paper, "; ".join(parts), verdict)
+            verdicts.append(Verdict.SUPPORTS if sign * fit.r > 0 else Verdict.CONTRADICTS)
+        parts.append(
+            f"{metric} gives Pearson r = {fit.r:+.2f} (p = {p_value(fit.p)}, n = {fit.x.size}) "
+            f"for the {fit.model.upper()}"
+        )
+    return Claim(Panel.SPIKE_METRICS, text, "; ".join(parts), _tally(verdicts))
 
 
-def _tally(holds: Sequence[bool]) -> Verdict:
-    if not holds:
+def mismatch_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
+    """Does accuracy fall with threshold mismatch (trend test of the slope, p < 0.05)?"""
+    text = paper.CLAIMS["mismatch"]
+    if not curves:
+        return _absent(Panel.MISMATCH, text)
+    parts, verdicts = [], []
+    for curve in curves:
+        name = _name(curve, curves)
+        span = (
+            f"{name} {_acc(curve, 0)} at {curve.x[0]:.0%} to {_acc(curve, -1)} at "
+            f"{curve.x[-1]:.0%} mismatch"
+        )
+        if np.unique(curve.x).size < 2:
+            parts.append(f"{name} has only one mismatch level")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        fit = evidence.trend(curve.keys, curve.x, curve.model)
+        if fit is None:
+            parts.append(f"{span}; {NO_INTERVAL_WHY}")
+            verdicts.append(Verdict.UNCLEAR)
+            continue
+        if fit.p_value >= ALPHA:
+            state, verdict = _NOT_SIGNIFICANT.replace("difference", "trend"), Verdict.UNCLEAR
+        elif fit.slope < 0:
+            state, verdict = "a significant fall", Verdict.SUPPORTS
+        else:
+            state, verdict = "a significant rise", Verdict.CONTRADICTS
+        per10 = 0.1  # the slope per 10 % mismatch (sigma_rel 0.1)
+        parts.append(
+            f"{span}: {state}, slope {signed_points(per10 * fit.slope)} points per 10 % mismatch "
+            f"[{signed_points(per10 * fit.low)}, {signed_points(per10 * fit.high)}], bootstrap "
+            f"p = {p_value(fit.p_value)}"
+        )
+        verdicts.append(verdict)
+    return Claim(Panel.MISMATCH, text, "; ".join(parts), _tally(verdicts))
+
+
+def _holm_tests(
+    curve: Curve, evidence: Evidence, pairs: Sequence[tuple[int, int]]
+) -> list[tuple] | None:
+    """Paired comparisons ``a(i) - a(j)`` of the curve's points with Holm-adjusted p-values;
+    None when any of them cannot be made (no per-recording results)."""
+    tests = [evidence.compare(curve.keys[i], curve.keys[j], curve.model) for i, j in pairs]
+    if any(t is None for t in tests):
+        return None
+    adjusted = holm([t.p_value for t in tests])  # type: ignore[union-attr]
+    return [(t, float(p)) for t, p in zip(tests, adjusted, strict=True)]
+
+
+def _family(m: int) -> str:
+    """How the p-values of ``m`` comparisons are corrected, as a clause to append."""
+    return f", Holm-corrected over {m} comparisons" if m > 1 else ", one comparison"
+
+
+def _compared(test: PairedComparison, holm_p: float, m: int) -> str:
+    """A comparison as text; the Holm-adjusted p only where ``m`` > 1 comparisons share it."""
+    return comparison(test, holm_p if m > 1 else None)
+
+
+def _others(m: int) -> str:
+    return "the one other value" if m == 1 else f"each of the {m} others"
+
+
+def _oriented(found: tuple, flip: bool) -> tuple:
+    """A ``(comparison a - b, Holm p)`` as ``b - a`` when ``flip``."""
+    test, p = found
+    if not flip:
+        return found
+    flipped = dataclasses.replace(
+        test,
+        difference=-test.difference,
+        low=-test.high,
+        high=-test.low,
+        only_a=test.only_b,
+        only_b=test.only_a,
+    )
+    return flipped, p
+
+
+def _up(test, holm_p: float) -> bool:
+    return holm_p < ALPHA and test.difference > 0
+
+
+def _acc(curve: Curve, i: int) -> str:
+    return pct_interval(curve.mean[i], curve.low[i], curve.high[i])
+
+
+def _name(curve: Curve, curves: Sequence[Curve]) -> str:
+    several = len({c.sweep for c in curves}) > 1
+    return curve.model.upper() + (f" ({curve.sweep})" if several else "")
+
+
+def _absent(panel: Panel, text: str) -> Claim:
+    return Claim(panel, text, f"{PANEL_TITLES[panel]} is not in this run", Verdict.ABSENT)
+
+
+def _tally(verdicts: Sequence[Verdict]) -> Verdict:
+    """All alike: that verdict; some support: in part; otherwise any contradiction rules."""
+    kinds = set(verdicts)
+    if not kinds:
         return Verdict.UNCLEAR
-    if all(holds):
-        return Verdict.AGREES
-    return Verdict.PARTLY if any(holds) else Verdict.DISAGREES
+    if len(kinds) == 1:
+        return kinds.pop()
+    if kinds == {Verdict.SUPPORTS, Verdict.CONSISTENT}:
+        return Verdict.CONSISTENT
+    if kinds & {Verdict.SUPPORTS, Verdict.CONSISTENT, Verdict.PARTLY}:
+        return Verdict.PARTLY
+    return Verdict.CONTRADICTS if Verdict.CONTRADICTS in kinds else Verdict.UNCLEAR

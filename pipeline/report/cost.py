@@ -1,9 +1,8 @@
-"""What accuracy costs: compute seconds per point, the Pareto front, observation time, the sweep.
+"""What accuracy costs in time: the Pareto front rule, observation time, the sweep's own cost.
 
-Compute cost of a point for model ``m``: the seconds of its spike and coding stages plus
-``train_m``, as measured when each stage was computed (a stage reused from the cache counts at
-its original cost: the price of the design, not of this run). A point lies on the *Pareto front*
-when every cheaper point is strictly less accurate: the cheapest design for each accuracy level.
+A point lies on the *Pareto front* of accuracy against a cost when every cheaper point is strictly
+less accurate: the cheapest design for each accuracy level (:func:`pareto_front`; the fronts
+themselves are in :mod:`pipeline.report.fronts`).
 
 Observation time of a point: ``T = n_windows * window_s`` seconds of touch; the time needed to
 reach accuracy ``L`` is the smallest swept ``T`` with ``a(T) >= L`` (grid points, no
@@ -20,26 +19,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.report.cubes import is_one_dimensional, point_keys, sweeps_for
+from pipeline.report.cubes import point_keys
 from pipeline.report.curves import Curve
-from pipeline.report.panels import Panel
-from pipeline.report.text import label, pct
+from pipeline.report.text import pct
 
 OBSERVATION_FRACTIONS = (0.8, 0.9, 1.0)
-
-
-@dataclass(frozen=True)
-class CostPoint:
-    """One distinct grid point for one model: compute seconds and accuracy."""
-
-    key: str
-    sweeps: tuple[str, ...]
-    label: str
-    model: str
-    seconds: float
-    mean: float
-    std: float
-    on_front: bool
 
 
 @dataclass(frozen=True)
@@ -105,52 +89,6 @@ def pareto_front(seconds: np.ndarray, accuracy: np.ndarray) -> np.ndarray:
     return front
 
 
-def cost_points(cubes: Mapping[str, xr.Dataset]) -> tuple[CostPoint, ...]:
-    """Every distinct point of every one-dimensional cube, per model, with the Pareto front."""
-    found: dict[tuple[str, str], dict[str, Any]] = {}
-    for name in sweeps_for(Panel.COST, cubes):
-        cube = cubes[name]
-        if not is_one_dimensional(cube):
-            continue
-        dim = cube["accuracy"].dims[0]
-        stages = [str(s) for s in cube["stage"].values]
-        for i, key in enumerate(point_keys(cube)):
-            point = cube.isel({dim: i})
-            text = f"{name}: {dim} = {label(point[dim].values)}"
-            for model in cube["model"].values:
-                folds = point["accuracy"].sel(model=model).values
-                if np.isnan(folds).all():
-                    continue
-                entry = found.setdefault(
-                    (key, str(model)),
-                    {
-                        "sweeps": [],
-                        "label": text,
-                        "seconds": _model_seconds(point["seconds"].values, stages, str(model)),
-                        "mean": float(np.nanmean(folds)),
-                        "std": float(np.nanstd(folds, ddof=0)),
-                    },
-                )
-                entry["sweeps"].append(name)
-    items = list(found.items())
-    seconds = np.array([e["seconds"] for _, e in items])
-    means = np.array([e["mean"] for _, e in items])
-    front = pareto_front(seconds, means) if items else np.zeros(0, dtype=bool)
-    return tuple(
-        CostPoint(
-            key=key,
-            sweeps=tuple(e["sweeps"]),
-            label=e["label"],
-            model=model,
-            seconds=e["seconds"],
-            mean=e["mean"],
-            std=e["std"],
-            on_front=bool(on),
-        )
-        for ((key, model), e), on in zip(items, front, strict=True)
-    )
-
-
 def sweep_cost(cubes: Mapping[str, xr.Dataset], runs: Iterable[SweepRun]) -> SweepCost:
     """Stage seconds summed over the distinct points of all cubes, and the logged runs."""
     per_point: dict[str, dict[str, float]] = {}
@@ -199,20 +137,6 @@ def sweep_run_from_record(record: Mapping[str, Any]) -> SweepRun:
     )
 
 
-def cost_sentence(points: Sequence[CostPoint]) -> str:
-    """One sentence on the Pareto front of accuracy against compute time."""
-    front = sorted((p for p in points if p.on_front), key=lambda p: p.seconds)
-    if not front:
-        return "No point has both compute seconds and accuracy."
-    cheap, best = front[0], front[-1]
-    return (
-        f"{len(front)} of {len(points)} (point, model) pairs are on the Pareto front: the "
-        f"cheapest design reaches {pct(cheap.mean)} in {cheap.seconds:.2g} s "
-        f"({cheap.model.upper()}, {cheap.label}) and the most accurate {pct(best.mean)} in "
-        f"{best.seconds:.2g} s ({best.model.upper()}, {best.label})."
-    )
-
-
 def observation_sentence(rows: Sequence[TimeToAccuracy]) -> str:
     """One sentence on the touch time each model needs for 90 % of its best accuracy."""
     parts = [
@@ -222,8 +146,3 @@ def observation_sentence(rows: Sequence[TimeToAccuracy]) -> str:
         if math.isclose(r.fraction, 0.9)
     ]
     return ("Along the observation sweep " + "; ".join(parts) + ".") if parts else ""
-
-
-def _model_seconds(row: np.ndarray, stages: list[str], model: str) -> float:
-    keep = [not s.startswith("train_") or s == f"train_{model}" for s in stages]
-    return float(np.nansum(row[keep]))

@@ -1,7 +1,9 @@
 """Reading result cubes (the layout of :mod:`pipeline.cube`): swept fields, values, point keys.
 
-Which panel a cube feeds is decided by the scene fields its one dimension sweeps, read from the
-``field`` attribute of its coordinates, never by its name.
+A cube's *sweep dimensions* are those of ``accuracy_mean`` but ``model`` (one for a 1-D or zipped
+sweep, two for a product of two axes, ...). Which panel a cube feeds is decided by the scene
+fields its one dimension sweeps, read from the ``field`` attribute of its coordinates, never by
+its name.
 """
 
 from __future__ import annotations
@@ -20,14 +22,27 @@ def swept_fields(cube: xr.Dataset) -> frozenset[str]:
     return frozenset(str(c.attrs["field"]) for c in cube.coords.values() if "field" in c.attrs)
 
 
+def sweep_dims(cube: xr.Dataset) -> tuple[str, ...]:
+    """The cube's sweep dimensions, in order (``accuracy_mean``'s dimensions but ``model``)."""
+    return tuple(str(d) for d in cube["accuracy_mean"].dims if d != "model")
+
+
 def is_one_dimensional(cube: xr.Dataset) -> bool:
-    return "accuracy" in cube and cube["accuracy"].ndim == 3
+    return "accuracy_mean" in cube and len(sweep_dims(cube)) == 1
+
+
+def axis_coordinates(cube: xr.Dataset, dim: str) -> list[str]:
+    """Names of the swept-axis coordinates along ``dim`` (the dimension's own first)."""
+    names = [dim] if "field" in cube[dim].attrs else []
+    return names + [
+        str(name)
+        for name, c in cube.coords.items()
+        if name != dim and "field" in c.attrs and c.dims == (dim,)
+    ]
 
 
 def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
     """Names of the cubes that feed ``panel``, in the mapping's order."""
-    if panel is Panel.COST:
-        return [name for name, cube in cubes.items() if "seconds" in cube]
     if panel is Panel.SPIKE_METRICS:
         return [name for name, cube in cubes.items() if "correlation_r" in cube]
     wanted = PANEL_FIELDS[panel]
@@ -39,13 +54,12 @@ def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
 
 
 def field_values(cube: xr.Dataset, field: str) -> np.ndarray:
-    """The value of scene ``field`` at every point of a one-dimensional cube, shape (n,).
+    """The value of scene ``field`` at every point of a cube, shape (sweep shape).
 
     The cube's coordinate ``field`` (a dotted scene field) holds it: along the dimension where
     the field varies, a scalar where every point has the same value.
     """
-    dim = cube["accuracy"].dims[0]
-    return cube[field].broadcast_like(cube[dim]).values
+    return cube[field].broadcast_like(cube["result_key"]).values
 
 
 def base_value(cube: xr.Dataset, field: str) -> Any:
@@ -84,8 +98,7 @@ def panel_x(panel: Panel, cube: xr.Dataset) -> np.ndarray:
 def point_keys(cube: xr.Dataset) -> list[str]:
     """Result cache keys (the cube's ``result_key``) of its points in C order over its swept
     dimensions; points shared by two sweeps have one key."""
-    dims = cube["seconds"].dims[:-1]
-    return [str(k) for k in cube["result_key"].transpose(*dims).values.ravel()]
+    return [str(k) for k in cube["result_key"].transpose(*sweep_dims(cube)).values.ravel()]
 
 
 def dataset_kind(cubes: Mapping[str, xr.Dataset]) -> str:
@@ -105,3 +118,18 @@ def sampling_rate_hz(cubes: Mapping[str, xr.Dataset]) -> float | None:
         if "sampling_rate_hz" in cube.attrs:
             return float(cube.attrs["sampling_rate_hz"])
     return None
+
+
+def n_classes(cubes: Mapping[str, xr.Dataset]) -> int | None:
+    """The number of classes the cubes state (the first that does), or None; chance is 1/n."""
+    for cube in cubes.values():
+        if "n_classes" in cube.attrs and int(cube.attrs["n_classes"]) > 0:
+            return int(cube.attrs["n_classes"])
+    return None
+
+
+def describe_coordinate(cube: xr.Dataset, name: str) -> tuple[str, str]:
+    """``(long_name, units)`` of a coordinate from its attributes; units "" when dimensionless."""
+    attrs = cube[name].attrs
+    units = str(attrs.get("units", ""))
+    return str(attrs.get("long_name", attrs.get("field", name))), "" if units == "1" else units

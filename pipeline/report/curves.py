@@ -1,9 +1,12 @@
 """Accuracy curves along a sweep and Fig. 9's least-squares lines against the spike metrics.
 
-Accuracy of a point for one model, over its ``K`` folds (population standard deviation, as in
-:mod:`pipeline.training`)::
-
-    a = (1/K) sum_k a_k,    s = sqrt((1/K) sum_k (a_k - a)^2)
+Accuracy of a point for one model is the cube's ``accuracy_mean`` ``a``: the fraction of
+(recording, repeat) pairs classified correctly out of fold. Its 95 % interval
+``[accuracy_low, accuracy_high]`` (Wilson score for one repeat, stratified bootstrap over
+recordings for several; NaN for points that predate per-recording results) gives the error bars.
+The spread over the ``K`` folds of all repeats (population standard deviation, as in
+:mod:`pipeline.training`), ``s = sqrt((1/K) sum_k (a_k - mean_k a_k)^2)``, is kept as a secondary
+number; nothing is judged by it.
 
 Fig. 9's fitted lines are the least-squares lines of ``a`` on SSNR (finite values only) and on
 STE; their ``r`` and ``p`` are the cube's Pearson ``correlation_r`` and ``correlation_p``.
@@ -17,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from pipeline.report.cubes import point_keys, sweep_dims
+
 
 @dataclass(frozen=True)
 class Curve:
@@ -27,16 +32,29 @@ class Curve:
     sweep, model : str
         Cube name and model (``ffnn``, ``cnn``).
     x : float64 (n,)
-        The panel's abscissa (threshold V, window s, taxel count, sigma_rel, touch s).
-    mean, std : float64 (n,)
-        Accuracy (fraction) mean and population standard deviation over folds.
+        The abscissa (threshold V, window s, taxel count, sigma_rel, touch s, any swept field;
+        positions 0, 1, ... for a field that is not a number).
+    keys : tuple[str, ...] (n,)
+        Result keys of the points, for paired tests (:mod:`pipeline.report.evidence`).
+    mean, low, high : float64 (n,)
+        Accuracy (fraction) and its 95 % interval (NaN: no interval).
+    std : float64 (n,)
+        Population standard deviation of the fold accuracies (secondary).
     """
 
     sweep: str
     model: str
     x: np.ndarray
+    keys: tuple[str, ...]
     mean: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
     std: np.ndarray
+
+    @property
+    def has_interval(self) -> bool:
+        """Whether every point has its 95 % interval."""
+        return bool(np.all(np.isfinite(self.low) & np.isfinite(self.high)))
 
     def index(self, x: float) -> int | None:
         """Index of the point at ``x`` (relative tolerance 1e-9), or None if not swept."""
@@ -51,11 +69,12 @@ class Curve:
 
 @dataclass(frozen=True)
 class MetricFit:
-    """Fig. 9: fold-mean accuracy against one spike metric along a correlate sweep.
+    """Fig. 9: accuracy against one spike metric along a correlate sweep.
 
-    ``x`` float64 (n,) holds the metric (dB or s^2) of the points used (finite), ``mean``/``std``
-    their accuracy; ``slope`` (1/unit) and ``intercept`` are the least-squares line; ``r``/``p``
-    the cube's Pearson coefficient and two-sided p; ``left_out`` counts non-finite metrics.
+    ``x`` float64 (n,) holds the metric (dB or s^2) of the points used (finite), ``mean``,
+    ``low``, ``high`` their accuracy and its 95 % interval; ``slope`` (1/unit) and ``intercept``
+    are the least-squares line; ``r``/``p`` the cube's Pearson coefficient and two-sided p;
+    ``left_out`` counts non-finite metrics.
     """
 
     sweep: str
@@ -63,7 +82,8 @@ class MetricFit:
     metric: str
     x: np.ndarray
     mean: np.ndarray
-    std: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
     slope: float
     intercept: float
     r: float
@@ -72,20 +92,30 @@ class MetricFit:
 
 
 def sweep_curves(name: str, cube: xr.Dataset, x: np.ndarray) -> tuple[Curve, ...]:
-    """One :class:`Curve` per model a one-dimensional cube trained (models all-NaN are left out)."""
+    """One :class:`Curve` per model of a one-dimensional cube (models all-NaN are left out).
+
+    ``x`` float (n,) is the abscissa of each point in cube order; the curve is sorted by it.
+    """
+    dim = sweep_dims(cube)[0]
     order = np.argsort(x, kind="stable")
+    keys = np.asarray(point_keys(cube))[order]
+    folds = cube["accuracy"].transpose(dim, "model", ...).values
+    folds = folds.reshape(folds.shape[0], folds.shape[1], -1)[order]
     curves = []
-    for model in cube["model"].values:
-        folds = cube["accuracy"].sel(model=model).values[order]  # (n, folds)
-        if np.isnan(folds).all():
+    for m, model in enumerate(cube["model"].values):
+        mean = cube["accuracy_mean"].transpose(dim, "model").values[order, m]
+        if np.isnan(mean).all():
             continue
         curves.append(
             Curve(
                 sweep=name,
                 model=str(model),
                 x=np.asarray(x, dtype=np.float64)[order],
-                mean=np.nanmean(folds, axis=1),
-                std=np.nanstd(folds, axis=1, ddof=0),
+                keys=tuple(str(k) for k in keys),
+                mean=mean.astype(np.float64),
+                low=cube["accuracy_low"].transpose(dim, "model").values[order, m],
+                high=cube["accuracy_high"].transpose(dim, "model").values[order, m],
+                std=_fold_std(folds[:, m]),
             )
         )
     return tuple(curves)
@@ -95,21 +125,24 @@ def metric_fits(name: str, cube: xr.Dataset) -> tuple[MetricFit, ...]:
     """Fig. 9 lines of one correlate cube: every model against SSNR and against STE."""
     from scipy import stats
 
+    dims = sweep_dims(cube)
     fits = []
     for model in cube["model"].values:
-        folds = cube["accuracy"].sel(model=model).values.reshape(-1, cube.sizes["fold"])
-        if np.isnan(folds).all():
+        where = {"model": model}
+        mean = cube["accuracy_mean"].sel(where).transpose(*dims).values.ravel()
+        if np.isnan(mean).all():
             continue
-        mean, std = np.nanmean(folds, axis=1), np.nanstd(folds, axis=1, ddof=0)
+        low = cube["accuracy_low"].sel(where).transpose(*dims).values.ravel()
+        high = cube["accuracy_high"].sel(where).transpose(*dims).values.ravel()
         for metric in cube["metric"].values:
-            x = cube[str(metric)].values.ravel().astype(np.float64)
+            x = cube[str(metric)].transpose(*dims).values.ravel().astype(np.float64)
             usable = np.isfinite(x) & np.isfinite(mean)
             xs, ys = x[usable], mean[usable]
             slope = intercept = math.nan
             if xs.size >= 2 and np.ptp(xs) > 0:
                 line = stats.linregress(xs, ys)
                 slope, intercept = float(line.slope), float(line.intercept)
-            where = {"model": model, "metric": metric, "coefficient": "pearson"}
+            at = {"model": model, "metric": metric, "coefficient": "pearson"}
             fits.append(
                 MetricFit(
                     sweep=name,
@@ -117,12 +150,23 @@ def metric_fits(name: str, cube: xr.Dataset) -> tuple[MetricFit, ...]:
                     metric=str(metric),
                     x=xs,
                     mean=ys,
-                    std=std[usable],
+                    low=low[usable],
+                    high=high[usable],
                     slope=slope,
                     intercept=intercept,
-                    r=float(cube["correlation_r"].sel(where)),
-                    p=float(cube["correlation_p"].sel(where)),
+                    r=float(cube["correlation_r"].sel(at)),
+                    p=float(cube["correlation_p"].sel(at)),
                     left_out=int(np.sum(~usable)),
                 )
             )
     return tuple(fits)
+
+
+def _fold_std(folds: np.ndarray) -> np.ndarray:
+    """Population std of each row's finite fold accuracies, float64 (n,); NaN where none."""
+    out = np.full(folds.shape[0], np.nan)
+    for i, row in enumerate(folds):
+        finite = row[np.isfinite(row)]
+        if finite.size:
+            out[i] = float(np.std(finite))
+    return out

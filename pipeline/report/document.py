@@ -1,5 +1,12 @@
 """The report as a document: its blocks in order, and the files of the report folder.
 
+Order: the answer to the designer's question (per model, the cheapest design as accurate as the
+best, :mod:`pipeline.report.answer`), the paper's claims judged by tests
+(:mod:`pipeline.report.claims`), Table I with the paper's rows (:mod:`pipeline.report.tables`),
+the figures (the paper's, then a curve for every other 1-D sweep and a heat map for every 2-D
+one), the hardware cost fronts (:mod:`pipeline.report.fronts`) with the energy model's stated
+assumptions, and what accuracy costs in time.
+
 Files of a report (``<root>/report`` by default), as :func:`report_files` returns them::
 
     report.html             one page, every figure inlined as SVG (no external files)
@@ -15,12 +22,20 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from pipeline.report.analysis import Report
-from pipeline.report.blocks import Block, Figure, Heading, Paragraph, Table
-from pipeline.report.cost import cost_sentence, observation_sentence
+from pipeline.report.answer import ANSWER_COLUMNS, answer_rows, answer_sentences, frame_sentence
+from pipeline.report.blocks import Block, Figure, Heading, Items, Paragraph, Table
+from pipeline.report.cost import observation_sentence
+from pipeline.report.designs import Cost
+from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
+from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.panels import PANEL_TITLES, Panel
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
-from pipeline.report.tables import PAPER_ROW, TABLE_COLUMNS, table_row
+from pipeline.report.sweeps import Heatmap, SweepPlot
+from pipeline.report.tables import TABLE_COLUMNS, table_notes, table_rows
+from pipeline.report.text import NO_INTERVAL_WHY, comparison, pct, pct_interval, rate, si
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure as MplFigure
@@ -28,7 +43,7 @@ if TYPE_CHECKING:
 
 def report_files(
     report: Report,
-    figures: Mapping[Panel, MplFigure],
+    figures: Mapping[str, MplFigure],
     *,
     version: str,
     on_figure: Callable[[], object] | None = None,
@@ -38,7 +53,7 @@ def report_files(
     Parameters
     ----------
     report, figures
-        The report and its figures (:func:`pipeline.report.figures.draw_report`).
+        The report and its figures by file stem (:func:`pipeline.report.figures.draw_report`).
     version
         The eskin-sweep version the report names as its writer.
     on_figure
@@ -48,79 +63,236 @@ def report_files(
 
     files: dict[str, bytes] = {}
     svgs: dict[str, str] = {}
-    for panel, figure in figures.items():
+    for stem, figure in figures.items():
         png, svg = figure_images(figure)
-        files[f"{FIGURES}/{panel.value}.png"] = png
-        files[f"{FIGURES}/{panel.value}.svg"] = svg.encode("utf-8")
-        svgs[panel.value] = svg
+        files[f"{FIGURES}/{stem}.png"] = png
+        files[f"{FIGURES}/{stem}.svg"] = svg.encode("utf-8")
+        svgs[str(stem)] = svg
         if on_figure is not None:
             on_figure()
-    blocks = report_blocks(report, set(figures), version=version)
+    blocks = report_blocks(report, {str(s) for s in figures}, version=version)
     files["report.md"] = render_markdown(blocks, figure_folder=FIGURES).encode("utf-8")
     files["report.html"] = render_html(blocks, svgs).encode("utf-8")
     return files
 
 
-def report_blocks(report: Report, drawn: set[Panel], *, version: str) -> list[Block]:
+def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Block]:
     """The report's text as blocks, figures referenced by stem (only those in ``drawn``)."""
     blocks: list[Block] = [
         Heading(1, TITLE),
         Paragraph(
             f"Grid(s) {', '.join(report.grids)} on {report.dataset} data, written by eskin-sweep "
-            f"{version}. Accuracy is the fraction of test recordings classified correctly; error "
-            "bars are the standard deviation over cross-validation folds."
+            f"{version}. {_accuracy_words(report)}"
         ),
-        Heading(2, "Against the paper"),
-        *(Paragraph(claim.sentence) for claim in report.claims),
-        Heading(2, "Figures"),
     ]
-    claims = {claim.panel: claim for claim in report.claims}
-    for panel in Panel:
-        blocks.append(Heading(3, PANEL_TITLES[panel]))
-        if panel in report.missing or panel not in drawn:
-            blocks.append(
-                Paragraph(f"{PANEL_TITLES[panel]}: {report.missing.get(panel, 'not drawn')}.")
+    if report.untested:
+        blocks.append(
+            Paragraph(
+                f"{report.untested} of {len(report.designs)} designs have {NO_INTERVAL_WHY}. "
+                "They are shown, but no paired test can be made with them."
             )
-            continue
-        blocks.append(Figure(panel.value, PANEL_TITLES[panel]))
-        if panel in claims:
-            blocks.append(Paragraph(claims[panel].sentence))
-        elif panel is Panel.COST:
-            blocks.append(Paragraph(cost_sentence(report.cost_points)))
-        elif panel is Panel.OBSERVATION:
-            blocks.append(Paragraph(observation_sentence(report.time_to_accuracy)))
+        )
+    blocks += _answer_blocks(report)
+    blocks += [Heading(2, "Against the paper"), *(Paragraph(c.sentence) for c in report.claims)]
     blocks += _table_blocks(report)
-    blocks += _cost_blocks(report)
+    blocks += _figure_blocks(report, drawn)
+    blocks += _front_blocks(report, drawn)
+    blocks += _time_blocks(report)
     return blocks
+
+
+def _accuracy_words(report: Report) -> str:
+    methods = ", ".join(report.interval_methods) or "none in this run"
+    chance = (
+        f"Chance is 1/{report.n_classes} = {pct(1 / report.n_classes)} (dashed line)."
+        if report.n_classes
+        else "The class count, and so chance, is not stated in the cubes."
+    )
+    return (
+        "Accuracy is the fraction of (recording, repeat) pairs classified correctly out of fold; "
+        f"error bars and [brackets] are its 95 % interval ({methods}), not the spread over "
+        f"folds, which appears only as a secondary number. {chance} Designs are compared by "
+        "paired tests on the same recordings (exact McNemar for one repeat, a stratified "
+        f"bootstrap otherwise; alpha {ALPHA:g}); differences are in percentage points with their "
+        f"95 % interval (paired stratified bootstrap, {RESAMPLES} resamples, generators seeded "
+        f"from the fixed seed {REPORT_SEED} and the compared result keys, so the report is "
+        "deterministic). The p-value decides significance; near the 5 % boundary the bootstrap "
+        "interval and the exact test can disagree (an interval just excluding 0 with p just "
+        "above 0.05), being two methods."
+    )
+
+
+def _answer_blocks(report: Report) -> Iterator[Block]:
+    yield Heading(2, "The answer: the cheapest design as accurate as the best")
+    if not report.answers:
+        yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
+        return
+    n = len(report.designs)
+    yield Paragraph(
+        f"Over the run's {n} distinct design{'' if n == 1 else 's'}, per model: the most "
+        "accurate design, and the cheapest designs (by address-event data rate and by estimated "
+        "readout power) whose accuracy is not significantly below it."
+    )
+    for answer in report.answers:
+        for sentence in answer_sentences(answer, report.frame):
+            yield Paragraph(sentence)
+    yield Table(ANSWER_COLUMNS, tuple(row for a in report.answers for row in answer_rows(a)))
+    yield Paragraph(frame_sentence(report.frame))
+    yield Paragraph(
+        "Readout power is an order-of-magnitude estimate of the activity-dependent power of the "
+        "readout (events and link for the event readout; ADC conversions and link for the frame "
+        "readout), from these assumptions (set them with --event-energy-pj, --adc-fom-fj and "
+        "--link-energy-pj-per-bit):"
+    )
+    yield Items(report.energy.assumptions())
 
 
 def _table_blocks(report: Report) -> Iterator[Block]:
     yield Heading(2, "Table I")
-    rows = [tuple(vars(PAPER_ROW).values())]
-    if report.run_row is None:
-        yield Paragraph("Table I for this run: not in this run: it needs a sweep of the threshold.")
-    else:
-        rows.insert(0, tuple(vars(table_row(report.run_row)).values()))
-    yield Table(TABLE_COLUMNS, tuple(rows))
-    notes = (
-        "This run's row is the threshold sweep's best point (where the most accurate model "
-        "peaks). The event readout's data rate is address-event bits per second at that point"
+    yield Table(TABLE_COLUMNS, table_rows(report.run_rows))
+    for note in table_notes(report.run_rows):
+        yield Paragraph(note)
+
+
+def _caption(title: str, report: Report) -> str:
+    bars = (
+        "error bars: 95 % interval of accuracy, not the fold spread"
+        if report.interval_methods
+        else f"no error bars: {NO_INTERVAL_WHY}"
     )
-    frame = report.run_row.frame if report.run_row else None
-    if frame is not None:
-        notes += (
-            f"; the frame-based readout is an assumption for comparison: one {frame.bits}-bit ADC "
-            f"sample per taxel at {frame.rate_hz:g} Hz (the recordings' sampling rate unless "
-            "given)"
+    chance = "; dashed line: chance" if report.n_classes else ""
+    return f"{title}. {bars[0].upper()}{bars[1:]}{chance}."
+
+
+def _figure_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
+    yield Heading(2, "Figures")
+    claims: dict[Panel, list[str]] = {}
+    for claim in report.claims:
+        claims.setdefault(claim.panel, []).append(claim.sentence)
+    for panel in Panel:
+        yield Heading(3, PANEL_TITLES[panel])
+        if panel in report.missing or panel.value not in drawn:
+            yield Paragraph(f"{PANEL_TITLES[panel]}: {report.missing.get(panel, 'not drawn')}.")
+            continue
+        yield Figure(panel.value, _caption(PANEL_TITLES[panel], report))
+        for sentence in claims.get(panel, ()):
+            yield Paragraph(sentence)
+        if panel is Panel.OBSERVATION:
+            yield Paragraph(observation_sentence(report.time_to_accuracy))
+    for plot in report.sweep_plots:
+        yield Heading(3, plot.title)
+        if plot.stem in drawn:
+            yield Figure(plot.stem, _caption(plot.title, report))
+        yield Paragraph(_plot_sentence(plot))
+    for found in report.heatmaps:
+        yield Heading(3, found.title)
+        if found.stem in drawn:
+            yield Figure(found.stem, f"{found.title} (accuracy in %, per model).")
+        yield Paragraph(_heatmap_sentence(found))
+    for note in report.undrawn:
+        yield Paragraph(note)
+
+
+def _plot_sentence(plot: SweepPlot) -> str:
+    parts = []
+    for curve in plot.curves:
+        b = curve.best
+        at = plot.ticks[int(curve.x[b])] if plot.ticks else f"{curve.x[b]:g}"
+        parts.append(
+            f"the {curve.model.upper()} is most accurate at {at} "
+            f"({pct_interval(curve.mean[b], curve.low[b], curve.high[b])})"
         )
-    yield Paragraph(notes + ".")
-    yield Paragraph(
-        "The paper's row holds only what this project states of the paper (its operating point "
-        "and figures); cells marked 'not stated here' are not taken from the paper's table."
+    return f"Along {plot.xlabel}: " + "; ".join(parts) + "."
+
+
+def _heatmap_sentence(found: Heatmap) -> str:
+    parts = []
+    for model, grid in zip(found.models, found.accuracy, strict=True):
+        i, j = divmod(int(np.nanargmax(grid)), grid.shape[1])
+        parts.append(
+            f"the {model.upper()} is most accurate at {found.rows[i]}, {found.cols[j]} "
+            f"({pct(float(grid[i, j]))})"
+        )
+    return (
+        f"Rows: {found.row_label}; columns: {found.col_label}. " + "; ".join(parts) + ". Its "
+        "designs are compared with every other design of the run in the answer and the fronts."
     )
 
 
-def _cost_blocks(report: Report) -> Iterator[Block]:
+_FRONT_COLUMNS = (
+    "model",
+    "design",
+    "cost",
+    "accuracy [95 % interval]",
+    "on the front?",
+)
+
+
+def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
+    yield Heading(2, "Hardware cost fronts")
+    if not report.fronts:
+        yield Paragraph("No design states both a cost and an accuracy.")
+        return
+    yield Paragraph(
+        "For each cost and model, a design is on the front when every cheaper or equally cheap "
+        "design is less accurate: the cheapest design for each accuracy level. A design off the "
+        "front is compared with the front design that dominates it (the most accurate front "
+        f"design that costs no more) by one paired test (alpha {ALPHA:g}, not corrected): where "
+        "the difference is not significant it is marked (hollow diamond) and listed, since it "
+        "is as accurate as far as this run can tell. The frame-based readout of each array "
+        "size is a reference line on the data-rate and power fronts. Readout power rests on the "
+        "energy assumptions listed with the answer above."
+    )
+    for front in report.fronts:
+        title = f"Accuracy against {front.cost.short}"
+        yield Heading(3, title)
+        if front.cost.stem in drawn:
+            yield Figure(front.cost.stem, _caption(title, report))
+        rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
+        rows += [_front_row(front, p) for p in front.marked]
+        yield Table(_FRONT_COLUMNS, tuple(rows))
+        if front.references:
+            yield Paragraph(
+                "Frame-based readout of the same arrays: "
+                + "; ".join(
+                    f"{label}: {_cost_text(front.cost, v)}" for label, v in front.references
+                )
+                + "."
+            )
+
+
+def _front_row(front: Front, point: FrontPoint) -> tuple[str, ...]:
+    if point.on_front:
+        status = "on the front"
+    else:
+        status = (
+            "off the front, not significantly less accurate than the front design "
+            f"({comparison(point.versus_front)})"  # type: ignore[arg-type]
+        )
+    a = point.accuracy
+    return (
+        point.model.upper(),
+        point.design.label,
+        _cost_text(front.cost, point.cost),
+        pct_interval(a.mean, a.low, a.high),
+        status,
+    )
+
+
+def _cost_text(which: Cost, value: float) -> str:
+    match which:
+        case Cost.DATA_RATE:
+            return rate(value, "bit/s")
+        case Cost.EVENT_RATE:
+            return rate(value, "events/s")
+        case Cost.BITS:
+            return f"{value:.3g} bit"
+        case Cost.COMPUTE:
+            return f"{value:.3g} s"
+    return si(value, "W")
+
+
+def _time_blocks(report: Report) -> Iterator[Block]:
     yield Heading(2, "What accuracy costs in time")
     if report.time_to_accuracy:
         yield Heading(3, "Observation time needed")
@@ -130,20 +302,10 @@ def _cost_blocks(report: Report) -> Iterator[Block]:
                 (
                     r.model.upper(),
                     f"{r.fraction:.0%}",
-                    f"{100 * r.target:.1f} %",
+                    pct(r.target),
                     "not reached" if r.seconds is None else f"{r.seconds:.3g}",
                 )
                 for r in report.time_to_accuracy
-            ),
-        )
-    front = sorted((p for p in report.cost_points if p.on_front), key=lambda p: p.seconds)
-    if front:
-        yield Heading(3, "Pareto front: the cheapest design for each accuracy level")
-        yield Table(
-            ("model", "point", "compute (s)", "accuracy"),
-            tuple(
-                (p.model.upper(), p.label, f"{p.seconds:.3g}", f"{100 * p.mean:.1f} %")
-                for p in front
             ),
         )
     cost = report.sweep_cost

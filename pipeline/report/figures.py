@@ -2,13 +2,17 @@
 
 Every function returns a new :class:`matplotlib.figure.Figure` on its own Agg canvas: no pyplot,
 no global state, nothing written (:func:`figure_images` renders one to PNG and SVG in memory).
-Error bars are the population standard deviation of accuracy over folds; both models are drawn
-on every panel.
+Error bars are the 95 % interval of accuracy (``accuracy_low``/``accuracy_high``), not the spread
+over folds; points without an interval (runs that predate per-recording results) have none.
+Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the class count is known.
+Every model is drawn on every panel.
 """
 
 from __future__ import annotations
 
 import io
+import math
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
@@ -24,54 +28,70 @@ from matplotlib.ticker import (
     NullFormatter,
 )
 
+from pipeline.report import paper
 from pipeline.report.analysis import Report
-from pipeline.report.claims import PAPER_THRESHOLD_V, PAPER_WINDOW_S
-from pipeline.report.cost import CostPoint
 from pipeline.report.curves import Curve, MetricFit
+from pipeline.report.designs import Cost
+from pipeline.report.fronts import Front
 from pipeline.report.panels import PANEL_TITLES, Panel
+from pipeline.report.sweeps import Heatmap, SweepPlot
+from pipeline.report.text import si
 
 PNG_DPI = 150
+YLABEL = "accuracy (%; bars: 95 % interval)"
 
 _COLORS = {"ffnn": "tab:blue", "cnn": "tab:orange"}
+_OTHER_COLORS = ("tab:green", "tab:red", "tab:purple", "tab:brown")
 _MARKERS = ("o", "s", "^", "D")
 _SIZE_IN = (6.4, 4.2)
 _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
 
-def draw_report(report: Report) -> dict[Panel, Figure]:
-    """One figure per panel that has data, in report order."""
+def draw_report(report: Report) -> dict[str, Figure]:
+    """One figure per stem of :attr:`Report.figure_stems`, in that order."""
+    chance = report.chance
+    curves = report.curves
     draw = {
-        Panel.THRESHOLD: lambda: threshold_figure(
-            report.curves[Panel.THRESHOLD], report.full_scale_v
+        Panel.THRESHOLD.value: lambda: threshold_figure(
+            curves[Panel.THRESHOLD], report.full_scale_v, chance
         ),
-        Panel.WINDOW: lambda: curve_figure(
-            Panel.WINDOW, report.curves[Panel.WINDOW], "window length (s)", PAPER_WINDOW_S
+        Panel.WINDOW.value: lambda: curve_figure(
+            PANEL_TITLES[Panel.WINDOW],
+            curves[Panel.WINDOW],
+            "window length (coding.window_s, s)",
+            chance,
+            paper_x=paper.WINDOW_S,
         ),
-        Panel.TAXELS: lambda: curve_figure(
-            Panel.TAXELS,
-            report.curves[Panel.TAXELS],
+        Panel.TAXELS.value: lambda: curve_figure(
+            PANEL_TITLES[Panel.TAXELS],
+            curves[Panel.TAXELS],
             "taxel count (taxels in the array)",
-            None,
+            chance,
             log=False,
         ),
-        Panel.SPIKE_METRICS: lambda: metric_figure(report.fits),
-        Panel.MISMATCH: lambda: curve_figure(
-            Panel.MISMATCH,
-            report.curves[Panel.MISMATCH],
+        Panel.SPIKE_METRICS.value: lambda: metric_figure(report.fits, chance),
+        Panel.MISMATCH.value: lambda: curve_figure(
+            PANEL_TITLES[Panel.MISMATCH],
+            curves[Panel.MISMATCH],
             "threshold mismatch sigma_rel (% of threshold)",
-            None,
+            chance,
             log=False,
             scale=100.0,
         ),
-        Panel.COST: lambda: cost_figure(report.cost_points),
-        Panel.OBSERVATION: lambda: curve_figure(
-            Panel.OBSERVATION,
-            report.curves[Panel.OBSERVATION],
+        Panel.OBSERVATION.value: lambda: curve_figure(
+            PANEL_TITLES[Panel.OBSERVATION],
+            curves[Panel.OBSERVATION],
             "observation time: windows x window length (s of touch)",
-            None,
+            chance,
         ),
     }
-    return {panel: draw[panel]() for panel in report.panels}
+    for plot in report.sweep_plots:
+        draw[plot.stem] = lambda plot=plot: sweep_figure(plot, chance)
+    for found in report.heatmaps:
+        draw[found.stem] = lambda found=found: heatmap_figure(found)
+    for front in report.fronts:
+        draw[front.cost.stem] = lambda front=front: front_figure(front, chance)
+    return {stem: draw[stem]() for stem in report.figure_stems}
 
 
 def figure_images(figure: Figure) -> tuple[bytes, str]:
@@ -82,9 +102,15 @@ def figure_images(figure: Figure) -> tuple[bytes, str]:
     return png.getvalue(), svg.getvalue().decode("utf-8")
 
 
-def threshold_figure(curves: Sequence[Curve], full_scale_v: float) -> Figure:
+def threshold_figure(curves: Sequence[Curve], full_scale_v: float, chance: float | None) -> Figure:
     """Fig. 7a: accuracy against threshold, equivalent bits ``log2(V_fs / theta)`` on top."""
-    figure = curve_figure(Panel.THRESHOLD, curves, "readout threshold theta (V)", PAPER_THRESHOLD_V)
+    figure = curve_figure(
+        PANEL_TITLES[Panel.THRESHOLD],
+        curves,
+        "readout threshold theta (readout.threshold_v, V)",
+        chance,
+        paper_x=paper.THRESHOLD_V,
+    )
     ax = figure.axes[0]
     top = ax.secondary_xaxis(
         "top",
@@ -101,15 +127,20 @@ def threshold_figure(curves: Sequence[Curve], full_scale_v: float) -> Figure:
 
 
 def curve_figure(
-    panel: Panel,
+    title: str,
     curves: Sequence[Curve],
     xlabel: str,
-    paper_x: float | None,
+    chance: float | None,
     *,
+    paper_x: float | None = None,
     log: bool = True,
     scale: float = 1.0,
+    ticks: Sequence[str] | None = None,
 ) -> Figure:
-    """Accuracy (%, mean +- fold std) against one swept quantity, one line per model and sweep."""
+    """Accuracy (%, 95 % interval bars) against one swept quantity, one line per model and sweep.
+
+    ``ticks`` labels the positions 0, 1, ... of a swept field that is not a number.
+    """
     figure, ax = _new()
     sweeps = list(dict.fromkeys(c.sweep for c in curves))
     for curve in curves:
@@ -118,22 +149,64 @@ def curve_figure(
         ax.errorbar(
             curve.x * scale,
             100 * curve.mean,
-            yerr=100 * curve.std,
+            yerr=_interval_bars(curve.mean, curve.low, curve.high),
             marker=marker,
-            color=_COLORS.get(curve.model),
+            color=_color(curve.model),
             capsize=3,
             label=label,
         )
-    if log and all(np.all(c.x > 0) for c in curves):
+    if ticks is not None:
+        ax.set_xticks(range(len(ticks)), list(ticks), rotation=30 if len(ticks) > 4 else 0)
+    elif log and all(np.all(c.x > 0) for c in curves):
         # Ticks at the swept values, in plain numbers rather than powers of ten.
         _log_x(ax, FixedLocator(np.unique(np.concatenate([c.x for c in curves])) * scale))
     if paper_x is not None:
         ax.axvline(paper_x * scale, color="grey", linestyle=":", label=f"paper: {paper_x:g}")
-    _finish(ax, PANEL_TITLES[panel], xlabel)
+    _chance(ax, chance)
+    _finish(ax, title, xlabel)
     return figure
 
 
-def metric_figure(fits: Sequence[MetricFit]) -> Figure:
+def sweep_figure(plot: SweepPlot, chance: float | None) -> Figure:
+    """Accuracy along any one-dimensional sweep (:class:`SweepPlot`)."""
+    return curve_figure(
+        plot.title, plot.curves, plot.xlabel, chance, log=plot.log, ticks=plot.ticks
+    )
+
+
+def heatmap_figure(found: Heatmap) -> Figure:
+    """Accuracy (%) of a two-dimensional sweep, one annotated panel per model."""
+    n = len(found.models)
+    width = max(_SIZE_IN[0], (0.7 * len(found.cols) + 2.5) * n + 1.0)
+    figure = Figure(figsize=(width, _SIZE_IN[1] + 0.25 * len(found.rows)), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = np.atleast_1d(figure.subplots(1, n, squeeze=False)[0])
+    values = 100 * found.accuracy
+    finite = values[np.isfinite(values)]
+    low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 100.0)
+    if high - low < 1e-9:
+        low, high = low - 0.5, high + 0.5
+    image = None
+    for ax, model, grid in zip(axes, found.models, values, strict=True):
+        image = ax.imshow(
+            np.ma.masked_invalid(grid), cmap="viridis", vmin=low, vmax=high, aspect="auto"
+        )
+        for (i, j), v in np.ndenumerate(grid):
+            text = f"{v:.1f}" if math.isfinite(v) else "-"
+            dark = math.isfinite(v) and v < (low + high) / 2
+            ax.text(j, i, text, ha="center", va="center", color="white" if dark else "black")
+        ax.set_xticks(range(len(found.cols)), list(found.cols))
+        ax.set_yticks(range(len(found.rows)), list(found.rows))
+        ax.set_xlabel(_wrap(found.col_label, 40))
+        ax.set_ylabel(_wrap(found.row_label, 40))
+        ax.set_title(model.upper())
+    if image is not None:
+        figure.colorbar(image, ax=list(axes), label="accuracy (%)")
+    figure.suptitle(_wrap(found.title, 90))
+    return figure
+
+
+def metric_figure(fits: Sequence[MetricFit], chance: float | None) -> Figure:
     """Fig. 9: accuracy against SSNR (left) and STE (right) with least-squares lines, r and p."""
     figure = Figure(figsize=(_SIZE_IN[0] * 1.8, _SIZE_IN[1]), layout="constrained")
     FigureCanvasAgg(figure)
@@ -141,58 +214,128 @@ def metric_figure(fits: Sequence[MetricFit]) -> Figure:
     labels = {"ssnr_db": "SSNR (dB)", "ste_s2": "STE (s$^2$)"}
     for ax, metric in zip(axes, ("ssnr_db", "ste_s2"), strict=True):
         for fit in (f for f in fits if f.metric == metric):
-            color = _COLORS.get(fit.model)
-            ax.errorbar(fit.x, 100 * fit.mean, yerr=100 * fit.std, fmt="o", color=color, capsize=3)
+            color = _color(fit.model)
+            ax.errorbar(
+                fit.x,
+                100 * fit.mean,
+                yerr=_interval_bars(fit.mean, fit.low, fit.high),
+                fmt="o",
+                color=color,
+                capsize=3,
+            )
             if np.isfinite(fit.slope) and fit.x.size:
                 xs = np.linspace(fit.x.min(), fit.x.max(), 50)
+                stated = math.isfinite(fit.r) and math.isfinite(fit.p)
                 ax.plot(
                     xs,
                     100 * (fit.intercept + fit.slope * xs),
                     color=color,
-                    label=f"{fit.model.upper()}: r = {fit.r:+.2f}, p = {fit.p:.2g}, "
-                    f"n = {fit.x.size}",
+                    label=f"{fit.model.upper()}: "
+                    + (f"r = {fit.r:+.2f}, p = {fit.p:.2g}, " if stated else "")
+                    + f"n = {fit.x.size}",
                 )
         left_out = max((f.left_out for f in fits if f.metric == metric), default=0)
         note = f" ({left_out} infinite left out)" if left_out else ""
+        _chance(ax, chance)
         _finish(ax, f"accuracy against {labels[metric].split()[0]}{note}", labels[metric])
-    figure.suptitle(PANEL_TITLES[Panel.SPIKE_METRICS])
+    figure.suptitle(_wrap(PANEL_TITLES[Panel.SPIKE_METRICS], 90))
     return figure
 
 
-def cost_figure(points: Sequence[CostPoint]) -> Figure:
-    """Accuracy against compute seconds of every distinct point, the Pareto front as a step."""
-    figure, ax = _new()
-    for model in dict.fromkeys(p.model for p in points):
-        mine = [p for p in points if p.model == model]
-        ax.errorbar(
-            [p.seconds for p in mine],
-            [100 * p.mean for p in mine],
-            yerr=[100 * p.std for p in mine],
-            fmt="o",
-            alpha=0.6,
-            color=_COLORS.get(model),
-            capsize=2,
-            label=f"{model.upper()} points",
-        )
-    front = sorted((p for p in points if p.on_front), key=lambda p: p.seconds)
-    if front:
-        ax.step(
-            [p.seconds for p in front],
-            [100 * p.mean for p in front],
-            where="post",
-            color="black",
-            marker="*",
-            markersize=10,
-            label="Pareto front (cheapest design per accuracy)",
-        )
-    if points and min(p.seconds for p in points) > 0:
+def front_figure(front: Front, chance: float | None) -> Figure:
+    """Accuracy against one cost: every design, each model's front as a step, the designs off
+    the front but indistinguishable from it marked, the frame readout as reference lines."""
+    figure, ax = _new(width=_SIZE_IN[0] * 1.6)
+    for model in front.models:
+        color = _color(model)
+        mine = [p for p in front.points if p.model == model]
+        plain = [p for p in mine if not p.on_front and not p.indistinguishable]
+        if plain:
+            ax.errorbar(
+                [p.cost for p in plain],
+                [100 * p.accuracy.mean for p in plain],
+                yerr=_point_bars(plain),
+                fmt="o",
+                alpha=0.5,
+                color=color,
+                capsize=2,
+                label=f"{model.upper()} designs",
+            )
+        marked = [p for p in mine if p.indistinguishable]
+        if marked:
+            ax.errorbar(
+                [p.cost for p in marked],
+                [100 * p.accuracy.mean for p in marked],
+                yerr=_point_bars(marked),
+                fmt="D",
+                markerfacecolor="none",
+                markersize=7,
+                color=color,
+                capsize=2,
+                label=f"{model.upper()} off the front, not significantly less accurate",
+            )
+        line = front.front(model)
+        if line:
+            ax.step(
+                [p.cost for p in line],
+                [100 * p.accuracy.mean for p in line],
+                where="post",
+                color=color,
+                marker="*",
+                markersize=11,
+                label=f"{model.upper()} front (cheapest design per accuracy)",
+            )
+    for (label, value), style in zip(
+        front.references, ("--", "-.", ":", (0, (5, 5))), strict=False
+    ):
+        ax.axvline(value, color="black", linestyle=style, linewidth=1, label=label)
+    costs = [p.cost for p in front.points] + [v for _, v in front.references]
+    if front.cost is not Cost.BITS and costs and min(costs) > 0:
         _log_x(ax, LogLocator(subs=(1.0, 2.0, 5.0)))
-    _finish(ax, PANEL_TITLES[Panel.COST], "compute time per point: all stages (s)")
+        if front.cost is Cost.POWER:
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: si(v, "W")))
+    _chance(ax, chance)
+    _finish(ax, f"Accuracy against {front.cost.short}", front.cost.axis, legend_outside=True)
     return figure
 
 
-def _new() -> tuple[Figure, Axes]:
-    figure = Figure(figsize=_SIZE_IN, layout="constrained")
+def _interval_bars(mean: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
+    """Asymmetric error bars (2, n) in percent from a 95 % interval; None when there is none."""
+    ok = np.isfinite(low) & np.isfinite(high)
+    if not ok.any():
+        return None
+    below = np.where(ok, np.clip(mean - low, 0.0, None), 0.0)
+    above = np.where(ok, np.clip(high - mean, 0.0, None), 0.0)
+    return 100 * np.vstack([below, above])
+
+
+def _point_bars(points) -> np.ndarray | None:
+    return _interval_bars(
+        np.array([p.accuracy.mean for p in points]),
+        np.array([p.accuracy.low for p in points]),
+        np.array([p.accuracy.high for p in points]),
+    )
+
+
+def _color(model: str) -> str:
+    if model in _COLORS:
+        return _COLORS[model]
+    return _OTHER_COLORS[sum(map(ord, model)) % len(_OTHER_COLORS)]
+
+
+def _chance(ax: Axes, chance: float | None) -> None:
+    if chance is not None and math.isfinite(chance):
+        ax.axhline(
+            100 * chance,
+            color="dimgrey",
+            linestyle="--",
+            linewidth=1,
+            label=f"chance ({100 * chance:.3g} %)",
+        )
+
+
+def _new(width: float = _SIZE_IN[0]) -> tuple[Figure, Axes]:
+    figure = Figure(figsize=(width, _SIZE_IN[1]), layout="constrained")
     FigureCanvasAgg(figure)
     return figure, figure.add_subplot()
 
@@ -204,10 +347,19 @@ def _log_x(ax: Axes, ticks: Locator) -> None:
     ax.xaxis.set_minor_formatter(NullFormatter())
 
 
-def _finish(ax: Axes, title: str, xlabel: str) -> None:
-    ax.set_title(title)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("accuracy (%, mean ± std over folds)")
+def _wrap(text: str, width: int) -> str:
+    """Long titles and labels broken into lines (a figure is a few inches wide)."""
+    return textwrap.fill(text, width, break_long_words=False, break_on_hyphens=False)
+
+
+def _finish(ax: Axes, title: str, xlabel: str, *, legend_outside: bool = False) -> None:
+    ax.set_title(_wrap(title, 70), fontsize="medium")
+    ax.set_xlabel(_wrap(xlabel, 80))
+    ax.set_ylabel(YLABEL)
     ax.grid(True, alpha=0.3)
-    if ax.get_legend_handles_labels()[0]:
+    if not ax.get_legend_handles_labels()[0]:
+        return
+    if legend_outside:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    else:
         ax.legend(fontsize="small")

@@ -1,4 +1,9 @@
-"""The figures of the report (panels) and which swept scene fields feed each of them."""
+"""The paper's figures (panels) and the observation time, and which swept fields feed each.
+
+The report's other figures (a curve for any other one-dimensional sweep, a heat map of a 2-D
+sweep, the hardware cost fronts) are named by :mod:`pipeline.report.sweeps` and
+:class:`pipeline.report.designs.Cost`.
+"""
 
 from __future__ import annotations
 
@@ -13,7 +18,6 @@ class Panel(enum.StrEnum):
     TAXELS = "fig8_taxels"
     SPIKE_METRICS = "fig9_ssnr_ste"
     MISMATCH = "fig10_mismatch"
-    COST = "cost_pareto"
     OBSERVATION = "observation_time"
 
 
@@ -23,7 +27,6 @@ PANEL_TITLES = {
     Panel.TAXELS: "Fig. 8: accuracy against the taxel count",
     Panel.SPIKE_METRICS: "Fig. 9: accuracy against SSNR and STE",
     Panel.MISMATCH: "Fig. 10: accuracy against threshold mismatch",
-    Panel.COST: "Accuracy against compute time (Pareto front)",
     Panel.OBSERVATION: "Accuracy against observation time",
 }
 
@@ -38,7 +41,7 @@ PANEL_FIELDS = {
 
 
 def absent(panel: Panel) -> str:
-    """Why ``panel`` has no data: the sweep it needs (not for :attr:`Panel.COST`)."""
+    """Why ``panel`` has no data: the sweep it needs."""
     needs = {
         Panel.THRESHOLD: "a sweep of readout.threshold_v",
         Panel.WINDOW: "a sweep of coding.window_s",

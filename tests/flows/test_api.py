@@ -77,7 +77,7 @@ def test_a_sweep_on_a_given_client_writes_cubes_and_leaves_the_client_open(
     }
     cubes = open_results(root)
     assert list(summary["cubes"]) == ["threshold", "window"] == sorted(cubes)
-    assert cubes["window"]["accuracy"].dims == ("window_s", "model", "fold")
+    assert cubes["window"]["accuracy"].dims == ("window_s", "model", "repeat", "fold")
     assert len((root / RUN_LOG).read_text().splitlines()) == 1
 
     def no_cluster(*args, **kwargs):

@@ -64,7 +64,8 @@ def test_noisy_scene_reports_finite_spike_metrics(capsys, tiny_scene):
 
 
 def test_threshold_above_the_signal_range_trains_without_nan(capsys, tiny_scene):
-    extra = "[readout]\nthreshold_v = 0.99\n"
+    # Rails at +-0.4 V: no swing can reach a 0.99 V step, whatever the recordings' peaks.
+    extra = "[readout]\nthreshold_v = 0.99\n[readout.effects]\nsaturation = { rail_v = 0.4 }\n"
     code, out, err = run_cli(capsys, "run", "--scene", tiny_scene(extra), "--json")
     assert code == 0, err
     result = json.loads(out)

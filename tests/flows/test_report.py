@@ -1,9 +1,13 @@
 """write_report: a report and its figures rendered into a whole folder (self-contained HTML,
-Markdown, PNG and SVG figures), replacing an old report but never a user's folder."""
+Markdown, PNG and SVG figures), replacing an old report but never a user's folder; the energy
+options of ``eskin report``, checked before anything is read or written."""
 
 import pytest
 
-from flows.report import write_report
+from flows.cli import main
+from flows.report import energy_model, write_report, write_run_report
+from pipeline.errors import EskinError
+from pipeline.hardware import EnergyModel
 from pipeline.report import Panel, build_report
 from pipeline.report.figures import draw_report
 from storage import StoreError
@@ -22,15 +26,15 @@ def test_report_folder_holds_every_output(tmp_path, small_report):
     report, figures = small_report
     page = write_report(tmp_path / "out", report, figures)
     assert page == tmp_path / "out" / "report.html"
-    for panel in figures:
+    for stem in figures:
         for ext in ("png", "svg"):
-            assert (tmp_path / "out" / "figures" / f"{panel.value}.{ext}").stat().st_size > 1000
+            assert (tmp_path / "out" / "figures" / f"{stem}.{ext}").stat().st_size > 1000
     html = page.read_text()
     assert html.count("<svg") == len(figures) and "src=" not in html and "<script" not in html
     markdown = (tmp_path / "out" / "report.md").read_text()
     assert f"(figures/{Panel.THRESHOLD.value}.png)" in markdown
     assert "Fig. 8: accuracy against the taxel count: not in this run" in markdown
-    assert "| paper (the paper's figures) |" in markdown
+    assert "| the paper | on-chip spikes (3.5 b, variable) |" in markdown
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no partial left behind
 
 
@@ -50,3 +54,41 @@ def test_a_report_replaces_an_old_report_but_never_a_users_folder(tmp_path, smal
     (tmp_path / "file").write_text("x")
     with pytest.raises(StoreError, match="not a directory"):
         write_report(tmp_path / "file", report, figures)
+
+
+def test_energy_options_set_the_energy_model_in_si_units():
+    model = energy_model(event_energy_pj=20.0, adc_fom_fj=0.5, link_energy_pj_per_bit=0.0)
+    assert model == EnergyModel(
+        event_energy_j=20e-12, adc_fom_j_per_step=0.5e-15, link_energy_j_per_bit=0.0
+    )
+    assert energy_model() == EnergyModel()
+
+
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [
+        ("--event-energy-pj", "-1"),
+        ("--adc-fom-fj", "nan"),
+        ("--link-energy-pj-per-bit", "inf"),
+        ("--adc-fom-fj", "ten"),
+    ],
+)
+def test_a_bad_energy_option_is_one_line_naming_it_and_writes_nothing(
+    option, value, tmp_path, capsys
+):
+    root = tmp_path / "root"
+    root.mkdir()
+    with pytest.raises(SystemExit) as exited:  # argparse reports a bad option value and exits
+        main(["report", "--root", str(root), option, value])
+    err = capsys.readouterr().err
+    assert exited.value.code == 2
+    assert err.count("\n") == 1 and err.startswith("eskin: error: ") and option in err
+    assert list(root.iterdir()) == [] and [p.name for p in tmp_path.iterdir()] == ["root"]
+
+
+def test_write_run_report_checks_energy_before_reading_anything(tmp_path):
+    with pytest.raises(EskinError, match=r"--event-energy-pj -1: need a finite number >= 0"):
+        write_run_report(tmp_path, event_energy_pj=-1.0, adc_fom_fj=float("nan"))
+    with pytest.raises(EskinError, match=r"--adc-fom-fj nan"):
+        write_run_report(tmp_path, adc_fom_fj=float("nan"))
+    assert list(tmp_path.iterdir()) == []

@@ -9,10 +9,17 @@ import xarray as xr
 
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.scene import Model, Scene
+from pipeline.training import CrossValidation
 
 
-def fake_result(ssnr_db: float) -> SimpleNamespace:
-    cv = SimpleNamespace(mean=0.5, std=0.1, fold_accuracy=np.array([0.4, 0.6]))
+def fake_result(ssnr_db: float, labels=None) -> SimpleNamespace:
+    cv = CrossValidation(
+        Model.FFNN,
+        np.array([0.5, 0.5]),
+        1.0,
+        predicted=np.array([0, 1, 1, 1]),
+        test_fold=np.array([0, 0, 1, 1]),
+    )
     metrics = SimpleNamespace(
         ssnr_db=ssnr_db,
         ste_s2=0.0,
@@ -30,12 +37,15 @@ def fake_result(ssnr_db: float) -> SimpleNamespace:
         metrics=metrics,
         accuracy={Model.FFNN: cv},
         timings_s={"load": 0.25, "train_ffnn": 1.0},
+        labels=labels,
     )
 
 
 def test_result_summary_is_plain_json_once_infinities_are_strings():
     summary = result_summary(fake_result(math.inf))
-    assert summary["accuracy"] == {"ffnn": {"mean": 0.5, "std": 0.1, "folds": [0.4, 0.6]}}
+    assert summary["accuracy"] == {
+        "ffnn": {"mean": 0.5, "std": 0.0, "folds": [0.5, 0.5], "repeats": 1}
+    }  # no labels: no interval
     assert (summary["taxels"], summary["chance"]) == (4, 1 / 12)
     text = json.dumps(json_safe(summary), allow_nan=False)
     assert json.loads(text)["ssnr_db"] == "inf"
@@ -48,15 +58,28 @@ def test_json_safe_names_every_non_finite_number_nested():
 
 def test_format_summary_names_models_and_an_infinite_ssnr():
     text = format_summary(result_summary(fake_result(math.inf)))
-    assert "FFNN  accuracy  50.0 % +- 10.0 % over 2 folds" in text
+    assert "FFNN  accuracy  50.0 %, fold spread +- 0.0 % over 2 folds" in text
     assert "SSNR inf (REAL = TRUE) dB" in text and "(total 1.2)" in text
     assert "SSNR 12.35 dB" in format_summary(result_summary(fake_result(12.345)))
+
+
+def test_the_summary_gives_the_wilson_interval_over_recordings():
+    """Two of four recordings right: scipy's Wilson interval for 2 of 4."""
+    from scipy import stats
+
+    summary = result_summary(fake_result(1.0, labels=np.array([0, 0, 1, 0])))
+    ci = stats.binomtest(2, 4).proportion_ci(0.95, method="wilson")
+    acc = summary["accuracy"]["ffnn"]
+    assert (acc["low"], acc["high"]) == (ci.low, ci.high)
+    assert acc["interval"].startswith("Wilson")
+    text = format_summary(summary)
+    assert f"50.0 % (95 % interval {100 * ci.low:.1f}-{100 * ci.high:.1f} %), fold spread" in text
 
 
 def test_format_sweep_summary_uses_the_given_cubes_and_their_best_points(tmp_path):
     accuracy = np.array([[[0.2, 0.4], [0.9, 0.7]], [[0.6, 0.6], [0.1, 0.1]]])
     cube = xr.Dataset(
-        {"accuracy": (("threshold_v", "model", "fold"), accuracy)},
+        {"accuracy_mean": (("threshold_v", "model"), accuracy.mean(axis=-1))},
         coords={"threshold_v": [0.05, 0.09], "model": ["ffnn", "cnn"]},
     )
     summary = {

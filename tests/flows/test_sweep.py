@@ -41,7 +41,7 @@ def test_cubes_are_labelled(smoke_sweep):
     cubes = open_results(smoke_sweep[0])
     assert set(cubes) == SMOKE_SWEEPS
     threshold = cubes["threshold"]
-    assert threshold["accuracy"].dims == ("threshold_v", "model", "fold")
+    assert threshold["accuracy"].dims == ("threshold_v", "model", "repeat", "fold")
     assert list(threshold["threshold_v"].values) == [0.05, 0.09]
     assert threshold["threshold_v"].attrs == {
         "field": "readout.threshold_v",
@@ -49,9 +49,24 @@ def test_cubes_are_labelled(smoke_sweep):
         "long_name": "comparator threshold (level-crossing step)",
     }
     assert list(threshold["model"].values) == ["ffnn", "cnn"]
-    assert threshold.sizes["fold"] == 4
+    assert threshold.sizes["fold"] == 4 and threshold.sizes["repeat"] == 1
     acc = threshold["accuracy"].values
     assert np.all((acc >= 0) & (acc <= 1))
+    # Every recording's out-of-fold prediction: each is tested in exactly one fold, and the
+    # fold accuracies are the fractions of their recordings predicted right.
+    assert threshold.sizes["recording"] == 48
+    assert threshold["correct"].dims == ("threshold_v", "model", "repeat", "recording")
+    folds = threshold["test_fold"].values
+    assert set(np.unique(folds)) == {0, 1, 2, 3}
+    correct = threshold["correct"].values
+    assert set(np.unique(correct)) <= {0, 1}
+    for f in range(4):
+        in_fold = folds[:, None, :, :] == f
+        per_fold = (correct * in_fold).sum(-1) / in_fold.sum(-1)
+        np.testing.assert_allclose(per_fold, acc[..., f])
+    np.testing.assert_allclose(threshold["accuracy_mean"], correct.mean(axis=(-2, -1)))
+    low, high = threshold["accuracy_low"].values, threshold["accuracy_high"].values
+    assert np.all((low <= threshold["accuracy_mean"].values) & (threshold["accuracy_mean"] <= high))
     for name in ("ssnr_db", "ste_s2", "event_rate_hz", "data_rate_bps", "equivalent_bits"):
         assert threshold[name].dims == ("threshold_v",) and "units" in threshold[name].attrs
     assert threshold["seconds"].dims == ("threshold_v", "stage")
@@ -72,7 +87,7 @@ def test_cubes_are_labelled(smoke_sweep):
 
 def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
     noise = open_results(smoke_sweep[0])["noise"]
-    assert noise["accuracy"].dims == ("amplifier_noise_sigma_v", "model", "fold")
+    assert noise["accuracy"].dims == ("amplifier_noise_sigma_v", "model", "repeat", "fold")
     assert "comparator_noise_sigma_v" in noise.coords
     assert noise["correlation_r"].dims == ("model", "metric", "coefficient")
     assert list(noise["metric"].values) == ["ssnr_db", "ste_s2"]
@@ -87,11 +102,12 @@ def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
 
 def test_xarray_queries_from_the_readme(smoke_sweep):
     cubes = open_results(smoke_sweep[0])
-    mean = cubes["threshold"]["accuracy"].mean("fold")
+    mean = cubes["threshold"]["accuracy_mean"]
     best = mean.sel(model="ffnn").idxmax("threshold_v")
     assert float(best) in (0.05, 0.09)
     window = cubes["window"].sel(window_s=0.2)["accuracy"]
-    assert window.dims == ("model", "fold")
+    assert window.dims == ("model", "repeat", "fold")
+    assert window.std(("repeat", "fold")).dims == ("model",)
 
 
 def test_window_sweep_reuses_spike_trains(smoke_sweep):

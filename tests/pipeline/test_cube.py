@@ -7,9 +7,11 @@ import types
 import numpy as np
 import pytest
 import xarray as xr
+from scipy import stats
 
 from pipeline.cube import (
     CUBE_VARIABLES,
+    OutOfFold,
     RecordingsInfo,
     build_cube,
     field_attrs,
@@ -94,9 +96,15 @@ def test_product_cube_layout_and_units():
         return ResultEntry({"ffnn": folds, "cnn": folds / 2}, {"train_ffnn": 1.0}, metrics())
 
     cube = build(grid, sweep, entries(grid, sweep, make))
-    assert cube["accuracy"].dims == ("threshold_v", "window_s", "model", "fold")
-    assert cube["accuracy"].shape == (2, 3, 2, 4)
-    assert cube["accuracy"].sel(threshold_v=0.1, window_s=0.3, model="ffnn").values[0] == 0.1 + 0.02
+    assert cube["accuracy"].dims == ("threshold_v", "window_s", "model", "repeat", "fold")
+    assert cube["accuracy"].shape == (2, 3, 2, 1, 4)
+    one = cube["accuracy"].sel(threshold_v=0.1, window_s=0.3, model="ffnn", repeat=0)
+    assert one.values[0] == 0.1 + 0.02
+    # Without predictions: the mean over folds, and no interval.
+    assert cube["accuracy_mean"].dims == ("threshold_v", "window_s", "model")
+    assert cube["accuracy_mean"].sel(threshold_v=0.1, window_s=0.3, model="ffnn") == 0.1 + 0.02
+    assert np.isnan(cube["accuracy_low"]).all() and cube["accuracy_low"].attrs["interval"] == "none"
+    assert "predicted" not in cube and "recording" not in cube.dims
     assert cube["accuracy"].sel(model="cnn").max() == pytest.approx(0.06)
     assert cube["window_s"].attrs == {
         "field": "coding.window_s",
@@ -116,6 +124,87 @@ def test_product_cube_layout_and_units():
         cube["readout.equivalent_bits"].values, [math.log2(1 / 0.05), math.log2(1 / 0.1)]
     )
     assert "correlation_r" not in cube
+
+
+def out_of_fold(n_correct: dict[str, int], names, labels, repeats=1) -> OutOfFold:
+    """Predictions with the first ``n_correct[model]`` recordings right and the others wrong."""
+    labels = np.asarray(labels)
+    predicted = {}
+    for model, k in n_correct.items():
+        guess = np.where(np.arange(len(labels)) < k, labels, (labels + 1) % 3)
+        predicted[model] = np.tile(guess, (repeats, 1))
+    folds = np.tile(np.arange(len(labels)) % 2, (repeats, 1))
+    return OutOfFold(tuple(names), labels, predicted, folds)
+
+
+def test_out_of_fold_predictions_and_intervals():
+    """``predicted``, ``correct`` and ``test_fold`` along the union of the points' recordings,
+    and ``accuracy_mean`` with its Wilson interval from the predictions."""
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"per_class": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
+    )
+    sweep = grid.sweeps[0]
+    names = [f"r{i}" for i in range(6)]
+    labels = [0, 1, 2, 0, 1, 2]
+
+    def make(point):
+        if point.index == (0,):  # four recordings only: the others are -1 in the cube
+            oof = out_of_fold({"ffnn": 4, "cnn": 2}, names[:4], labels[:4])
+        else:
+            oof = out_of_fold({"ffnn": 6, "cnn": 0}, names, labels)
+        return ResultEntry({"ffnn": [0.5, 0.5], "cnn": [0.5, 0.5]}, {}, metrics(), None, oof)
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    assert cube["predicted"].dims == ("threshold_v", "model", "repeat", "recording")
+    assert cube["recording"].values.tolist() == names
+    assert cube["label"].values.tolist() == labels
+    first = cube["correct"].sel(threshold_v=0.05, repeat=0)
+    assert first.sel(model="ffnn").values.tolist() == [1, 1, 1, 1, -1, -1]
+    assert first.sel(model="cnn").values.tolist() == [1, 1, 0, 0, -1, -1]
+    assert cube["test_fold"].sel(threshold_v=0.05, repeat=0).values.tolist() == [0, 1, 0, 1, -1, -1]
+    assert cube["predicted"].dtype == np.int16 and cube["correct"].dtype == np.int8
+    mean = cube["accuracy_mean"]
+    assert mean.sel(threshold_v=0.05).values.tolist() == [1.0, 0.5]
+    assert mean.sel(threshold_v=0.1).values.tolist() == [1.0, 0.0]
+    ci = stats.binomtest(2, 4).proportion_ci(0.95, method="wilson")
+    low = float(cube["accuracy_low"].sel(threshold_v=0.05, model="cnn"))
+    high = float(cube["accuracy_high"].sel(threshold_v=0.05, model="cnn"))
+    assert (low, high) == pytest.approx((ci.low, ci.high), abs=1e-12)
+    assert cube["accuracy_low"].attrs["interval"].startswith("Wilson")
+    assert cube["accuracy_high"].sel(threshold_v=0.1, model="ffnn") == 1.0
+    for name in ("predicted", "correct", "test_fold", "accuracy_mean", "recording", "label"):
+        assert cube[name].attrs["long_name"]
+
+
+def test_repeats_are_a_dimension_and_the_interval_a_bootstrap():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "one": {"set": {"training.repeats": 3}, "axes": {"readout.threshold_v": [0.05]}}
+            },
+        }
+    )
+    sweep = grid.sweeps[0]
+    names, labels = [f"r{i}" for i in range(6)], [0, 1, 2, 0, 1, 2]
+
+    def make(point):
+        oof = out_of_fold({"ffnn": 3, "cnn": 3}, names, labels, repeats=3)
+        return ResultEntry(
+            {"ffnn": np.full((3, 2), 0.5), "cnn": np.full((3, 2), 0.5)}, {}, metrics(), None, oof
+        )
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    assert cube.sizes["repeat"] == 3
+    assert cube["accuracy_mean"].sel(model="ffnn").item() == 0.5
+    assert "bootstrap" in cube["accuracy_low"].attrs["interval"]
+    low, high = (
+        cube["accuracy_low"].sel(model="ffnn").item(),
+        cube["accuracy_high"].sel(model="ffnn").item(),
+    )
+    assert 0 <= low < 0.5 < high <= 1
+    again = build(grid, sweep, entries(grid, sweep, make))  # the bootstrap's seed is fixed
+    xr.testing.assert_identical(again, cube)
 
 
 def test_every_point_has_its_result_key():

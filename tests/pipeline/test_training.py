@@ -21,6 +21,7 @@ from pipeline.training import (
     FoldAdam,
     cross_validate,
     fold_loss,
+    repeat_seed,
     standardize,
     stratified_folds,
 )
@@ -180,10 +181,49 @@ def test_learns_separable_classes(model):
     frames, labels = separable()
     cv = cross_validate(frames, labels, model, SMALL)
     assert isinstance(cv, CrossValidation)
-    assert cv.fold_accuracy.shape == (5,) and cv.fold_accuracy.dtype == np.float64
+    assert cv.fold_accuracy.shape == (1, 5) and cv.fold_accuracy.dtype == np.float64
     assert cv.mean > 0.9, cv.fold_accuracy
     assert cv.seconds > 0
     assert np.isfinite(cv.train_loss).all()
+
+
+@pytest.mark.parametrize("model", list(Model))
+def test_out_of_fold_predictions_agree_with_fold_accuracy(model):
+    """Every recording is tested once per repeat; its fold's accuracy is the fraction of that
+    fold's recordings whose out-of-fold prediction equals the label."""
+    frames, labels = separable(extra=1, contrast=0.7)  # hard enough for errors
+    labels = np.array([3, 7, 42, 50])[labels]  # predictions are in the caller's labels
+    spec = TrainingSpec(epochs=4, batch_size=8, folds=5, hidden_units=8, seed=5, repeats=2)
+    cv = cross_validate(frames, labels, model, spec)
+    assert cv.predicted.shape == cv.test_fold.shape == (2, len(labels))
+    assert set(np.unique(cv.predicted)) <= {3, 7, 42, 50}
+    for repeat in range(2):
+        splits = stratified_folds(
+            np.unique(labels, return_inverse=True)[1], 5, repeat_seed(5, repeat)
+        )
+        for fold, (_, test) in enumerate(splits):
+            np.testing.assert_array_equal(
+                np.flatnonzero(cv.test_fold[repeat] == fold), np.sort(test)
+            )
+            correct = cv.predicted[repeat, test] == labels[test]
+            assert cv.fold_accuracy[repeat, fold] == correct.mean()
+    assert not np.array_equal(cv.test_fold[0], cv.test_fold[1])  # a fresh split per repeat
+
+
+def test_first_repeat_is_the_single_cross_validation():
+    """Repeat 0 uses the training seed itself: ``repeats = 1`` is the paper's procedure, and
+    more repeats only add rows."""
+    frames, labels = separable(seed=2)
+    one = TrainingSpec(epochs=3, batch_size=8, folds=5, hidden_units=8, seed=11)
+    three = TrainingSpec(**{**vars(one), "repeats": 3})
+    a = cross_validate(frames, labels, Model.FFNN, one)
+    b = cross_validate(frames, labels, Model.FFNN, three)
+    assert b.fold_accuracy.shape == (3, 5)
+    np.testing.assert_array_equal(a.fold_accuracy[0], b.fold_accuracy[0])
+    np.testing.assert_array_equal(a.predicted[0], b.predicted[0])
+    assert repeat_seed(11, 0) == 11
+    assert len({repeat_seed(11, r) for r in range(50)}) == 50
+    assert all(0 <= repeat_seed(2**63 - 1, r) < 2**63 for r in range(5))
 
 
 def test_label_shuffled_noise_is_near_chance():
@@ -210,6 +250,7 @@ def test_batched_equals_sequential_with_unequal_fold_sizes(model):
     sequential = cross_validate(frames, labels, model, SMALL, batched=False)
     assert batched.mean < 1  # the comparison is not trivially 1 == 1
     np.testing.assert_array_equal(batched.fold_accuracy, sequential.fold_accuracy)
+    np.testing.assert_array_equal(batched.predicted, sequential.predicted)
     np.testing.assert_allclose(batched.train_loss, sequential.train_loss, rtol=0, atol=1e-5)
 
 
@@ -299,7 +340,7 @@ def test_arbitrary_integer_labels_and_float_frames():
     frames, labels = separable(n_classes=3)
     labels = np.array([3, 7, 42])[labels]
     cv = cross_validate(frames.astype(np.float64), labels, Model.FFNN, SMALL)
-    assert cv.fold_accuracy.shape == (5,)
+    assert cv.fold_accuracy.shape == (1, 5)
 
 
 def test_bad_shapes_are_rejected():
@@ -312,6 +353,7 @@ def test_bad_shapes_are_rejected():
 
 def test_cross_validation_summary():
     cv = CrossValidation(Model.CNN, np.array([0.5, 1.0, 0.75, 0.75]), 1.0)
+    assert cv.fold_accuracy.shape == (1, 4)  # one fold row is one repeat
     assert cv.mean == pytest.approx(0.75)
     assert cv.std == pytest.approx(np.sqrt(0.125 / 4))  # population std, ddof=0
     with pytest.raises(ValueError):

@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 import storage
 import storage.store as store_module
-from pipeline.cube import RecordingsInfo
+from pipeline.cube import OutOfFold, RecordingsInfo
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Model
@@ -270,15 +270,73 @@ def test_results_round_trip_keeps_model_order(store):
     read = store.read_result(KEY)
     assert list(read.fold_accuracy) == ["ffnn", "cnn"]
     assert all(type(model) is str for model in read.fold_accuracy)
-    np.testing.assert_array_equal(bits(read.fold_accuracy["ffnn"]), bits([0.5, 1, 0, NEG_NAN]))
-    np.testing.assert_array_equal(bits(read.fold_accuracy["cnn"]), bits([0.25, 0.75, 1 / 3, -0.0]))
+    # A (folds,) row is one repeat: read back as (1, folds).
+    np.testing.assert_array_equal(bits(read.fold_accuracy["ffnn"]), bits([[0.5, 1, 0, NEG_NAN]]))
+    np.testing.assert_array_equal(
+        bits(read.fold_accuracy["cnn"]), bits([[0.25, 0.75, 1 / 3, -0.0]])
+    )
     assert read.seconds == {"train_ffnn": 1.2, "train_cnn": 5.0}
     for name in ("ssnr_db", "ste_s2", "equivalent_bits"):  # +inf, -inf, a negative NaN
         assert bits(getattr(read.metrics, name)) == bits(getattr(entry.metrics, name))
     with xr.open_zarr(store.path / "results" / KEY, consolidated=False, zarr_format=3) as ds:
-        assert ds["accuracy"].dims == ("model", "fold")
+        assert ds["accuracy"].dims == ("model", "repeat", "fold")
         assert ds["model"].values.tolist() == ["ffnn", "cnn"]
+        assert "predicted" not in ds  # kept no predictions: none written
     assert read.recordings is None  # stated nothing: read as unknown, never as empty
+    assert read.out_of_fold is None
+
+
+OUT_OF_FOLD = OutOfFold(
+    recording_names=("bark/01", "bark/02", "µ-foam/01"),
+    labels=np.array([0, 0, 1]),
+    predicted={"ffnn": np.array([[0, 1, 1], [0, 0, 1]]), "cnn": np.array([[1, 1, 1], [0, 0, 0]])},
+    test_fold=np.array([[0, 1, 0], [1, 0, 0]]),
+)
+
+
+def test_results_round_trip_out_of_fold_predictions_exactly(store):
+    accuracy = {"ffnn": [[0.5, 1.0], [1.0, 1.0]], "cnn": [[0.5, 0.5], [0.5, 0.5]]}
+    store.write_result(KEY, ResultEntry(accuracy, {}, metrics(), None, OUT_OF_FOLD))
+    read = store.read_result(KEY)
+    np.testing.assert_array_equal(read.fold_accuracy["ffnn"], accuracy["ffnn"])
+    oof = read.out_of_fold
+    assert oof.recording_names == OUT_OF_FOLD.recording_names
+    assert list(oof.predicted) == ["ffnn", "cnn"]
+    for model, values in OUT_OF_FOLD.predicted.items():
+        assert oof.predicted[model].dtype == np.int64
+        np.testing.assert_array_equal(oof.predicted[model], values)
+    np.testing.assert_array_equal(oof.labels, OUT_OF_FOLD.labels)
+    np.testing.assert_array_equal(oof.test_fold, OUT_OF_FOLD.test_fold)
+
+
+def test_out_of_fold_predictions_must_match_the_models_and_repeats(store):
+    with pytest.raises(ValueError, match="predictions of"):
+        store.write_result(
+            KEY, ResultEntry({"ffnn": [[0.5], [0.5]]}, {}, metrics(), None, OUT_OF_FOLD)
+        )
+    with pytest.raises(ValueError, match="2 repeats, accuracy has 1"):
+        store.write_result(
+            KEY, ResultEntry({"ffnn": [0.5], "cnn": [0.5]}, {}, metrics(), None, OUT_OF_FOLD)
+        )
+    with pytest.raises(ValueError, match="labels"):
+        OutOfFold(("a", "b"), np.array([0]), {}, np.zeros((1, 2)))
+    assert not store.has("results", KEY)  # nothing half-written
+
+
+def test_results_written_before_repeats_read_as_one_repeat(store):
+    """An entry with ``accuracy`` (model, fold), as written before repeats existed."""
+    store.write_result(KEY, ResultEntry({"ffnn": [0.5, 0.25]}, {}, metrics()))
+    group = zarr.open_group(store.path / "results" / KEY, mode="r+")
+    stored = group["accuracy"]
+    old = stored[:][:, 0]  # (model, fold)
+    attrs = dict(stored.attrs)
+    del group["accuracy"]
+    group.create_array("accuracy", data=old, dimension_names=["model", "fold"]).attrs.update(attrs)
+    digests = dict(group.attrs["sha256"])
+    digests["accuracy"] = store_module._digest(old)
+    group.attrs["sha256"] = digests
+    read = store.read_result(KEY)
+    np.testing.assert_array_equal(read.fold_accuracy["ffnn"], [[0.5, 0.25]])
 
 
 @pytest.mark.parametrize(
@@ -513,7 +571,7 @@ def test_unreadable_metadata_is_corruption_and_discard_allows_recompute(store):
         store.read_result(KEY)
     store.discard(EntryKind.RESULTS, KEY)
     store.write_result(KEY, entry)
-    np.testing.assert_array_equal(store.read_result(KEY).fold_accuracy["ffnn"], [0.5, 0.25])
+    np.testing.assert_array_equal(store.read_result(KEY).fold_accuracy["ffnn"], [[0.5, 0.25]])
 
 
 def test_entry_of_another_kind_is_corruption(store):

@@ -1,28 +1,35 @@
-"""What accuracy costs: distinct points priced per model, the Pareto front, observation time."""
+"""What accuracy costs: distinct designs priced per model, the Pareto front, observation time."""
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from pipeline.hardware import EnergyModel
 from pipeline.report import Panel, build_report
 from pipeline.report.cost import pareto_front, time_to_accuracy
+from pipeline.report.designs import Cost, cost
 from tests.report_helpers import make_cubes
 
 
-def test_cost_points_are_distinct_and_priced_per_model():
+def test_designs_are_distinct_and_priced_per_model():
     cubes = make_cubes()
     report = build_report(cubes)
-    keys = [(p.key, p.model) for p in report.cost_points]
+    keys = [d.key for d in report.designs]
     assert len(keys) == len(set(keys))
-    shared = [p for p in report.cost_points if len(p.sweeps) > 1]
+    shared = [d for d in report.designs if len(d.sweeps) > 1]
     assert shared, "the operating point is in several sweeps and must be counted once"
-    one = next(p for p in report.cost_points if p.model == "ffnn" and p.label.startswith("taxels"))
+    (base,) = shared
+    assert set(base.sweeps) == {"threshold", "window"}
+    assert base.label == "readout.threshold_v = 0.09 V, coding.window_s = 0.1 s"
+    one = next(d for d in report.designs if d.label == "array.rows = 1, array.cols = 1")
     # load + readout (per taxel) + coding + train_ffnn; train_cnn is not the FFNN's cost.
-    assert one.seconds == 0.1 + 0.01 * 1 + 0.02 + 0.5
-    cost = report.sweep_cost
-    assert cost.n_points == len({p.key for p in report.cost_points})
-    assert dict(cost.stage_seconds)["load"] == pytest.approx(0.1 * cost.n_points)
+    assert cost(one, "ffnn", Cost.COMPUTE, EnergyModel()) == 0.1 + 0.01 * 1 + 0.02 + 0.5
+    compute = next(f for f in report.fronts if f.cost is Cost.COMPUTE)
+    assert compute.front("ffnn")[0].design is one
+    total = report.sweep_cost
+    assert total.n_points == len(report.designs)
+    assert dict(total.stage_seconds)["load"] == pytest.approx(0.1 * total.n_points)
 
 
 @given(st.lists(st.tuples(st.integers(0, 20), st.integers(0, 20)), min_size=1, max_size=30))

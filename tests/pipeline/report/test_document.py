@@ -9,7 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from pipeline.hardware import EnergyModel
 from pipeline.report import FrameReadout, Panel, SweepRun, build_report
+from pipeline.report.designs import Cost
 from pipeline.report.document import report_blocks, report_files
 from pipeline.report.figures import draw_report
 from pipeline.report.render import render_markdown
@@ -23,7 +25,7 @@ def golden_markdown(write: bool = False) -> str:
     """report.md of :func:`make_cubes` with a 12-bit frame readout and one logged run."""
     runs = (SweepRun("2024-01-01T00:00:00+00:00", "t|x", 10, 2, 8, 12.5),)
     report = build_report(make_cubes(), frame=FrameReadout(12, 2000.0), runs=runs)
-    text = render_markdown(report_blocks(report, set(report.panels), version=VERSION))
+    text = render_markdown(report_blocks(report, set(report.figure_stems), version=VERSION))
     if write:
         GOLDEN.write_text(text, encoding="utf-8")
     return text
@@ -43,11 +45,12 @@ def test_report_files_are_the_pages_and_every_figure_twice(small):
     report, figures = small
     calls = []
     files = report_files(report, figures, version=VERSION, on_figure=lambda: calls.append(1))
-    stems = [p.value for p in figures]
+    stems = list(figures)
+    assert stems == [Panel.THRESHOLD.value, Panel.MISMATCH.value, *(c.stem for c in Cost)]
     assert set(files) == {"report.md", "report.html"} | {
         f"figures/{s}.{ext}" for s in stems for ext in ("png", "svg")
     }
-    assert len(calls) == len(figures) == 3
+    assert len(calls) == len(figures)
     assert all(files[f"figures/{s}.png"].startswith(b"\x89PNG") for s in stems)
     html = files["report.html"].decode()
     assert html.count("<svg") == len(figures) and "<?xml" not in html
@@ -57,7 +60,21 @@ def test_report_files_are_the_pages_and_every_figure_twice(small):
 
 def test_a_panel_not_drawn_says_so():
     report = build_report(make_cubes({"threshold": PAPER_LIKE_SWEEPS["threshold"]}))
-    markdown = render_markdown(report_blocks(report, {Panel.COST}, version=VERSION))
+    markdown = render_markdown(report_blocks(report, {Cost.COMPUTE.stem}, version=VERSION))
     assert f"{Panel.THRESHOLD.value}.png" not in markdown
     assert "Fig. 7a: accuracy against the readout threshold: not drawn." in markdown
-    assert f"(figures/{Panel.COST.value}.png)" in markdown
+    assert f"(figures/{Cost.COMPUTE.stem}.png)" in markdown
+    assert f"{Cost.DATA_RATE.stem}.png" not in markdown
+
+
+def test_the_report_opens_with_the_answer_and_names_its_assumptions():
+    markdown = golden_markdown()
+    headings = [line for line in markdown.splitlines() if line.startswith("## ")]
+    assert headings[:3] == [
+        "## The answer: the cheapest design as accurate as the best",
+        "## Against the paper",
+        "## Table I",
+    ]
+    assert "Holm-corrected over these 18 comparisons" in markdown
+    for sentence in EnergyModel().assumptions():
+        assert f"- {sentence}" in markdown

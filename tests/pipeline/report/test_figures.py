@@ -1,17 +1,26 @@
-"""Figures: one per panel with data, each drawn (not blank), labelled with units, no pyplot."""
+"""Figures: one per stem with data, drawn (not blank), labelled with units, chance on every
+accuracy axis, 95 % intervals as error bars, a curve for any 1-D sweep, a heat map for 2-D."""
 
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from pipeline.report import Panel, build_report
-from pipeline.report.figures import draw_report
+from pipeline.report.designs import Cost
+from pipeline.report.figures import YLABEL, draw_report
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
+
+CHANCE_PERCENT = 100 / 12
 
 
 @pytest.fixture(scope="module")
-def figures():
-    return draw_report(build_report(make_cubes()))
+def cubes():
+    return make_cubes()
+
+
+@pytest.fixture(scope="module")
+def figures(cubes):
+    return draw_report(build_report(cubes))
 
 
 def ink(figure) -> float:
@@ -21,32 +30,113 @@ def ink(figure) -> float:
     return float(np.mean(np.any(rgb < 250, axis=-1)))
 
 
-def test_every_panel_is_drawn_and_not_blank(figures):
-    assert list(figures) == list(Panel)
-    for panel, figure in figures.items():
-        assert ink(figure) > 0.02, panel
+def accuracy_axes(figure):
+    return [ax for ax in figure.axes if ax.get_ylabel() == YLABEL]
+
+
+def chance_lines(ax):
+    return [
+        line
+        for line in ax.get_lines()
+        if np.allclose(line.get_ydata(), CHANCE_PERCENT) and line.get_linestyle() == "--"
+    ]
+
+
+def test_every_figure_is_drawn_and_not_blank(figures):
+    panels = [p.value for p in Panel]
+    fronts = [c.stem for c in Cost]
+    assert list(figures) == [*panels, "sweep_noise", *fronts]
+    for stem, figure in figures.items():
+        assert ink(figure) > 0.02, stem
 
 
 def test_axes_are_labelled_with_units(figures):
-    for panel, figure in figures.items():
+    for stem, figure in figures.items():
         for ax in figure.axes:
             if ax.get_xlabel():  # secondary axes label themselves
-                assert "(" in ax.get_xlabel() and ")" in ax.get_xlabel(), panel
-        assert "accuracy (%" in figure.axes[0].get_ylabel()
-    main = figures[Panel.THRESHOLD].axes[0]
+                assert "(" in ax.get_xlabel() and ")" in ax.get_xlabel(), stem
+        assert accuracy_axes(figure), stem
+    main = figures[Panel.THRESHOLD.value].axes[0]
     top = [ax for ax in main.child_axes if ax.get_xlabel().endswith("(bit)")]
     assert top, "Fig. 7a has the equivalent bit resolution on a second axis"
 
 
-def test_both_models_and_error_bars_are_drawn(figures):
-    labels = figures[Panel.WINDOW].axes[0].get_legend_handles_labels()[1]
+def test_every_accuracy_axis_has_a_chance_line(figures):
+    for stem, figure in figures.items():
+        for ax in accuracy_axes(figure):
+            assert len(chance_lines(ax)) == 1, stem
+            assert "chance (8.33 %)" in ax.get_legend_handles_labels()[1], stem
+
+
+def test_error_bars_are_the_95_percent_interval(cubes, figures):
+    ax = figures[Panel.WINDOW.value].axes[0]
+    labels = ax.get_legend_handles_labels()[1]
     assert {"FFNN", "CNN"} <= set(labels)
-    assert figures[Panel.WINDOW].axes[0].containers  # errorbar containers
+    container = next(c for c in ax.containers if c.get_label() == "FFNN")
+    (bars,) = container.lines[2]
+    ends = np.array([segment[:, 1] for segment in bars.get_segments()])  # (points, 2) in %
+    window = cubes["window"].sel(model="ffnn").sortby("window_s")
+    np.testing.assert_allclose(ends[:, 0], 100 * window["accuracy_low"].values)
+    np.testing.assert_allclose(ends[:, 1], 100 * window["accuracy_high"].values)
 
 
 def test_missing_sweeps_draw_no_figure():
     sweeps = {"threshold": PAPER_LIKE_SWEEPS["threshold"]}
-    assert set(draw_report(build_report(make_cubes(sweeps)))) == {Panel.THRESHOLD, Panel.COST}
+    stems = set(draw_report(build_report(make_cubes(sweeps))))
+    assert stems == {Panel.THRESHOLD.value} | {c.stem for c in Cost}
+
+
+def test_any_one_dimensional_sweep_gets_its_own_curve_titled_from_its_field():
+    sweeps = {
+        "amp": {"axes": {"readout.effects.amplifier_noise.sigma_v": [0.01, 0.02, 0.04]}},
+        "per_class": {"axes": {"dataset.recordings_per_class": [4, 6]}},
+        "polarity": {"axes": {"coding.polarity": ["merged", "split"]}},
+    }
+    cubes = make_cubes(sweeps)
+    report = build_report(cubes)
+    plots = {p.sweep: p for p in report.sweep_plots}
+    assert set(plots) == set(sweeps)
+    amp = cubes["amp"]["sigma_v"].attrs
+    assert plots["amp"].xlabel == (
+        f"{amp['long_name']} (readout.effects.amplifier_noise.sigma_v, {amp['units']})"
+    )
+    assert plots["amp"].title.startswith(f"Accuracy against {amp['long_name']}")
+    assert plots["polarity"].ticks == ("merged", "split")
+    figures = draw_report(report)
+    ax = figures["sweep_amp"].axes[0]
+    assert ax.get_xlabel().replace("\n", " ") == plots["amp"].xlabel and chance_lines(ax)
+    assert [t.get_text() for t in figures["sweep_polarity"].axes[0].get_xticklabels()] == [
+        "merged",
+        "split",
+    ]
+    per_class = figures["sweep_per_class"].axes[0]
+    assert "dataset.recordings_per_class" in per_class.get_xlabel().replace("\n", " ")
+
+
+def test_a_two_axis_sweep_gets_an_annotated_heat_map_per_model():
+    sweeps = {
+        "mismatch_by_size": {
+            "axes": {
+                "readout.effects.threshold_mismatch.sigma_rel": [0.0, 0.1, 0.3],
+                "array.rows": [2, 4],
+            }
+        }
+    }
+    cubes = make_cubes(sweeps)
+    report = build_report(cubes)
+    (found,) = report.heatmaps
+    assert found.models == ("ffnn", "cnn") and found.accuracy.shape == (2, 3, 2)
+    expected = cubes["mismatch_by_size"]["accuracy_mean"].transpose("model", "sigma_rel", "rows")
+    np.testing.assert_array_equal(found.accuracy, expected.values)
+    figure = draw_report(report)["heatmap_mismatch_by_size"]
+    panels = [ax for ax in figure.axes if ax.get_title() in ("FFNN", "CNN")]
+    assert len(panels) == 2
+    for ax, values in zip(panels, 100 * expected.values, strict=True):
+        texts = [t.get_text() for t in ax.texts]
+        assert texts == [f"{v:.1f}" for v in values.ravel()]
+        assert [t.get_text() for t in ax.get_yticklabels()] == ["0", "0.1", "0.3"]
+        assert "array.rows" in ax.get_xlabel() and "sigma_rel" in ax.get_ylabel().replace("\n", "")
+    assert ink(figure) > 0.05
 
 
 def test_figures_are_on_their_own_agg_canvas_not_pyplot(figures):

@@ -1,0 +1,252 @@
+"""The run's designs: its distinct points across all cubes, their accuracy and what they cost.
+
+A *design* is one distinct point of the run (one ``result_key``; the operating point that several
+sweeps share is one design). Its settings are the swept fields of every sweep it lies in, at
+their values there; its accuracy per model is the cube's ``accuracy_mean`` with the 95 % interval
+``accuracy_low``/``accuracy_high`` (NaN for points that predate per-recording results) and, as a
+secondary number, the population standard deviation of the fold accuracies.
+
+Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
+
+* address-event data rate ``data_rate_bps`` (bit/s) and event rate ``event_rate_hz`` (Hz), from
+  the cube;
+* equivalent bits ``log2(V_fs / theta)``;
+* compute seconds: its spike and coding stages plus ``train_m``, as measured when each stage was
+  computed (a stage reused from the cache counts at its original cost);
+* readout power ``P = event_rate_hz * E_event + data_rate_bps * E_link`` (W,
+  :func:`pipeline.hardware.event_power_w`, constants of an :class:`~pipeline.hardware.EnergyModel`).
+
+The frame-based readout of the same array (:class:`FrameReadout`) sends ``n * bits * rate_hz``
+bit/s for ``n = rows * cols`` taxels and draws :func:`pipeline.hardware.frame_power_w`.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.hardware import EnergyModel, event_power_w, frame_data_rate_bps, frame_power_w
+from pipeline.report.cubes import axis_coordinates, describe_coordinate, point_keys, sweep_dims
+from pipeline.report.text import label
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """Accuracy of one model at one design (fractions); ``low``/``high`` NaN: no interval."""
+
+    mean: float
+    low: float
+    high: float
+    fold_std: float
+
+    @property
+    def has_interval(self) -> bool:
+        return math.isfinite(self.low) and math.isfinite(self.high)
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One swept field of a design: dotted scene ``field``, its value as text, its units."""
+
+    field: str
+    value: str
+    units: str
+
+    @property
+    def text(self) -> str:
+        return f"{self.field} = {self.value}" + (f" {self.units}" if self.units else "")
+
+
+@dataclass(frozen=True)
+class Design:
+    """One distinct point of the run (see the module docstring).
+
+    ``rows``/``cols`` are None when the cube does not hold them; rates and bits are NaN when the
+    point did not measure them; ``seconds`` and ``accuracy`` hold the models the point trained.
+    """
+
+    key: str
+    sweeps: tuple[str, ...]
+    settings: tuple[Setting, ...]
+    rows: int | None
+    cols: int | None
+    event_rate_hz: float
+    data_rate_bps: float
+    equivalent_bits: float
+    window_s: float
+    n_windows: str
+    seconds: Mapping[str, float]
+    accuracy: Mapping[str, Accuracy]
+
+    @property
+    def label(self) -> str:
+        """The design's swept settings, e.g. ``readout.threshold_v = 0.09 V``."""
+        return ", ".join(s.text for s in self.settings) or "the base design"
+
+    @property
+    def n_taxels(self) -> int | None:
+        return None if self.rows is None or self.cols is None else self.rows * self.cols
+
+
+class Cost(enum.Enum):
+    """A cost of a design; the value is ``(figure stem, axis label, short name)``."""
+
+    DATA_RATE = ("front_data_rate", "address-event data rate (bit/s)", "data rate")
+    EVENT_RATE = ("front_event_rate", "event rate of the array (events/s)", "event rate")
+    BITS = ("front_equivalent_bits", "equivalent bits log2(V_fs / theta) (bit)", "equivalent bits")
+    COMPUTE = ("cost_pareto", "compute time per point: all stages (s)", "compute time")
+    POWER = ("front_power", "estimated readout power (W)", "readout power")
+
+    @property
+    def stem(self) -> str:
+        return self.value[0]
+
+    @property
+    def axis(self) -> str:
+        return self.value[1]
+
+    @property
+    def short(self) -> str:
+        return self.value[2]
+
+
+@dataclass(frozen=True)
+class FrameReadout:
+    """A frame-based readout of the same array: one ``bits``-bit ADC sample per taxel per frame,
+    ``rate_hz`` frames per second."""
+
+    bits: int
+    rate_hz: float
+
+    def data_rate_bps(self, n_taxels: int) -> float:
+        return float(frame_data_rate_bps(n_taxels, self.rate_hz, self.bits))
+
+    def power_w(self, n_taxels: int, energy: EnergyModel) -> float:
+        return float(frame_power_w(n_taxels, self.rate_hz, self.bits, energy))
+
+
+def cost(design: Design, model: str, which: Cost, energy: EnergyModel) -> float:
+    """The design's ``which`` cost for ``model`` (NaN when unknown)."""
+    match which:
+        case Cost.DATA_RATE:
+            return design.data_rate_bps
+        case Cost.EVENT_RATE:
+            return design.event_rate_hz
+        case Cost.BITS:
+            return design.equivalent_bits
+        case Cost.COMPUTE:
+            return design.seconds.get(model, math.nan)
+        case Cost.POWER:
+            rates = (design.event_rate_hz, design.data_rate_bps)
+            if not all(math.isfinite(r) and r >= 0 for r in rates):
+                return math.nan
+            return float(event_power_w(*rates, energy))
+    raise ValueError(f"unknown cost {which}")
+
+
+def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
+    """Every distinct point of every cube, in the order first met; models all-NaN left out."""
+    found: dict[str, dict[str, Any]] = {}
+    for name, cube in cubes.items():
+        dims = sweep_dims(cube)
+        settings = _settings(cube)
+        stages = [str(s) for s in cube["stage"].values] if "seconds" in cube else []
+        models = [str(m) for m in cube["model"].values]
+        mean = _flat(cube["accuracy_mean"], dims)
+        low, high = _flat(cube["accuracy_low"], dims), _flat(cube["accuracy_high"], dims)
+        folds = cube["accuracy"].transpose(*dims, "model", ...).values
+        folds = folds.reshape(mean.shape[0], len(models), -1)
+        seconds = _flat(cube["seconds"], dims) if stages else None
+        scalars = {
+            v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
+            for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
+        }
+        fields = {
+            f: cube[f].broadcast_like(cube["result_key"]).transpose(*dims).values.ravel()
+            if f in cube.coords
+            else None
+            for f in ("array.rows", "array.cols", "coding.window_s", "coding.n_windows")
+        }
+        for p, key in enumerate(point_keys(cube)):
+            entry = found.get(key)
+            if entry is not None:
+                entry["sweeps"].append(name)
+                entry["settings"] += [s for s in settings[p] if s not in entry["settings"]]
+                continue
+            accuracy = {}
+            for m, model in enumerate(models):
+                if not math.isfinite(mean[p, m]):
+                    continue
+                with np.errstate(invalid="ignore"):
+                    spread = folds[p, m][np.isfinite(folds[p, m])]
+                accuracy[model] = Accuracy(
+                    float(mean[p, m]),
+                    float(low[p, m]),
+                    float(high[p, m]),
+                    float(np.std(spread)) if spread.size else math.nan,
+                )
+            found[key] = {
+                "key": key,
+                "sweeps": [name],
+                "settings": list(settings[p]),
+                "rows": _int(fields["array.rows"], p),
+                "cols": _int(fields["array.cols"], p),
+                **{v: float(values[p]) for v, values in scalars.items()},
+                "window_s": math.nan
+                if fields["coding.window_s"] is None
+                else float(fields["coding.window_s"][p]),
+                "n_windows": "?"
+                if fields["coding.n_windows"] is None
+                else label(fields["coding.n_windows"][p]),
+                "seconds": {}
+                if seconds is None
+                else {m: _model_seconds(seconds[p], stages, m) for m in accuracy},
+                "accuracy": accuracy,
+            }
+    return tuple(
+        Design(**(e | {"sweeps": tuple(e["sweeps"]), "settings": tuple(e["settings"])}))
+        for e in found.values()
+    )
+
+
+def _settings(cube: xr.Dataset) -> list[tuple[Setting, ...]]:
+    """The swept fields of every point of a cube, in point order."""
+    dims = sweep_dims(cube)
+    columns = []
+    for dim in dims:
+        for name in axis_coordinates(cube, dim):
+            _, units = describe_coordinate(cube, name)
+            values = cube[name].broadcast_like(cube["result_key"]).transpose(*dims).values.ravel()
+            columns.append((str(cube[name].attrs["field"]), units, values))
+    size = cube["result_key"].size
+    return [
+        tuple(Setting(f, label(values[i]), units) for f, units, values in columns)
+        for i in range(size)
+    ]
+
+
+def _flat(variable: xr.DataArray, dims: tuple[str, ...]) -> np.ndarray:
+    """Values with the sweep dimensions (C order) flattened into the first axis."""
+    values = variable.transpose(*dims, ...).values
+    size = int(np.prod([variable.sizes[d] for d in dims])) if dims else 1
+    return values.reshape(size, *values.shape[len(dims) :]).astype(np.float64)
+
+
+def _int(values: np.ndarray | None, p: int) -> int | None:
+    if values is None:
+        return None
+    try:
+        return int(values[p])
+    except (TypeError, ValueError):
+        return None
+
+
+def _model_seconds(row: np.ndarray, stages: list[str], model: str) -> float:
+    keep = [not s.startswith("train_") or s == f"train_{model}" for s in stages]
+    return float(np.nansum(row[keep]))

@@ -1,0 +1,229 @@
+"""Per-recording results of a whole run, and the paired tests the report runs on them.
+
+Every point of a run evaluated on the same dataset sees the same recordings and the same folds,
+so any two points, of one cube or of two, can be compared recording by recording. A point is
+identified across cubes by its ``result_key``; a recording by its name and class (and the
+dataset's ``dataset.kind`` and ``dataset.path``, so that recordings of two datasets that happen to
+share a name are never paired). The run's recordings are the union over all cubes.
+
+For a point and a model, ``correct`` is int8 (repeats, n_run_recordings): 1 right, 0 wrong, -1
+no prediction (a recording the point did not hold, a repeat or model it did not run). A paired
+comparison of points ``a`` and ``b`` uses the repeats both ran and, among those, the recordings
+both predicted in every such repeat; then :func:`pipeline.stats.compare_paired` gives
+``accuracy(a) - accuracy(b)`` on them, its 95 % interval (paired stratified bootstrap over
+recordings) and its p-value (exact McNemar for one repeat, bootstrap otherwise). A trend along
+several points (:func:`pipeline.stats.trend`) uses the recordings all of them predicted.
+
+Seeds: every bootstrap draws from ``numpy.random.default_rng([REPORT_SEED, crc32(part), ...])``
+with the parts the compared result keys and the model (:func:`rng_for`), so a comparison gives
+the same interval wherever the report shows it and in whatever order the report computes it.
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from pipeline.report.cubes import point_keys, sweep_dims
+from pipeline.stats import PairedComparison, Trend, compare_paired, trend
+
+REPORT_SEED = 20_240_531
+"""The report's fixed seed: the root of every bootstrap generator (:func:`rng_for`)."""
+RESAMPLES = 2000
+ALPHA = 0.05
+"""Significance level of every test the report judges a claim or a design by."""
+
+
+def rng_for(*parts: str) -> np.random.Generator:
+    """The bootstrap generator of one comparison: ``default_rng([REPORT_SEED, crc32(part)...])``."""
+    return np.random.default_rng([REPORT_SEED, *(zlib.crc32(p.encode("utf-8")) for p in parts)])
+
+
+@dataclass(frozen=True, eq=False)
+class Evidence:
+    """The run's per-recording results.
+
+    Attributes
+    ----------
+    labels : int64 (n,)
+        Class of each of the run's ``n`` recordings.
+    correct : dict[(result key, model), int8 (repeats, n)]
+        1 right, 0 wrong, -1 no prediction; only points that kept predictions are here.
+    """
+
+    labels: np.ndarray
+    correct: Mapping[tuple[str, str], np.ndarray]
+    _memo: dict = field(default_factory=dict, repr=False)
+
+    def has(self, key: str, model: str) -> bool:
+        """Whether the point holds per-recording results for ``model``."""
+        return (key, model) in self.correct
+
+    def compare(self, a: str, b: str, model: str) -> PairedComparison | None:
+        """``accuracy(a) - accuracy(b)`` of ``model`` on the recordings both predicted, with its
+        interval and p-value; None when either point has no predictions or they share none."""
+        memo = ("compare", a, b, model)
+        if memo not in self._memo:
+            self._memo[memo] = self._compare(a, b, model)
+        return self._memo[memo]
+
+    def trend(self, keys: Sequence[str], x: Sequence[float], model: str) -> Trend | None:
+        """Least-squares slope of ``model``'s accuracy on ``x`` over the points ``keys`` (paired
+        bootstrap); None when a point has no predictions, the points share no recording, or
+        ``x`` has fewer than 2 distinct values."""
+        x = np.asarray(x, dtype=np.float64)
+        if len(keys) < 2 or np.unique(x).size < 2 or not all(self.has(k, model) for k in keys):
+            return None
+        arrays = [self.correct[(k, model)] for k in keys]
+        repeats = min(a.shape[0] for a in arrays)
+        stack = np.stack([a[:repeats] for a in arrays])  # (levels, repeats, n)
+        rows = (stack >= 0).any(axis=2).all(axis=0)
+        stack = stack[:, rows]
+        cols = (stack >= 0).all(axis=(0, 1))
+        if not rows.any() or not cols.any():
+            return None
+        return trend(
+            stack[:, :, cols] == 1,
+            x,
+            self.labels[cols],
+            rng=rng_for("trend", model, *keys),
+            resamples=RESAMPLES,
+        )
+
+    def _compare(self, a: str, b: str, model: str) -> PairedComparison | None:
+        if not (self.has(a, model) and self.has(b, model)):
+            return None
+        ca, cb = self.correct[(a, model)], self.correct[(b, model)]
+        repeats = min(ca.shape[0], cb.shape[0])
+        ca, cb = ca[:repeats], cb[:repeats]
+        rows = (ca >= 0).any(axis=1) & (cb >= 0).any(axis=1)
+        ca, cb = ca[rows], cb[rows]
+        cols = (ca >= 0).all(axis=0) & (cb >= 0).all(axis=0)
+        if not rows.any() or not cols.any():
+            return None
+        return compare_paired(
+            ca[:, cols] == 1,
+            cb[:, cols] == 1,
+            self.labels[cols],
+            rng=rng_for(a, b, model),
+            resamples=RESAMPLES,
+        )
+
+
+def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
+    """The per-recording results of every point of every cube that kept them."""
+    index: dict[tuple[str, str, int], int] = {}
+    found: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+    for cube in cubes.values():
+        if "correct" not in cube:
+            continue
+        dims = sweep_dims(cube)
+        names = [str(n) for n in cube["recording"].values]
+        labels = [int(v) for v in cube["label"].values]
+        datasets = _dataset_ids(cube)
+        correct = cube["correct"].transpose(*dims, "model", "repeat", "recording").values
+        correct = correct.reshape(-1, *correct.shape[len(dims) :])
+        for p, key in enumerate(point_keys(cube)):
+            columns = np.array(
+                [
+                    index.setdefault((datasets[p], name, label), len(index))
+                    for name, label in zip(names, labels, strict=True)
+                ],
+                dtype=np.int64,
+            )
+            for m, model in enumerate(str(v) for v in cube["model"].values):
+                values = correct[p, m]
+                if (key, model) in found or not (values >= 0).any():
+                    continue
+                found[(key, model)] = (columns, values)
+    n = len(index)
+    labels = np.zeros(n, dtype=np.int64)
+    for (_, _, label), i in index.items():
+        labels[i] = label
+    arrays = {}
+    for (key, model), (columns, values) in found.items():
+        full = np.full((values.shape[0], n), -1, dtype=np.int8)
+        full[:, columns] = values
+        arrays[(key, model)] = full
+    return Evidence(labels=labels, correct=arrays)
+
+
+def _dataset_ids(cube: xr.Dataset) -> list[str]:
+    """Which recordings each point saw (``dataset.kind`` and ``dataset.path``), in point order."""
+    parts = [
+        cube[name].broadcast_like(cube["result_key"]).transpose(*sweep_dims(cube)).values.ravel()
+        for name in ("dataset.kind", "dataset.path")
+        if name in cube.coords
+    ]
+    size = cube["result_key"].size
+    return ["|".join(str(p[i]) for p in parts) for i in range(size)]
+
+
+PointRef = str | tuple[str, Mapping[str, object]]
+"""A point of a run: its result key, or ``(sweep name, {dimension: value})`` in that sweep."""
+
+
+def compare_points(
+    cubes: Mapping[str, xr.Dataset], model: str, a: PointRef, b: PointRef
+) -> PairedComparison:
+    """Paired comparison of ``model``'s accuracy at two points of a run, recording by recording.
+
+    Parameters
+    ----------
+    cubes
+        The run's cubes (:func:`storage.open_results`).
+    model
+        ``"ffnn"`` or ``"cnn"``.
+    a, b
+        Each a result key (the cubes' ``result_key`` coordinate) or ``(sweep, {dim: value})``,
+        e.g. ``("threshold", {"threshold_v": 0.09})``; the points may lie in different cubes.
+
+    Returns
+    -------
+    PairedComparison
+        ``accuracy(a) - accuracy(b)`` on the recordings (and repeats) both predicted, its 95 %
+        interval (paired, class-stratified bootstrap over recordings), the exact McNemar p-value
+        (one repeat; a bootstrap p-value for several) and the discordant counts; the same numbers
+        the report shows for these two points.
+
+    Raises
+    ------
+    KeyError
+        A sweep, dimension value or result key that the cubes do not hold.
+    ValueError
+        A point without per-recording results for ``model`` (a run that predates them), or two
+        points that share no recording.
+    """
+    key_a, key_b = _result_key(cubes, a), _result_key(cubes, b)
+    evidence = gather_evidence(cubes)
+    missing = [str(ref) for ref, key in ((a, key_a), (b, key_b)) if not evidence.has(key, model)]
+    if missing:
+        raise ValueError(
+            f"no per-recording {model} results at {', '.join(missing)}: re-run the sweep"
+        )
+    comparison = evidence.compare(key_a, key_b, model)
+    if comparison is None:
+        raise ValueError(f"{a} and {b} share no recording")
+    return comparison
+
+
+def _result_key(cubes: Mapping[str, xr.Dataset], ref: PointRef) -> str:
+    if isinstance(ref, str):
+        if not any(ref in point_keys(cube) for cube in cubes.values()):
+            raise KeyError(f"no point has result key {ref!r}")
+        return ref
+    sweep, at = ref
+    if sweep not in cubes:
+        raise KeyError(f"no sweep {sweep!r} (the run has {', '.join(sorted(cubes))})")
+    cube = cubes[sweep]
+    dims = sweep_dims(cube)
+    if set(at) != set(dims):
+        raise KeyError(f"sweep {sweep!r} needs a value for each of {list(dims)}, got {sorted(at)}")
+    try:
+        return str(cube["result_key"].sel(dict(at)).item())
+    except KeyError:
+        raise KeyError(f"sweep {sweep!r} has no point at {dict(at)}") from None

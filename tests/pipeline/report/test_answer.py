@@ -1,0 +1,121 @@
+"""The design answer on hand-made cubes with exact predictions (see tests/report_helpers.py).
+
+Thresholds 0.04 .. 0.3 V; data rate 700 / threshold (cheaper at higher thresholds). Of 120
+recordings the FFNN gets right: 0.09 V 108 (the best, 90 %), 0.04 V 107, 0.15 V 106 (88 %, one
+and two discordant recordings: not significantly below), 0.05 V 96 and 0.3 V 72 (60 %:
+significantly below). The cheapest design not significantly below the best is 0.15 V.
+"""
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from pipeline.hardware import EnergyModel, frame_data_rate_bps
+from pipeline.report import FrameReadout, build_report
+from pipeline.report.answer import answer_rows, answer_sentences
+from pipeline.report.document import report_blocks
+from pipeline.report.render import render_markdown
+from pipeline.stats import holm
+from tests.report_helpers import N_RECORDINGS, make_cubes
+
+THRESHOLDS = {0.04: 0.89, 0.05: 0.80, 0.09: 0.90, 0.15: 0.88, 0.3: 0.60}
+SWEEPS = {"threshold": {"axes": {"readout.threshold_v": list(THRESHOLDS)}}}
+
+
+def by_threshold(scene):
+    return THRESHOLDS[scene.readout.threshold_v]
+
+
+@pytest.fixture(scope="module")
+def cubes():
+    return make_cubes(SWEEPS, by_threshold, models=("ffnn",))
+
+
+@pytest.fixture(scope="module")
+def answer(cubes):
+    (found,) = build_report(cubes, frame=FrameReadout(12, 2000.0)).answers
+    return found
+
+
+def threshold_of(candidate):
+    (setting,) = candidate.design.settings
+    return float(setting.value)
+
+
+def test_cheapest_design_not_significantly_below_the_best_is_chosen(answer):
+    assert answer.model == "ffnn"
+    assert threshold_of(answer.best) == 0.09
+    assert answer.best.accuracy.mean == 108 / N_RECORDINGS
+    chosen = answer.by_data_rate
+    assert threshold_of(chosen) == 0.15 and threshold_of(answer.by_power) == 0.15
+    assert chosen.accuracy.mean == 106 / N_RECORDINGS
+    assert (chosen.versus_best.only_a, chosen.versus_best.only_b) == (0, 2)
+    assert chosen.versus_best.difference == pytest.approx(-2 / N_RECORDINGS, abs=1e-15)
+    assert chosen.versus_best.low <= chosen.versus_best.difference <= chosen.versus_best.high
+    significant = {threshold_of(c) for c in answer.candidates if c.below_best}
+    assert significant == {0.05, 0.3}  # 0.3 V is cheaper still, but 60 % is significantly below
+    assert {threshold_of(c) for c in answer.as_accurate} == {0.04, 0.09, 0.15}
+    assert answer.comparisons == 4 and answer.untested == 0
+
+
+def test_holm_adjusted_p_values_are_holm_of_the_exact_mcnemar_p_values(cubes, answer):
+    cube = cubes["threshold"].sel(model="ffnn", repeat=0)
+    best = cube["correct"].sel(threshold_v=0.09).values == 1
+    others = [c for c in answer.candidates if c is not answer.best]
+    raw = []
+    for candidate in others:
+        mine = cube["correct"].sel(threshold_v=threshold_of(candidate)).values == 1
+        only_a, only_b = int(np.sum(mine & ~best)), int(np.sum(best & ~mine))
+        raw.append(scipy.stats.binomtest(only_a, only_a + only_b, 0.5).pvalue)
+        assert candidate.versus_best.p_value == pytest.approx(raw[-1], rel=1e-12)
+    expected = holm(raw)
+    assert [c.holm_p for c in others] == pytest.approx(list(expected), rel=1e-12)
+    # 0.05 V: 12 discordant recordings, all one way; 2 * 0.5**12, times 3 (the second smallest
+    # of 4 p-values).
+    at_005 = next(c for c in others if threshold_of(c) == 0.05)
+    assert at_005.holm_p == pytest.approx(3 * 2 * 0.5**12, rel=1e-12)
+
+
+def test_the_answer_is_set_against_the_frame_readout_of_the_same_array(answer):
+    chosen = answer.by_data_rate
+    frame = frame_data_rate_bps(4, 2000.0, 12)  # the smoke scene's 2 x 2 taxels
+    assert chosen.frame_data_rate_bps == frame
+    assert chosen.data_rate_ratio == pytest.approx(frame / (700.0 / 0.15), rel=1e-12)
+    assert chosen.power_ratio > 1
+    text = " ".join(answer_sentences(answer, FrameReadout(12, 2000.0)))
+    assert "readout.threshold_v = 0.15 V" in text and "Holm-corrected over these 4" in text
+    # 96 kbit/s / (700 / 0.15 bit/s) = 20.6
+    assert "21x below the frame-based readout of the same array (96 kbit/s, 4 taxels)" in text
+    rows = answer_rows(answer)
+    assert [r[1] for r in rows] == ["best", "cheapest by data rate; cheapest by readout power"]
+    wilson = scipy.stats.binomtest(106, N_RECORDINGS).proportion_ci(method="wilson")
+    assert rows[1][3] == f"88.3 % [{100 * wilson.low:.1f}, {100 * wilson.high:.1f}]"
+    assert rows[1][4].startswith("-1.7 points [") and rows[1][4].endswith("Holm p = 1")
+
+
+def test_data_rate_and_power_can_choose_different_designs():
+    # Same accuracy; 0.05 V sends fewer bits but more events than 0.09 V.
+    rates = {0.05: (1000.0, 2000.0), 0.09: (100.0, 3000.0)}
+    cubes = make_cubes(
+        {"threshold": {"axes": {"readout.threshold_v": [0.05, 0.09]}}},
+        lambda scene: 0.9,
+        models=("ffnn",),
+        rates=lambda scene: rates[scene.readout.threshold_v],
+    )
+    energy = EnergyModel(event_energy_j=1e-9, link_energy_j_per_bit=1e-12)
+    (answer,) = build_report(cubes, energy=energy).answers
+    assert threshold_of(answer.by_data_rate) == 0.05
+    assert threshold_of(answer.by_power) == 0.09
+    assert answer.by_power.power_w == pytest.approx(100.0 * 1e-9 + 3000.0 * 1e-12)
+    assert answer.by_power.frame_power_w is None  # no frame readout given: unknown, not guessed
+
+
+def test_a_run_without_per_recording_results_names_the_best_and_says_why_no_more():
+    cubes = make_cubes(SWEEPS, by_threshold, models=("ffnn",), predictions=False)
+    report = build_report(cubes)
+    (answer,) = report.answers
+    assert threshold_of(answer.best) == 0.09 and answer.by_data_rate is None
+    assert answer.comparisons == 0 and answer.untested == 4
+    markdown = render_markdown(report_blocks(report, set(), version="t"))
+    assert "no interval: this run predates per-recording results; re-run the sweep" in markdown
+    assert "nan" not in markdown.lower()
