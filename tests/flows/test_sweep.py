@@ -286,6 +286,12 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
     assert "three textures" in cube["dataset.path"].item()
     assert (cube.attrs["dataset_name"], cube.attrs["sampling_rate_hz"]) == ("three", 500.0)
     assert cube.attrs["class_names"] == ["coarse", "fine", "medium"]
+    # Per-recording evidence of the folder's 12 recordings, and a report that opens with the
+    # design answer for them.
+    assert cube.sizes["recording"] == 12 and sorted(set(cube["label"].values)) == [0, 1, 2]
+    markdown = (root / "report" / "report.md").read_text()
+    assert markdown.index("## The answer") < markdown.index("## Against the paper")
+    assert "Chance is 1/3 = 33.3 %" in markdown
 
     api = server.status().api_url  # the suite's server, which this sweep used
     request = urllib.request.Request(
