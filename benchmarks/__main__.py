@@ -8,12 +8,12 @@ import sys
 
 from tqdm import tqdm
 
-from benchmarks import coding, encoder, scale, sweep, training
+from benchmarks import coding, encoder, planning, scale, sweep, training
 
 
 def main() -> None:
     quick = "--quick" in sys.argv  # skips the scale runs and the paper-grid sweeps (~25 minutes)
-    suites = [encoder, coding, training] + ([] if quick else [scale, sweep])
+    suites = [encoder, coding, training, planning] + ([] if quick else [scale, sweep])
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
         rows += suite.run()

@@ -16,7 +16,9 @@ import json
 import logging
 import re
 import statistics
+import threading
 import time
+import weakref
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +35,7 @@ from pipeline.cube import RecordingsInfo, build_cube
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import resolve_dataset_argument
-from pipeline.scene import Scene, cache_key
+from pipeline.scene import DatasetSpec, Scene, cache_key
 from pipeline.stages import RESULTS, SPIKES
 from storage import EntryKind, ResultEntry, StoreError, SweepStore
 from storage.cubes import SPIKE_STAGES
@@ -100,7 +102,12 @@ def check_grid(grid: Grid) -> dict[str, DatasetFacts]:
     Returns the facts of each dataset, by recordings cache key.
     """
     facts: dict[str, DatasetFacts] = {}
+    seen: set[DatasetSpec] = set()
     for point in grid.points():
+        # The recordings key is a function of the dataset alone: one key per distinct dataset.
+        if point.scene.dataset in seen:
+            continue
+        seen.add(point.scene.dataset)
         key = cache_key(point.scene, "recordings")
         if key not in facts:
             facts[key] = DatasetFacts.describe(point.scene.dataset)
@@ -129,9 +136,34 @@ def load_sweep_grid(grid_ref: str, dataset: str | None = None) -> Grid:
         ``dataset`` names no dataset.
     """
     grid = load_grid(grid_ref)
-    if dataset is None:
-        return grid
-    return grid.with_dataset(resolve_dataset_argument(dataset))
+    if dataset is not None:
+        grid = grid.with_dataset(resolve_dataset_argument(dataset))
+    return _LAST_GRID.same(grid)
+
+
+class _LastGrid:
+    """The grid :func:`load_sweep_grid` gave last, held weakly.
+
+    ``eskin sweep`` loads its grid three times: to check it before Prefect starts, to open the
+    root, and to plan it. A grid equal to the last one (the same name, base scene and sweeps)
+    has the same points, so the last one is given again, with the points its check built.
+    Only points are shared this way; the recordings are described again at each check.
+    """
+
+    def __init__(self) -> None:
+        self._ref: weakref.ref[Grid] | None = None
+        self._lock = threading.Lock()
+
+    def same(self, grid: Grid) -> Grid:
+        with self._lock:
+            last = self._ref() if self._ref is not None else None
+            if last is not None and last == grid:
+                return last
+            self._ref = weakref.ref(grid)
+            return grid
+
+
+_LAST_GRID = _LastGrid()
 
 
 def open_root(grid_ref: str, root: str | None, dataset: str | None = None) -> SweepStore:
@@ -156,7 +188,8 @@ def plan_sweep(grid_ref: str, root: str, dataset: str | None = None) -> SweepPla
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    found = {key: store.read_valid(EntryKind.RESULTS, key) for key in scenes}
+    stored = store.complete_keys(EntryKind.RESULTS)
+    found = {key: store.read_valid(EntryKind.RESULTS, key) for key in scenes if key in stored}
     records = {key: entry for key, entry in found.items() if entry is not None}
     return SweepPlan(grid, str(store.root), scenes, records, datasets)
 

@@ -40,16 +40,24 @@ length, and values a scene refuses. :func:`check_fits` then checks the points ag
 recordings (windows longer than a recording, arrays whose delays eat it, classes smaller than
 the folds) before any work starts, naming the shortest recording; :func:`check_scene_fits` is
 the same check for one scene (``eskin run``).
+
+Expanding and checking a grid costs a few tens of microseconds per point, linear in the points:
+a sweep's scenes are built by :class:`pipeline.scene.SceneVariants` (each scene part validated
+once per distinct combination of the swept values in it, and shared by the points that have
+it), a grid builds its points and their result keys once, and :func:`check_fits` checks each
+distinct combination of recordings, array, coding and folds once.
 """
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import enum
+import functools
 import itertools
 import json
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -61,10 +69,14 @@ from pipeline.coding import whole_windows
 from pipeline.errors import SceneError
 from pipeline.scene import (
     EFFECT_TYPES,
+    ArraySpec,
+    CanonicalMemo,
+    CodingSpec,
     DatasetKind,
     DatasetSpec,
     Effect,
     Scene,
+    SceneVariants,
     cache_key,
     with_dataset_path_from,
 )
@@ -132,15 +144,21 @@ class Sweep:
 
 @dataclass(frozen=True)
 class GridPoint:
-    """One point of a sweep: where it sits in the cube and the scene it simulates."""
+    """One point of a sweep: where it sits in the cube and the scene it simulates.
+
+    ``key`` is the scene's result cache key (``cache_key(scene, "results")``), computed once
+    when the point is made; ``memo`` (not kept) is as for :meth:`Scene.canonical`, for points
+    made by the many that share scene parts.
+    """
 
     sweep: str
     index: tuple[int, ...]
     scene: Scene
+    memo: dataclasses.InitVar[CanonicalMemo | None] = None
+    key: str = dataclasses.field(init=False, compare=False, repr=False)
 
-    @property
-    def key(self) -> str:
-        return cache_key(self.scene, "results")
+    def __post_init__(self, memo: CanonicalMemo | None) -> None:
+        object.__setattr__(self, "key", cache_key(self.scene, "results", memo))
 
 
 @dataclass(frozen=True)
@@ -164,12 +182,17 @@ class Grid:
 
     def points(self) -> list[GridPoint]:
         """Every point of every sweep (a point shared by two sweeps appears in both)."""
-        return [point for sweep in self.sweeps for point in sweep_points(self.base, sweep)]
+        return list(self._points)
+
+    @functools.cached_property
+    def _points(self) -> tuple[GridPoint, ...]:
+        # Built once per grid: checking, planning and counting a sweep all walk its points.
+        return tuple(point for sweep in self.sweeps for point in sweep_points(self.base, sweep))
 
     def unique_points(self) -> dict[str, Scene]:
         """Distinct scenes by result key, in first-seen order."""
         unique: dict[str, Scene] = {}
-        for point in self.points():
+        for point in self._points:
             unique.setdefault(point.key, point.scene)
         return unique
 
@@ -241,12 +264,37 @@ class Grid:
 
 
 def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
-    """The scenes of one sweep (already validated when the grid loaded)."""
+    """The scenes of one sweep (already validated when the grid loaded).
+
+    Each point's scene is ``base.replace(**sweep.fixed).replace(**values)`` with the point's
+    ``values``, built as :class:`pipeline.scene.SceneVariants` builds it: each scene part is
+    validated once per distinct combination of the swept values in it, and the points share
+    equal parts, whose canonical forms their keys write once.
+    """
     fixed = base.replace(**sweep.fixed) if sweep.fixed else base
-    return [
-        GridPoint(sweep.name, index, fixed.replace(**values))
-        for index, values in sweep.index_values()
-    ]
+    variants = _variants(fixed, sweep)
+    memo: CanonicalMemo = {}
+    points = []
+    for index, indices in _positions(sweep):
+        scene = variants.scene(indices)
+        points.append(GridPoint(sweep.name, index, scene, memo))
+    return points
+
+
+def _variants(fixed: Scene, sweep: Sweep) -> SceneVariants:
+    return SceneVariants(fixed, [(axis.field, axis.values) for axis in sweep.axes])
+
+
+def _positions(sweep: Sweep) -> Iterator[tuple[tuple[int, ...], tuple[int, ...]]]:
+    """Every point as ``(index in the cube, index into each axis's values)``, in C order (as
+    :meth:`Sweep.index_values`)."""
+    if sweep.mode == SweepMode.ZIP:
+        n_axes = len(sweep.axes)
+        for i in range(len(sweep.axes[0].values)):
+            yield (i,), (i,) * n_axes
+        return
+    for index in itertools.product(*(range(len(axis.values)) for axis in sweep.axes)):
+        yield index, index
 
 
 def builtin_grid_names() -> tuple[str, ...]:
@@ -366,8 +414,15 @@ def scene_misfits(scene: Scene, facts: DatasetFacts) -> list[tuple[str, str]]:
     class has at least ``training.folds`` recordings: the same conditions the simulation needs.
     Each problem names the shortest recording where it is the culprit. Empty if the scene fits.
     """
+    return _misfits(scene.array, scene.coding, scene.training.folds, facts)
+
+
+def _misfits(
+    array: ArraySpec, coding: CodingSpec, folds: int, facts: DatasetFacts
+) -> list[tuple[str, str]]:
+    """:func:`scene_misfits` of a scene with this ``array``, ``coding`` and ``training.folds``:
+    all it depends on, so that a grid checks each distinct combination once."""
     problems: list[tuple[str, str]] = []
-    array = scene.array
     cut = cut_samples(taxel_delays_s(array), facts.fs_hz)
     remaining = facts.min_samples - cut
     if remaining < 2:
@@ -382,24 +437,24 @@ def scene_misfits(scene: Scene, facts: DatasetFacts) -> list[tuple[str, str]]:
         )
     else:
         usable_s = (remaining - 1) / facts.fs_hz  # as SpikeTrains.duration_s
-        fit = whole_windows(usable_s, scene.coding.window_s)
-        wanted = scene.coding.n_windows
+        fit = whole_windows(usable_s, coding.window_s)
+        wanted = coding.n_windows
         if fit < 1 or (wanted != "auto" and wanted > fit):
             n = 1 if wanted == "auto" else wanted
             field = "coding.window_s" if fit < 1 else "coding.n_windows"
             problems.append(
                 (
                     field,
-                    f"{n} window(s) of {scene.coding.window_s} s do not fit "
+                    f"{n} window(s) of {coding.window_s} s do not fit "
                     f"{facts.shortest_recording()}: {usable_s:.3g} s after taxel delays "
                     f"hold {fit}",
                 )
             )
-    if facts.min_class_size < scene.training.folds:
+    if facts.min_class_size < folds:
         problems.append(
             (
                 "training.folds",
-                f"{scene.training.folds} folds need at least that many recordings per class; "
+                f"{folds} folds need at least that many recordings per class; "
                 + (f"class {facts.smallest_class!r}" if facts.smallest_class else "a class")
                 + f" has fewer ({facts.min_class_size})",
             )
@@ -424,11 +479,23 @@ def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
     """
     # Points sharing a problem (every threshold of a too-short dataset, say) are listed once.
     places: dict[str, list[str]] = {}
+    recordings: dict[DatasetSpec, str] = {}
+    misfits: dict[tuple[str, ArraySpec, CodingSpec, int], list[str]] = {}
     for point in grid.points():
-        where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
-        fact = facts[cache_key(point.scene, "recordings")]
-        for _, text in scene_misfits(point.scene, fact):
-            places.setdefault(text, []).append(where)
+        scene = point.scene
+        key = recordings.get(scene.dataset)
+        if key is None:  # the recordings key is a function of the dataset alone
+            key = recordings[scene.dataset] = cache_key(scene, "recordings")
+        combination = (key, scene.array, scene.coding, scene.training.folds)
+        texts = misfits.get(combination)
+        if texts is None:
+            texts = misfits[combination] = [
+                text for _, text in _misfits(*combination[1:], facts[key])
+            ]
+        if texts:
+            where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
+            for text in texts:
+                places.setdefault(text, []).append(where)
     problems = [
         ", ".join(wheres[:3])
         + (f" and {len(wheres) - 3} more" if len(wheres) > 3 else "")
@@ -523,8 +590,8 @@ def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep
         if not isinstance(values, list) or not values:
             problems.append(f"{here}: must be a non-empty list of values")
             continue
-        canonical = [json.dumps(v, sort_keys=True) for v in values]
-        duplicates = sorted({v for v in canonical if canonical.count(v) > 1})
+        counts = collections.Counter(json.dumps(v, sort_keys=True) for v in values)
+        duplicates = sorted(v for v, n in counts.items() if n > 1)
         if duplicates:
             problems.append(f"{here}: duplicate values {', '.join(duplicates)}")
         axes.append((field, tuple(values)))
@@ -539,12 +606,16 @@ def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep
     except SceneError as exc:
         problems.append(f"{where}.set: {'; '.join(exc.problems)}")
         return None
-    for _, values in sweep.index_values():
-        try:
-            fixed_base.replace(**values)
-        except SceneError as exc:
-            at = ", ".join(f"{f} = {v!r}" for f, v in values.items())
-            problems.append(f"{where} at {at}: {'; '.join(exc.problems)}")
+    # Each scene part is validated once per combination of the values in it, not per point.
+    variants = _variants(fixed_base, sweep)
+    for _, indices in _positions(sweep):
+        refused = variants.problems(indices)
+        if refused:
+            at = ", ".join(
+                f"{axis.field} = {axis.values[i]!r}"
+                for axis, i in zip(sweep.axes, indices, strict=True)
+            )
+            problems.append(f"{where} at {at}: {'; '.join(refused)}")
     return sweep
 
 

@@ -16,16 +16,23 @@ is declared with the stages themselves, in :mod:`pipeline.stages`::
     spikes     : dataset, array, readout (+ seed if a random effect is named)
     rates      : spikes fields + coding
     results    : rates fields + training
+
+Many scenes that differ in a few fields (a grid's points) are built by :class:`SceneVariants`,
+which reads each part once per distinct combination of the values in it and shares the part
+between the scenes. The canonical form is written part by part (the JSON of a dict with sorted
+keys is its items' JSON in key order), so a memo writes a shared part once for all its scenes.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import enum
+import functools
 import json
 import math
+import operator
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -364,14 +371,68 @@ class Scene:
         """Plain nested dict in the TOML layout (enums as strings, tuples as lists)."""
         return _plain(self)
 
-    def canonical(self, parts: tuple[str, ...] | None = None) -> str:
+    def canonical(
+        self, parts: tuple[str, ...] | None = None, memo: CanonicalMemo | None = None
+    ) -> str:
         """Stable JSON of the scene (or of ``parts``: top-level parts such as ``"readout"``, or
-        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names."""
-        data = self.to_dict()
-        data.pop("name")
-        if parts is not None:
-            data = _selected(data, parts)
-        return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names.
+
+        ``memo`` holds the canonical form of part objects already written: give the same dict
+        for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
+        each part is written once. The text does not depend on it.
+        """
+        # The JSON of a dict with sorted keys is its items' JSON in key order, so each part can
+        # be written (and remembered) on its own: the text is that of the whole selection.
+        items = []
+        for top, fields in _canonical_plan(_CANONICAL_PARTS if parts is None else tuple(parts)):
+            value = getattr(self, top)
+            if fields is None:
+                text = _canonical_part(value, memo)
+            else:
+                text = _canonical_json(_selected({top: _plain(value)}, fields)[top])
+            items.append(f'"{top}":{text}')
+        return "{" + ",".join(items) + "}"
+
+
+#: Canonical memo: the canonical JSON of a part object by its ``id``, with the object itself,
+#: which keeps it alive so that its ``id`` is not reused while the memo holds it.
+CanonicalMemo = dict[int, tuple[Any, str]]
+
+#: The top-level fields a canonical form holds (every field but the name).
+_CANONICAL_PARTS = ("array", "coding", "dataset", "readout", "seed", "training")
+
+
+def _canonical_json(data: Any) -> str:
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def _canonical_part(value: Any, memo: CanonicalMemo | None) -> str:
+    """The canonical JSON of one top-level part, from ``memo`` if it was written before."""
+    if memo is None:
+        return _canonical_json(_plain(value))
+    found = memo.get(id(value))
+    if found is None:
+        found = memo[id(value)] = (value, _canonical_json(_plain(value)))
+    return found[1]
+
+
+@functools.lru_cache(maxsize=64)
+def _canonical_plan(parts: tuple[str, ...]) -> tuple[tuple[str, tuple[str, ...] | None], ...]:
+    """The top-level parts ``parts`` selects, sorted, each whole (None) or with its dotted
+    fields; raises ``KeyError`` for a part that is not in the canonical form."""
+    whole: set[str] = set()
+    dotted: dict[str, list[str]] = {}
+    for part in parts:
+        top = part.split(".", 1)[0]
+        if top not in _CANONICAL_PARTS:
+            raise KeyError(top)
+        if top == part:
+            whole.add(top)
+        else:
+            dotted.setdefault(top, []).append(part)
+    return tuple(
+        (top, None if top in whole else tuple(dotted[top])) for top in sorted(whole | dotted.keys())
+    )
 
 
 def _selected(data: dict[str, Any], parts: tuple[str, ...]) -> dict[str, Any]:
@@ -406,12 +467,13 @@ def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
 MODEL_REVISION = 3
 
 
-def cache_key(scene: Scene, stage: str) -> str:
+def cache_key(scene: Scene, stage: str, memo: CanonicalMemo | None = None) -> str:
     """SHA-256 (hex, 32 chars) of :data:`MODEL_REVISION` and the canonical form of exactly the
-    fields ``stage`` uses (:meth:`pipeline.stages.Level.key`)."""
+    fields ``stage`` uses (:meth:`pipeline.stages.Level.key`); ``memo`` as for
+    :meth:`Scene.canonical`."""
     from pipeline.stages import level_named
 
-    return level_named(stage).key(scene)
+    return level_named(stage).key(scene, memo)
 
 
 def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:
@@ -435,6 +497,119 @@ def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str
 def builtin_scene_names() -> tuple[str, ...]:
     files = resources.files("pipeline.scenes").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
+
+
+# ---------------------------------------------------------------------------------------------
+# Many variants of one scene
+
+#: The scene's top-level fields in the order the reader reads (and reports) them.
+_READ_ORDER = ("dataset", "array", "readout", "coding", "training", "name", "seed")
+
+
+class SceneVariants:
+    """Copies of one scene with the same dotted fields replaced, each field from its own list.
+
+    ``variants.scene(indices)`` is ``scene.replace(**{field: values[i] ...})`` over ``axes``
+    and ``indices``: the same scene, or a :class:`SceneError` with the same problems, but each
+    scene part (``dataset``, ``array``, ...) is read and validated once per distinct
+    combination of the value indices of the fields in it (a part no field is in, once), and
+    the scenes share their parts. A grid whose fields take a few values each thus validates a
+    few parts, not every point, and its scenes' canonical forms can be written once per part
+    (:meth:`Scene.canonical` with a memo).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene the variants start from.
+    axes : sequence of (str, sequence)
+        Dotted scene fields (``"readout.threshold_v"``), each with its values. A field must
+        start with a top-level scene field (``dataset``, ..., ``name``, ``seed``).
+
+    Raises
+    ------
+    ValueError
+        A field does not start with a top-level scene field.
+    """
+
+    def __init__(self, scene: Scene, axes: Sequence[tuple[str, Sequence[Any]]]):
+        self._data = scene.to_dict()
+        self._fields = [name for name, _ in axes]
+        self._values = [values for _, values in axes]
+        self.source = f"scene {scene.name!r} with {sorted(self._fields)}"
+        tops = [name.split(".")[0] for name in self._fields]
+        unknown = sorted(set(tops) - set(_READ_ORDER))
+        if unknown:
+            raise ValueError(f"not top-level scene fields: {', '.join(unknown)}")
+        self._positions = {
+            top: tuple(i for i, t in enumerate(tops) if t == top) for top in _READ_ORDER
+        }
+        # The memo key of a part: the indices of the values in it (none for an untouched part).
+        self._part_indices = [
+            (top, operator.itemgetter(*positions) if positions else lambda _: ())
+            for top, positions in self._positions.items()
+        ]
+        self._parts: dict[tuple[str, Any], tuple[Any, list[str]]] = {}
+
+    def problems(self, indices: Sequence[int]) -> list[str]:
+        """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
+        problems: list[str] = []
+        for top, part_indices in self._part_indices:
+            problems += self._part(top, part_indices(indices), indices)[1]
+        return problems
+
+    def scene(self, indices: Sequence[int]) -> Scene:
+        """The scene with each field set to ``values[indices[axis]]``.
+
+        Raises
+        ------
+        SceneError
+            The values the scene refuses, exactly as :meth:`Scene.replace` says.
+        """
+        parts: dict[str, Any] = {}
+        problems: list[str] = []
+        for top, part_indices in self._part_indices:
+            value, found = self._part(top, part_indices(indices), indices)
+            parts[top] = value
+            problems += found
+        if problems:
+            raise SceneError(problems, self.source)
+        return Scene(**parts)
+
+    def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
+        found = self._parts.get((top, part_indices))
+        if found is None:
+            positions = self._positions[top]
+            changes = [(self._fields[i], self._values[i][indices[i]]) for i in positions]
+            found = self._parts[top, part_indices] = self._read(top, changes)
+        return found
+
+    def _read(self, top: str, changes: list[tuple[str, Any]]) -> tuple[Any, list[str]]:
+        """Part ``top`` with ``changes`` made as :meth:`Scene.replace` makes them, and what the
+        reader found wrong with it."""
+        data = {top: _copy_plain(self._data[top])}
+        for dotted, value in changes:
+            node = data
+            *parents, leaf = dotted.split(".")
+            for part in parents:
+                node = node.setdefault(part, {})
+            node[leaf] = value
+        reader = _Reader(self.source)
+        if top == "name":
+            part = reader.convert(data[top], "name", _string)
+        elif top == "seed":
+            part = reader.convert(data[top], "seed", _seed)
+        else:
+            part = getattr(reader, top)(data[top], top)
+        return part, reader.problems
+
+
+def _copy_plain(value: Any) -> Any:
+    """A copy of a plain nested dict/list, so that changing it leaves the original alone."""
+    if isinstance(value, dict):
+        return {k: _copy_plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_copy_plain(v) for v in value]
+    return value
 
 
 # ---------------------------------------------------------------------------------------------

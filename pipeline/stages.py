@@ -43,6 +43,7 @@ into that entry.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import time
 from collections.abc import Callable, Iterator, Mapping
@@ -355,11 +356,25 @@ class Level:
 
     def upstream(self) -> tuple[Level, ...]:
         """Every level this one needs, directly or through others, each once, inputs first."""
+        return self._upstream
+
+    @functools.cached_property
+    def _upstream(self) -> tuple[Level, ...]:
         found: dict[str, Level] = {}
         for before in self.after:
             for level in (*before.upstream(), before):
                 found.setdefault(level.name, level)
         return tuple(found.values())
+
+    @functools.cached_property
+    def _all_reads(self) -> tuple[Read, ...]:
+        return tuple(read for level in (*self.upstream(), self) for read in level.reads)
+
+    @functools.cached_property
+    def _parts_by_condition(self) -> dict[tuple[bool, ...], tuple[str, ...]]:
+        # The parts depend on the scene only through which conditional reads apply: computed
+        # once per such combination, as a grid asks for the keys of many scenes.
+        return {}
 
     def key_parts(self, scene: Scene) -> tuple[str, ...]:
         """The scene parts this level's output depends on: what it and its upstream read.
@@ -367,17 +382,24 @@ class Level:
         A field whose whole part is read too is left to the part (``readout.full_scale_v``
         within ``readout``).
         """
-        paths: dict[str, None] = {}
-        for level in (*self.upstream(), self):
-            for read in level.reads:
-                if read.applies(scene):
+        reads = self._all_reads
+        applies = tuple(read.applies(scene) for read in reads if read.when is not None)
+        parts = self._parts_by_condition.get(applies)
+        if parts is None:
+            conditions = iter(applies)
+            paths: dict[str, None] = {}
+            for read in reads:
+                if read.when is None or next(conditions):
                     paths.setdefault(read.path, None)
-        return tuple(p for p in paths if not any(p.startswith(f"{q}.") for q in paths))
+            parts = tuple(p for p in paths if not any(p.startswith(f"{q}.") for q in paths))
+            self._parts_by_condition[applies] = parts
+        return parts
 
-    def key(self, scene: Scene) -> str:
+    def key(self, scene: Scene, memo: scene_module.CanonicalMemo | None = None) -> str:
         """SHA-256 (hex, 32 chars) of :data:`pipeline.scene.MODEL_REVISION`, the level's name
-        and the canonical form of exactly :meth:`key_parts`."""
-        canonical = scene.canonical(self.key_parts(scene))
+        and the canonical form of exactly :meth:`key_parts`; ``memo`` as for
+        :meth:`pipeline.scene.Scene.canonical` (the key does not depend on it)."""
+        canonical = scene.canonical(self.key_parts(scene), memo)
         text = f"r{scene_module.MODEL_REVISION}:{self.name}:" + canonical
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 

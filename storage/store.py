@@ -458,6 +458,22 @@ class SweepStore:
         """True only if a complete entry ``kind/key`` exists (partial copies are invisible)."""
         return (self._entry_path(EntryKind(kind), key) / "zarr.json").is_file()
 
+    def complete_keys(self, kind: EntryKind | str) -> frozenset[str]:
+        """Keys of the complete entries of ``kind``, from one listing of its folder.
+
+        One directory listing instead of a look-up per key: planning a sweep of many points asks
+        which of them are stored. Partial copies and anything that is not an entry are left out.
+        """
+        try:
+            with os.scandir(self.path / EntryKind(kind).value) as entries:
+                return frozenset(
+                    entry.name
+                    for entry in entries
+                    if _KEY.fullmatch(entry.name) and os.path.isfile(Path(entry.path, "zarr.json"))
+                )
+        except FileNotFoundError:
+            return frozenset()
+
     def discard(self, kind: EntryKind | str, key: str) -> bool:
         """Remove entry ``kind/key`` (e.g. a corrupt one, to recompute it).
 

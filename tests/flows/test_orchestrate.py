@@ -14,11 +14,13 @@ from flows.orchestrate import (
     SweepCounts,
     SweepPlan,
     assemble_cube,
+    check_grid,
     cost_kind,
     dry_run,
     format_dry_run,
     load_sweep_grid,
     open_root,
+    plan_sweep,
     training_cost,
     with_recordings,
 )
@@ -28,7 +30,7 @@ from pipeline.errors import DatasetError
 from pipeline.grid import DatasetFacts, Grid, load_grid
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Scene, cache_key
-from storage import StoreError
+from storage import EntryKind, StoreError
 from storage.store import RateEntry, ResultEntry, SweepStore
 
 
@@ -220,3 +222,71 @@ def test_cubes_state_the_recordings_of_entries_written_before_results_did(tmp_pa
         empty.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
     cube = assemble_cube(bare, "t")
     assert not {"dataset_name", "sampling_rate_hz", "class_names", "n_classes"} & set(cube.attrs)
+
+
+# ---------------------------------------------------------------------------------------------
+# Planning
+
+
+def test_check_grid_describes_each_distinct_dataset_once(monkeypatch):
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "a": {"axes": {"dataset.seed": [0, 1], "readout.threshold_v": [0.05, 0.1]}},
+                "b": {"axes": {"dataset.seed": [1, 2]}},
+            },
+        }
+    )
+    described = []
+    real = DatasetFacts.describe
+
+    def describe(spec):
+        described.append(spec.seed)
+        return real(spec)
+
+    monkeypatch.setattr(DatasetFacts, "describe", describe)
+    facts = check_grid(grid)
+    assert described == [0, 1, 2]
+    assert list(facts) == list(
+        dict.fromkeys(cache_key(p.scene, "recordings") for p in grid.points())
+    )
+
+
+def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path):
+    grid = load_grid("smoke")
+    store = SweepStore.open_or_create(tmp_path / "run")
+    keys = list(grid.unique_points())
+    assert not store.complete_keys(EntryKind.RESULTS) & set(keys)
+    assert SweepStore(tmp_path / "absent").complete_keys(EntryKind.RESULTS) == frozenset()
+    for key in (keys[2], keys[0]):
+        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+    (store.path / "results" / f".partial-{keys[1]}-0").mkdir()
+    (store.path / "results" / keys[3]).mkdir()  # no metadata: not a complete entry
+    assert store.complete_keys(EntryKind.RESULTS) == {keys[0], keys[2]}
+    plan = plan_sweep("smoke", str(store.root))
+    assert list(plan.scenes) == keys
+    assert list(plan.records) == [keys[0], keys[2]]
+    assert plan.missing == [k for k in keys if k not in (keys[0], keys[2])]
+    assert plan.sweep_keys == {
+        s.name: tuple(dict.fromkeys(p.key for p in grid.points() if p.sweep == s.name))
+        for s in grid.sweeps
+    }
+    assert not (store.path / "results" / f".partial-{keys[1]}-0").exists()
+
+
+def test_an_equal_grid_loaded_again_is_the_last_one_with_its_points(tmp_path):
+    path = tmp_path / "g.toml"
+    text = '[sweeps.t]\naxes = {{ "readout.threshold_v" = {} }}\n'
+    path.write_text(text.format("[0.05, 0.1]"))
+    first = load_sweep_grid(str(path))
+    points = first.points()
+    again = load_sweep_grid(str(path))
+    assert again is first and again.points() == points
+    path.write_text(text.format("[0.05, 0.2]"))
+    changed = load_sweep_grid(str(path))
+    assert changed != first
+    assert [p.scene.readout.threshold_v for p in changed.points()] == [0.05, 0.2]
+    (tmp_path / "Z.csv").write_text("")
+    moved = load_sweep_grid(str(path), str(tmp_path))
+    assert {p.scene.dataset.kind for p in moved.points()} == {"vibtac12"}

@@ -1,5 +1,10 @@
 """Grids: built-in grids cover the paper's figures; expansion, dimension names, validation."""
 
+import dataclasses
+import hashlib
+import itertools
+import json
+
 import numpy as np
 import pytest
 
@@ -12,9 +17,11 @@ from pipeline.grid import (
     check_scene_fits,
     load_grid,
     scene_misfits,
+    sweep_points,
 )
 from pipeline.recordings import Recordings
-from pipeline.scene import Effect, Scene, cache_key
+from pipeline.scene import MODEL_REVISION, Effect, Scene, SceneVariants, _selected, cache_key
+from pipeline.stages import LEVELS
 from pipeline.taxels import cut_samples, taxel_delays_s, taxel_signals
 
 
@@ -318,3 +325,229 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
     facts = DatasetFacts.describe(spec)
     assert facts == DatasetFacts.of(load_recordings(spec))
     assert (facts.min_samples, facts.shortest) == (20, "a/r1.npy")
+
+
+# ---------------------------------------------------------------------------------------------
+# Expansion: the shared-parts path gives what a plain ``Scene.replace`` per point gives
+
+
+def reference_key(scene: Scene, level) -> str:
+    """A level's key as it was first written: its parts found level by level, the canonical
+    form of the whole scene as one dict."""
+    paths = {}
+    for each in (*level.upstream(), level):
+        for read in each.reads:
+            if read.applies(scene):
+                paths.setdefault(read.path, None)
+    parts = tuple(p for p in paths if not any(p.startswith(f"{q}.") for q in paths))
+    assert level.key_parts(scene) == parts
+    data = scene.to_dict()
+    data.pop("name")
+    canonical = json.dumps(
+        _selected(data, parts),
+        sort_keys=True,
+        separators=(",", ":"),
+        allow_nan=False,
+    )
+    text = f"r{MODEL_REVISION}:{level.name}:{canonical}"
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def reference_points(grid: Grid) -> list[tuple[str, tuple[int, ...], Scene]]:
+    """Every point as ``Scene.replace`` makes it, one point at a time."""
+    found = []
+    for s in grid.sweeps:
+        fixed = grid.base.replace(**s.fixed) if s.fixed else grid.base
+        found += [(s.name, index, fixed.replace(**values)) for index, values in s.index_values()]
+    return found
+
+
+def reference_problems(data: dict) -> list[str]:
+    """The problems of a grid's points as ``Scene.replace`` finds them, one point at a time."""
+    base = Scene.builtin(data["base"])
+    problems = []
+    for name, spec in data["sweeps"].items():
+        fixed = base.replace(**spec.get("set", {}))
+        axes = spec["axes"]
+        if spec.get("mode") == "zip":
+            rows = [
+                dict(zip(axes, values, strict=True)) for values in zip(*axes.values(), strict=True)
+            ]
+        else:
+            rows = [dict(zip(axes, v, strict=True)) for v in itertools.product(*axes.values())]
+        for values in rows:
+            try:
+                fixed.replace(**values)
+            except SceneError as exc:
+                at = ", ".join(f"{f} = {v!r}" for f, v in values.items())
+                problems.append(f"sweeps.{name} at {at}: {'; '.join(exc.problems)}")
+    return problems
+
+
+MANY_AXES = {
+    "base": "paper",
+    "sweeps": {
+        "product": {
+            "set": {"array.cols": 2, "readout.effects.amplifier_noise.sigma_v": 0.01},
+            "axes": {
+                "readout.threshold_v": [0.05, 0.09],
+                "readout.effects.threshold_mismatch.sigma_rel": [0.0, 0.1, 0.2],
+                "coding.window_s": [0.1, 0.2],
+                "training.seed": [0, 1],
+                "seed": [0, 5],
+            },
+        },
+        "zipped": {
+            "mode": "zip",
+            "axes": {
+                "readout.effects.comparator_noise.sigma_v": [0.0, 0.01, 0.02],
+                "array.rows": [1, 2, 3],
+                "coding.n_windows": [10, "auto", 5],
+            },
+        },
+        "tables": {
+            "axes": {
+                "readout.effects": [{}, {"saturation": {"rail_v": 0.4}}],
+                "training.models": [["ffnn"], ["cnn", "ffnn"]],
+                "dataset.seed": [0, 1],
+            }
+        },
+    },
+}
+
+
+def test_points_keys_and_order_are_those_of_scene_replace_at_every_point():
+    grid = Grid.from_dict(MANY_AXES)
+    points = grid.points()
+    assert [(p.sweep, p.index, p.scene) for p in points] == reference_points(grid)
+    assert len(points) == 48 + 3 + 8
+    for point in points:
+        assert point.key == reference_key(point.scene, LEVELS[-1])
+        assert point == type(point)(point.sweep, point.index, point.scene)
+        assert point.key == type(point)(point.sweep, point.index, point.scene).key
+        moved = dataclasses.replace(point, scene=point.scene.replace(**{"array.rows": 7}))
+        assert moved.key == cache_key(moved.scene, "results") != point.key
+        for level in LEVELS:
+            assert level.key(point.scene) == reference_key(point.scene, level)
+    # The sweep's own points are the grid's.
+    assert sweep_points(grid.base, grid.sweeps[1]) == [p for p in points if p.sweep == "zipped"]
+
+
+def test_canonical_form_is_that_of_the_whole_selection_with_or_without_a_memo():
+    scene = Grid.from_dict(MANY_AXES).points()[5].scene
+    memo = {}
+    data = scene.to_dict()
+    data.pop("name")
+    for parts in (
+        None,
+        ("dataset",),
+        ("readout.full_scale_v", "dataset"),
+        ("readout", "readout.full_scale_v", "seed"),
+        ("readout.effects", "array.rows", "training"),
+    ):
+        selected = data if parts is None else _selected(data, parts)
+        expected = json.dumps(selected, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        assert scene.canonical(parts) == expected
+        assert scene.canonical(parts, memo) == scene.canonical(parts, memo) == expected
+    assert memo  # parts were remembered
+    with pytest.raises(KeyError):
+        scene.canonical(("name",))
+
+
+def test_scene_variants_refuse_what_scene_replace_refuses_with_the_same_problems():
+    scene = Scene.paper()
+    axes = [
+        ("readout.threshold_v", [0.05, 2.0, -1.0]),
+        ("readout.full_scale_v", [1.0, 0.01]),
+        ("seed", [0, -3]),
+        ("array.rows", [1, 0]),
+    ]
+    variants = SceneVariants(scene, axes)
+    for indices in itertools.product(*(range(len(v)) for _, v in axes)):
+        changes = {f: values[i] for (f, values), i in zip(axes, indices, strict=True)}
+        try:
+            expected = scene.replace(**changes)
+        except SceneError as exc:
+            assert variants.problems(indices) == exc.problems
+            with pytest.raises(SceneError) as info:
+                variants.scene(indices)
+            assert str(info.value) == str(exc)
+        else:
+            assert variants.problems(indices) == []
+            assert variants.scene(indices) == expected
+    with pytest.raises(ValueError, match="not top-level scene fields: wobble"):
+        SceneVariants(scene, [("wobble.x", [1])])
+
+
+def test_refused_values_are_reported_point_by_point_as_before():
+    data = {
+        "base": "paper",
+        "sweeps": {
+            "p": {
+                "axes": {
+                    "readout.threshold_v": [0.05, 1.5],
+                    "readout.full_scale_v": [1.0, 0.02],
+                    "seed": [1, -1],
+                }
+            },
+            "z": {
+                "mode": "zip",
+                "set": {"array.cols": 1},
+                "axes": {"array.rows": [0, 2, 300], "training.folds": [1, 3, 4]},
+            },
+        },
+    }
+    with pytest.raises(SceneError) as info:
+        Grid.from_dict(data)
+    expected = reference_problems(data)
+    assert len(expected) == 7 + 2  # one point of p fits, one of z
+    assert info.value.problems == expected
+    assert str(info.value) == str(SceneError(expected, "<dict>", "grid"))
+
+
+def test_equal_scenes_at_several_points_are_one_point_by_key():
+    # No random effect: the scene seed is not in any key, so both seeds are one point; the
+    # operating point is in both sweeps.
+    grid = Grid.from_dict(
+        {
+            "base": "paper",
+            "sweeps": {
+                "seeds": {"axes": {"seed": [0, 1], "readout.threshold_v": [0.05, 0.09]}},
+                "threshold": {"axes": {"readout.threshold_v": [0.09, 0.2]}},
+            },
+        }
+    )
+    points = grid.points()
+    keys = [p.key for p in points]
+    assert len(keys) == 6
+    unique = grid.unique_points()
+    assert list(unique) == list(dict.fromkeys(keys))
+    assert len(unique) == 3
+    assert unique[keys[0]] is points[0].scene
+    assert keys[0] == keys[2] and keys[1] == keys[3] == keys[4] == cache_key(grid.base, "results")
+
+
+def test_check_fits_reports_as_the_per_point_check():
+    grid = Grid.from_dict(
+        {
+            "base": "paper",
+            "sweeps": {
+                "a": {"axes": {"array.rows": [1, 3, 5], "coding.window_s": [0.1, 0.2, 0.5]}},
+                "b": {"axes": {"training.folds": [2, 4, 12], "coding.n_windows": [1, 3]}},
+            },
+        }
+    )
+    facts = DatasetFacts.of(recordings_with_short_class(401))
+    places: dict[str, list[str]] = {}
+    for point in grid.points():
+        for _, text in scene_misfits(point.scene, facts):
+            where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
+            places.setdefault(text, []).append(where)
+    expected = [
+        ", ".join(w[:3]) + (f" and {len(w) - 3} more" if len(w) > 3 else "") + f": {text}"
+        for text, w in places.items()
+    ]
+    assert len(expected) >= 4
+    with pytest.raises(SceneError) as info:
+        check_fits(grid, {cache_key(grid.base, "recordings"): facts})
+    assert info.value.problems == expected

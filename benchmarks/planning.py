@@ -1,0 +1,215 @@
+"""Planning a sweep: load, check and plan grids of 1,000, 10,000 and 100,000 points.
+
+What ``eskin sweep`` does before any point is computed, timed as the user meets it: the command
+line loads the grid and checks it against its recordings (:func:`flows.orchestrate.check_grid`),
+then the flow opens the root (loading the grid again) and plans it
+(:func:`flows.orchestrate.plan_sweep`: load, check, distinct points by key, cached entries) on
+an empty store. Each grid is a product of five axes over the ``paper`` scene (threshold,
+window, taxel rows, threshold mismatch, training seed), the same sweep at every size.
+
+Rows: the 100,000-point plan against its absolute target (10 s on 2 cores); the cost per point
+at 100,000 over that at 1,000 (linear growth keeps it near 1); and, side by side in this
+process on 1,000 points, the straightforward way (``Scene.replace``, the whole canonical form
+and the fit check at every point) over the shared-parts path, after checking that both give the
+same points and keys. Medians of 3 runs.
+
+``python -m benchmarks.planning`` runs this suite alone and prints its rows and the seconds of
+each phase at 100,000 points.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import resource
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from benchmarks.timing import median_seconds
+from flows.orchestrate import check_grid, load_sweep_grid, open_root, plan_sweep
+from pipeline.grid import DatasetFacts, Grid, check_scene_fits, load_grid
+from pipeline.scene import MODEL_REVISION, Scene, _selected
+from pipeline.stages import RECORDINGS, RESULTS, Level
+
+SIZES = (1_000, 10_000, 100_000)
+REPEAT = 3
+TARGET_S = 10.0
+LINEAR_TARGET = 1.5
+BASELINE_POINTS = 1_000
+THRESHOLDS_V = [0.01, 0.02, 0.03, 0.05, 0.07, 0.09, 0.12, 0.15, 0.2, 0.25]
+WINDOWS_S = [0.025, 0.05, 0.075, 0.1, 0.125, 0.15, 0.2, 0.25, 0.3, 0.4]
+ROWS = list(range(1, 11))  # 10 rows at 1 mm, 20 mm/s: 0.45 s of delays, 4.5 s left of 5 s
+MISMATCH_REL = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5]
+
+
+def grid_text(n_points: int) -> str:
+    """A grid TOML of ``n_points`` (1,000 times a power of ten up to 100,000) on ``paper``."""
+    mismatch = MISMATCH_REL if n_points >= 10_000 else MISMATCH_REL[1:2]
+    seeds = list(range(n_points // 10_000)) if n_points >= 100_000 else [0]
+    axes = {
+        "readout.threshold_v": THRESHOLDS_V,
+        "coding.window_s": WINDOWS_S,
+        "array.rows": ROWS,
+        "readout.effects.threshold_mismatch.sigma_rel": mismatch,
+        "training.seed": seeds,
+    }
+    lines = [f'name = "plan{n_points}"', 'base = "paper"', "[sweeps.big.axes]"]
+    lines += [f'"{field}" = {json.dumps(values)}' for field, values in axes.items()]
+    return "\n".join(lines) + "\n"
+
+
+def sweep_before_work(grid_path: str, root: str) -> int:
+    """What ``eskin sweep`` does before computing: load and check, open the root, plan.
+
+    Returns the number of distinct points planned.
+    """
+    grid = load_sweep_grid(grid_path)  # held, as the command line holds it, while the flow runs
+    check_grid(grid)
+    store = open_root(grid_path, root)
+    return len(plan_sweep(grid_path, str(store.root)).scenes)
+
+
+def reference_key(scene: Scene, level: Level) -> str:
+    """A level's key from the canonical form of the whole scene written at once."""
+    data = scene.to_dict()
+    data.pop("name")
+    canonical = json.dumps(
+        _selected(data, level.key_parts(scene)),
+        sort_keys=True,
+        separators=(",", ":"),
+        allow_nan=False,
+    )
+    text = f"r{MODEL_REVISION}:{level.name}:{canonical}"
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def reference_plan(grid: Grid) -> dict[str, Scene]:
+    """The baseline: every point built with ``Scene.replace``, its keys from the whole
+    canonical form, its fit checked on its own; the distinct scenes by result key."""
+    facts: dict[str, DatasetFacts] = {}
+    unique: dict[str, Scene] = {}
+    for sweep in grid.sweeps:
+        fixed = grid.base.replace(**sweep.fixed) if sweep.fixed else grid.base
+        for _, values in sweep.index_values():
+            scene = fixed.replace(**values)
+            recordings = reference_key(scene, RECORDINGS)
+            if recordings not in facts:
+                facts[recordings] = DatasetFacts.describe(scene.dataset)
+            check_scene_fits(scene, facts[recordings])
+            unique.setdefault(reference_key(scene, RESULTS), scene)
+    return unique
+
+
+def shared_parts_plan(grid: Grid) -> dict[str, Scene]:
+    """The same from a fresh copy of ``grid`` (nothing cached): check, then distinct points."""
+    fresh = dataclasses.replace(grid)
+    check_grid(fresh)
+    return fresh.unique_points()
+
+
+def timed(function: Callable[[], object]) -> float:
+    start = time.perf_counter()
+    function()
+    return time.perf_counter() - start
+
+
+def phases(grid_path: str, root: str) -> dict[str, float]:
+    """Seconds of each planning phase of one grid, in the order a sweep meets them."""
+    seconds = {}
+    start = time.perf_counter()
+    grid = load_grid(grid_path)
+    seconds["load_grid"] = time.perf_counter() - start
+    seconds["points()"] = timed(grid.points)
+    seconds["check_grid"] = timed(lambda: check_grid(grid))
+    seconds["unique_points()"] = timed(grid.unique_points)
+    store = open_root(grid_path, root)
+    seconds["plan_sweep"] = timed(lambda: plan_sweep(grid_path, str(store.root)))
+    return seconds
+
+
+def measure(folder: Path, repeat: int = REPEAT) -> dict:
+    """Medians of the sweep-before-work time per size, the baseline pair, phases at the most."""
+    paths = {}
+    for n in SIZES:
+        paths[n] = folder / f"plan{n}.toml"
+        paths[n].write_text(grid_text(n))
+    seconds = {}
+    for n in SIZES:
+        runs = []
+        for i in range(repeat):
+            root = str(folder / f"root{n}-{i}")
+            start = time.perf_counter()
+            planned = sweep_before_work(str(paths[n]), root)
+            runs.append(time.perf_counter() - start)
+            if planned != n:
+                raise RuntimeError(f"{paths[n]} planned {planned} distinct points, not {n}")
+        seconds[n] = statistics.median(runs)
+    grid = load_grid(str(paths[BASELINE_POINTS]))
+    if list(shared_parts_plan(grid).items()) != list(reference_plan(grid).items()):
+        raise RuntimeError("the shared-parts plan and the Scene.replace baseline differ")
+    ours_s, baseline_s = median_seconds(
+        lambda: shared_parts_plan(grid), lambda: reference_plan(grid), repeat=repeat
+    )
+    return {
+        "seconds": seconds,
+        "ours_s": ours_s,
+        "baseline_s": baseline_s,
+        "phases": phases(str(paths[SIZES[-1]]), str(folder / "phases")),
+        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def rows(found: dict) -> list[dict]:
+    seconds = found["seconds"]
+    per_point_us = {n: s / n * 1e6 for n, s in seconds.items()}
+    small, large = SIZES[0], SIZES[-1]
+    sizes = ", ".join(f"{n:,}: {seconds[n]:.2f} s ({per_point_us[n]:.0f} us/point)" for n in SIZES)
+    return [
+        {
+            "benchmark": f"plan+check {large:,} points / {TARGET_S:g} s",
+            "ratio": seconds[large] / TARGET_S,
+            "target": "<= 1",
+            "detail": f"{sizes}; peak {found['peak_rss_mib']:.0f} MiB",
+        },
+        {
+            "benchmark": f"plan+check per point: {large:,} / {small:,} points",
+            "ratio": per_point_us[large] / per_point_us[small],
+            "target": f"<= {LINEAR_TARGET} (linear)",
+            "detail": f"{per_point_us[small]:.0f} us/point at {small:,} (fixed costs "
+            f"included), {per_point_us[large]:.0f} us/point at {large:,}; "
+            f"{large:,} / {SIZES[1]:,}: {per_point_us[large] / per_point_us[SIZES[1]]:.2f}",
+        },
+        {
+            "benchmark": "check+distinct points: Scene.replace per point / shared parts",
+            "ratio": found["baseline_s"] / found["ours_s"],
+            "target": ">= 10",
+            "detail": f"{BASELINE_POINTS:,} points: {found['ours_s'] * 1e3:.0f} ms vs "
+            f"{found['baseline_s'] * 1e3:.0f} ms",
+        },
+    ]
+
+
+def run(repeat: int = REPEAT) -> list[dict]:
+    with tempfile.TemporaryDirectory(prefix="eskin-plan-") as folder:
+        return rows(measure(Path(folder), repeat))
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory(prefix="eskin-plan-") as folder:
+        found = measure(Path(folder))
+    table = rows(found)
+    width = max(len(r["benchmark"]) for r in table)
+    print(f"{'benchmark':{width}s}  {'ratio':>8s}  target / detail")
+    for r in table:
+        print(f"{r['benchmark']:{width}s}  {r['ratio']:8.2f}  {r['target']}; {r['detail']}")
+    print(f"phases at {SIZES[-1]:,} points (s):")
+    for name, seconds in found["phases"].items():
+        print(f"  {name:16s} {seconds:6.2f}")
+
+
+if __name__ == "__main__":
+    main()
