@@ -1,4 +1,8 @@
-"""``python -m benchmarks``: run every benchmark and print one table of medians and ratios."""
+"""``python -m benchmarks``: run every benchmark and print one table of medians and ratios.
+
+A row may carry a ``table`` (markdown text) of the figures behind it: it is printed after the
+summary table.
+"""
 
 from __future__ import annotations
 
@@ -8,12 +12,14 @@ import sys
 
 from tqdm import tqdm
 
-from benchmarks import coding, encoder, planning, scale, sweep, training
+from benchmarks import coding, encoder, planning, scale, sweep, sweep_scale, training
 
 
 def main() -> None:
-    quick = "--quick" in sys.argv  # skips the scale runs and the paper-grid sweeps (~25 minutes)
-    suites = [encoder, coding, training, planning] + ([] if quick else [scale, sweep])
+    # --quick skips the scale runs, the paper-grid sweeps (~25 minutes) and the sweep machinery
+    # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes).
+    quick = "--quick" in sys.argv
+    suites = [encoder, coding, training, planning] + ([] if quick else [scale, sweep, sweep_scale])
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
         rows += suite.run()
@@ -24,6 +30,9 @@ def main() -> None:
     print(f"{'benchmark':{width}s}  {'ratio':>8s}  target / detail")
     for r in rows:
         print(f"{r['benchmark']:{width}s}  {r['ratio']:8.2f}  {r['target']}; {r['detail']}")
+    for r in rows:
+        if "table" in r:
+            print(f"\n{r['benchmark']}:\n{r['table']}")
 
 
 if __name__ == "__main__":

@@ -200,19 +200,19 @@ def temporary_server_env(env: dict[str, str], state: Path) -> dict[str, str]:
 
 
 def stage_seconds(root: Path) -> float:
-    """Sum of every computed stage's seconds: spike stages once per spike entry."""
+    """Sum of every computed stage's seconds: spike stages once per spike entry, coding and
+    training once per result (coding a rate matrix, which the store does not keep, is timed
+    by each result that needed it)."""
     store = SweepStore.open(root)
-    total = 0.0
-    for kind in (EntryKind.SPIKES, EntryKind.RATES, EntryKind.RESULTS):
-        folder = store.path / kind.value
-        for key in (p.name for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")):
-            if kind is EntryKind.SPIKES:
-                total += sum(store.read_spikes(key).seconds.values())
-            elif kind is EntryKind.RATES:
-                total += sum(store.read_rates(key).seconds.values())
-            else:
-                seconds = store.read_result(key).seconds
-                total += sum(v for k, v in seconds.items() if k.startswith("train_"))
+    spikes = store.read_many(
+        EntryKind.SPIKES, store.complete_keys(EntryKind.SPIKES), discard_corrupt=False
+    )
+    results = store.read_many(
+        EntryKind.RESULTS, store.complete_keys(EntryKind.RESULTS), discard_corrupt=False
+    )
+    total = sum(sum(entry.seconds.values()) for entry in spikes.values())
+    for entry in results.values():
+        total += sum(v for k, v in entry.seconds.items() if k == "coding" or k.startswith("train_"))
     return total
 
 

@@ -8,12 +8,13 @@ whose result is in the store is not computed again.
 
 from __future__ import annotations
 
+import collections
 import contextlib
-import dataclasses
 import functools
 import hashlib
 import json
 import logging
+import math
 import re
 import statistics
 import threading
@@ -29,19 +30,23 @@ import xarray as xr
 
 from flows.cluster import ClusterError, check_workers, dask_client
 from flows.environment import hermetic_environment
-from flows.work import ensure_entry
+from flows.work import PointsFailed, ensure_entries
 from pipeline.coding import MAX_AUTO_WINDOWS
-from pipeline.cube import RecordingsInfo, build_cube
+from pipeline.cube import build_cube
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import resolve_dataset_argument
-from pipeline.scene import DatasetSpec, Scene, cache_key
+from pipeline.scene import CanonicalMemo, DatasetSpec, Scene, cache_key
 from pipeline.stages import RESULTS, SPIKES
 from storage import EntryKind, ResultEntry, StoreError, SweepStore
 from storage.cubes import SPIKE_STAGES
 
 DEFAULT_RUNS_DIR = Path("runs")
 POLL_S = 2.0
+#: Tasks per worker thread a sweep's missing points are split into (see
+#: :func:`default_points_per_task`), and the most points one task takes.
+TASKS_PER_THREAD = 8
+MAX_POINTS_PER_TASK = 500
 NO_WORKER_TIMEOUT_S = 120.0
 
 
@@ -57,15 +62,12 @@ class SweepPlan:
 
     ``records`` holds the result entries of the cached points as planning read (and checked)
     them, so that assembling the cubes reads from the store only the points computed since.
-    ``datasets`` holds the facts of each dataset the grid was checked against, by recordings
-    cache key.
     """
 
     grid: Grid
     root: str
     scenes: dict[str, Scene]  # distinct points by result key
     records: dict[str, ResultEntry]
-    datasets: dict[str, DatasetFacts] = dataclasses.field(default_factory=dict)
 
     @property
     def cached(self) -> frozenset[str]:
@@ -184,57 +186,117 @@ def plan_sweep(grid_ref: str, root: str, dataset: str | None = None) -> SweepPla
     ``dataset`` is as for :func:`load_sweep_grid`.
     """
     grid = load_sweep_grid(grid_ref, dataset)
-    datasets = check_grid(grid)
+    check_grid(grid)
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    stored = store.complete_keys(EntryKind.RESULTS)
-    found = {key: store.read_valid(EntryKind.RESULTS, key) for key in scenes if key in stored}
-    records = {key: entry for key, entry in found.items() if entry is not None}
-    return SweepPlan(grid, str(store.root), scenes, records, datasets)
+    found = store.read_many(EntryKind.RESULTS, scenes, discard_corrupt=True)
+    records = {key: found[key] for key in scenes if key in found}
+    return SweepPlan(grid, str(store.root), scenes, records)
 
 
-def submit_missing(plan: SweepPlan, client: Any) -> dict[str, Any]:
-    """Submit every missing point (after the spike trains it needs); return its future by key.
+def submit_missing(
+    plan: SweepPlan, client: Any, points_per_task: int | None = None
+) -> dict[str, Any]:
+    """Submit every missing point in batches; return each point's future by result key.
 
-    Largest points first, so that no long point starts last while the other workers idle. A
-    spike train that several points share is submitted once, and one already in the store not
-    at all. Task keys name the root as well as the entry: Dask hands a task whose key it still
-    holds the earlier result, so a sweep of another root on the same cluster would otherwise
-    skip writing its entries.
+    Points are ordered largest first (so that no long point starts last while the other workers
+    idle), points that share a spike train are kept together, and consecutive points are
+    batched into one task each (:func:`flows.work.ensure_entries`): a task costs the
+    scheduler and the store the same whatever its size, so cheap points are sent many at a
+    time. Points of one task share its future. A spike train that points of several tasks
+    share is computed first by a task of its own (before those tasks start); one already in
+    the store is not computed at all. Task keys name the root as well as the work: Dask hands
+    a task whose key it still holds the earlier result, so a sweep of another root on the same
+    cluster would otherwise skip writing its entries.
+
+    Parameters
+    ----------
+    points_per_task
+        Points per task; default :func:`default_points_per_task` of the missing points and the
+        cluster's worker threads.
     """
     store = SweepStore.open(plan.root)
     root = hashlib.sha256(str(Path(plan.root).resolve()).encode()).hexdigest()[:12]
-    spike_futures: dict[str, Any] = {}
-    point_futures = {}
-    priorities = {key: training_cost(plan.scenes[key]) for key in plan.missing}
-    for key in sorted(priorities, key=priorities.__getitem__, reverse=True):
-        scene = plan.scenes[key]
-        data = scene.to_dict()
-        priority = priorities[key]
-        spikes_key = SPIKES.key(scene)
-        if spikes_key not in spike_futures and not store.has(SPIKES.name, spikes_key):
-            spike_futures[spikes_key] = client.submit(
-                ensure_entry,
-                plan.root,
-                SPIKES.name,
-                data,
-                key=f"spikes-{spikes_key}-{root}",
-                pure=False,
-                priority=priority + 1,
-            )
-        after = [spike_futures[spikes_key]] if spikes_key in spike_futures else []
-        point_futures[key] = client.submit(
-            ensure_entry,
+    cost = {key: training_cost(plan.scenes[key]) for key in plan.missing}
+    size = points_per_task or default_points_per_task(len(cost), sum(client.nthreads().values()))
+    by_train: dict[str, list[str]] = {}
+    memo: CanonicalMemo = {}  # the points share scene parts: each is written once
+    for key in sorted(cost, key=cost.__getitem__, reverse=True):
+        by_train.setdefault(SPIKES.key(plan.scenes[key], memo), []).append(key)
+    batches = _batches(by_train, size)
+    stored = store.complete_keys(EntryKind.SPIKES)
+    spread = collections.Counter(train for batch in batches for train in {t for t, _ in batch})
+    shared = [train for train, n in spread.items() if n > 1 and train not in stored]
+    train_futures: dict[str, Any] = {}
+    for start in range(0, len(shared), size):
+        trains = shared[start : start + size]
+        scenes = [plan.scenes[by_train[t][0]] for t in trains]
+        future = client.submit(
+            ensure_entries,
+            plan.root,
+            SPIKES.name,
+            scenes,
+            key=f"spikes-{_digest_keys(trains)}-{root}",
+            pure=False,
+            priority=max(cost.values()) + 1,
+        )
+        train_futures.update(dict.fromkeys(trains, future))
+    futures: dict[str, Any] = {}
+    for batch in batches:
+        keys = [key for _, keys in batch for key in keys]
+        after = list({id(f): f for t, _ in batch if (f := train_futures.get(t))}.values())
+        future = client.submit(
+            ensure_entries,
             plan.root,
             RESULTS.name,
-            data,
+            [plan.scenes[key] for key in keys],
             *after,
-            key=f"point-{key}-{root}",
+            key=f"points-{_digest_keys(keys)}-{root}",
             pure=False,
-            priority=priority,
+            priority=max(cost[key] for key in keys),
         )
-    return point_futures
+        futures.update(dict.fromkeys(keys, future))
+    return futures
+
+
+def default_points_per_task(n_points: int, n_threads: int) -> int:
+    """Points per task: about 8 tasks per worker thread, 1 to :data:`MAX_POINTS_PER_TASK`.
+
+    Eight tasks per thread keep the workers evenly busy to the end when points differ in
+    cost; a sweep of few, expensive points gets one point per task.
+    """
+    per_task = math.ceil(n_points / (TASKS_PER_THREAD * max(1, n_threads)))
+    return max(1, min(MAX_POINTS_PER_TASK, per_task))
+
+
+def _batches(by_train: dict[str, list[str]], size: int) -> list[list[tuple[str, list[str]]]]:
+    """Points in batches of at most ``size``: (spike key, result keys) pairs, in order.
+
+    The points of one train stay in one batch where they fit, so that the batch computes the
+    train itself; a train with more points than ``size`` is spread over several batches.
+    """
+    batches: list[list[tuple[str, list[str]]]] = []
+    current: list[tuple[str, list[str]]] = []
+    room = size
+    for train, keys in by_train.items():
+        if len(keys) > room and current and len(keys) <= size:
+            batches.append(current)
+            current, room = [], size
+        while keys:
+            taken, keys = keys[:room], keys[room:]
+            current.append((train, taken))
+            room -= len(taken)
+            if room == 0:
+                batches.append(current)
+                current, room = [], size
+    if current:
+        batches.append(current)
+    return batches
+
+
+def _digest_keys(keys: list[str]) -> str:
+    return hashlib.sha256("".join(keys).encode()).hexdigest()[:32]
 
 
 def progress_bar(plan: SweepPlan, show_progress: bool) -> Any:
@@ -270,14 +332,20 @@ def training_cost(scene: Scene) -> int:
 
 
 def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str, str | None]]:
-    """Yield ``(key, failure)`` as points finish (``failure`` None for a success).
+    """Yield ``(key, failure)`` for every point as its task finishes (``failure`` None for a
+    success).
+
+    A task that stored some of its points and failed others (:class:`flows.work.PointsFailed`)
+    counts only those as failed; a task that failed as a whole fails all its points.
 
     Raises :class:`SweepFailed` if the cluster has had no worker for ``NO_WORKER_TIMEOUT_S``.
     """
     from distributed import wait
 
-    keys = {future: key for key, future in futures.items()}
-    pending = set(keys)
+    points: dict[Any, list[str]] = {}
+    for key, future in futures.items():
+        points.setdefault(future, []).append(key)
+    pending = set(points)
     alone_since = None
     while pending:
         try:
@@ -286,67 +354,59 @@ def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str
             done = set()
         for future in done:
             pending.discard(future)
-            failed = future.status == "error"
-            yield keys[future], f"{future.key}: {future.exception()}" if failed else None
+            failures = point_failures(future, points[future])
+            for key in points[future]:
+                yield key, failures.get(key)
         if client.nthreads():
             alone_since = None
         elif alone_since is None:
             alone_since = time.monotonic()
         elif time.monotonic() - alone_since > NO_WORKER_TIMEOUT_S:
+            n_left = sum(len(points[f]) for f in pending)
             raise SweepFailed(
                 f"the Dask cluster has had no worker for {NO_WORKER_TIMEOUT_S:.0f} s with "
-                f"{len(pending)} points left; finished points are kept in the store"
+                f"{n_left} points left; finished points are kept in the store"
             )
 
 
+def point_failures(future: Any, keys: list[str]) -> dict[str, str]:
+    """Why each of ``keys`` failed in the finished task ``future``; empty if none failed."""
+    if future.status != "error":
+        return {}
+    error = future.exception()
+    if isinstance(error, PointsFailed):
+        return {key: f"point {key}: {why}" for key, why in error.failures.items() if key in keys}
+    return dict.fromkeys(keys, f"{future.key}: {error}")
+
+
 def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
-    """Build the cube of the sweep ``name`` from the store, write it and return it."""
+    """Build the cube of the sweep ``name`` from the store, write it and return it.
+
+    The points cached at planning come from the plan; the others are read from the store, each
+    batch once.
+
+    Raises
+    ------
+    StoreError
+        A point of the sweep has no result in the store (it failed, or was never computed).
+    CorruptEntryError
+        A result's batch fails its checksum.
+    """
     store = SweepStore.open(plan.root)
     spec = next(s for s in plan.grid.sweeps if s.name == name)
-    records = {
-        key: plan.records[key] if key in plan.records else store.read_result(key)
-        for key in plan.sweep_keys[name]
-    }
-    records = with_recordings(plan, store, records)
+    keys = plan.sweep_keys[name]
+    computed = [key for key in keys if key not in plan.records]
+    read = store.read_many(EntryKind.RESULTS, computed, discard_corrupt=False)
+    missing = [key for key in computed if key not in read]
+    if missing:
+        raise StoreError(
+            f"sweep {name!r}: {len(missing)} point(s) have no result in {plan.root} "
+            f"(first: {missing[0]})"
+        )
+    records = {key: plan.records[key] if key in plan.records else read[key] for key in keys}
     cube = build_cube(plan.grid, spec, records, spike_stages=SPIKE_STAGES)
     store.write_cube(name, cube)
     return cube
-
-
-def with_recordings(
-    plan: SweepPlan, store: SweepStore, records: dict[str, ResultEntry]
-) -> dict[str, ResultEntry]:
-    """The result entries, each stating the recordings it was computed on where that is known.
-
-    What an entry does not state itself (entries written before results did) is taken from
-    what the store and the plan know of the same recordings: the class names from the point's
-    rate entry, the dataset name and sampling rate from the facts the grid was checked against.
-    A fact neither has stays unknown, and so out of the cube, rather than guessed.
-    """
-    class_names: dict[str, tuple[str, ...] | None] = {}
-    completed = {}
-    for key, record in records.items():
-        known = record.recordings or RecordingsInfo()
-        if None not in (known.dataset_name, known.class_names, known.sampling_rate_hz):
-            completed[key] = record
-            continue
-        scene = plan.scenes[key]
-        recordings_key = cache_key(scene, "recordings")
-        if recordings_key not in class_names:
-            try:
-                class_names[recordings_key] = store.read_rates(
-                    cache_key(scene, "rates")
-                ).class_names
-            except (StoreError, OSError):
-                class_names[recordings_key] = None
-        facts = plan.datasets.get(recordings_key)
-        info = RecordingsInfo(
-            dataset_name=known.dataset_name or (facts.dataset if facts else None) or None,
-            class_names=known.class_names or class_names[recordings_key],
-            sampling_rate_hz=known.sampling_rate_hz or (facts.fs_hz if facts else None),
-        )
-        completed[key] = dataclasses.replace(record, recordings=info)
-    return completed
 
 
 def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
@@ -650,10 +710,8 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     scenes = grid.unique_points()
     totals: dict[str, float] = {}
     if store is not None:
-        for key in scenes:
-            entry = store.peek_result(key)
-            if entry is not None:
-                totals[key] = sum(entry.seconds.values())
+        for key, entry in store.peek_results(scenes).items():
+            totals[key] = sum(entry.seconds.values())
     by_kind: dict[str, list[float]] = {}
     for key, seconds in totals.items():
         by_kind.setdefault(cost_kind(scenes[key]), []).append(seconds)

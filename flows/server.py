@@ -37,6 +37,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from flows.environment import restored_environment
 from pipeline.errors import EskinError
 
 SERVER_DIR_ENV = "ESKIN_SERVER_DIR"
@@ -143,9 +144,8 @@ def prefect_server(*, show_progress: bool = True) -> Iterator[str]:
 def _using(info: ServerInfo) -> Iterator[None]:
     """Point Prefect at ``info`` for the block, whether or not Prefect is imported yet."""
     urls = {"PREFECT_API_URL": info.api_url, "PREFECT_UI_URL": info.ui_url}
-    saved = {name: os.environ.get(name) for name in urls}
-    os.environ.update(urls)
-    try:
+    with restored_environment(urls):
+        os.environ.update(urls)
         if "prefect" not in sys.modules:  # it reads the environment when imported
             yield
             return
@@ -153,12 +153,6 @@ def _using(info: ServerInfo) -> Iterator[None]:
 
         with temporary_settings({PREFECT_API_URL: info.api_url, PREFECT_UI_URL: info.ui_url}):
             yield
-    finally:
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
 
 
 def stop(state: Path | None = None) -> ServerInfo | None:

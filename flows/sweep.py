@@ -43,6 +43,7 @@ from flows.orchestrate import (
     log_sweep_run,
     open_root,
     plan_sweep,
+    point_failures,
     progress_bar,
     submit_missing,
     sweep_client,
@@ -92,7 +93,9 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
     mine = {futures[key] for key in keys if key in futures}
     if mine:
         wait(mine)
-    failed = [f"{f.key}: {f.exception()}" for f in mine if f.status == "error"]
+    failed = [
+        why for f in mine for why in point_failures(f, [k for k in keys if k in futures]).values()
+    ]
     if failed:
         raise SweepFailed(failure_message(failed, len(keys), plan.root))
     cube = assemble_cube(plan, name)

@@ -1,12 +1,18 @@
 """Work that runs on Dask workers: plain functions, no Prefect.
 
-:func:`ensure_entry` is the one task: it makes sure the run's store holds one level's entry of a
-scene (a level of :data:`pipeline.stages.LEVELS` that the store keeps), reading what its inputs
-need from the store and computing only the entries that are missing, inputs first. Each entry is
-written complete (storage marks it complete only after its data is written). Work is keyed by the
-levels' cache keys, so two points that share a spike train (a window sweep at one threshold)
-reuse it, and a worker that dies mid-task leaves nothing a later run trusts. The levels the store
-does not keep (the recordings and their front end) stay in memory, a few per worker process.
+:func:`ensure_entries` is the one task: it makes sure the run's store holds one level's entries
+for a batch of scenes (a level of :data:`pipeline.stages.LEVELS` that the store keeps), reading
+what their inputs need from the store and computing only the entries that are missing, inputs
+first. A batch of cheap points costs one Dask task instead of one each, and its entries are
+written together: one batch per kind in the store (:mod:`storage.batches`) each time the task
+flushes, which it does at its end and every :data:`FLUSH_S` seconds or :data:`FLUSH_BYTES`
+bytes of pending trains, so that a killed worker loses at most that much work. Each batch is
+written complete or not at all. Work is keyed by the levels' cache keys, so two points that
+share a spike train (a window sweep at one threshold) reuse it. The levels the store does not
+keep (the recordings, their front end, the rate matrices) stay in memory, a few per worker.
+
+One failing point does not lose the others of its task: they are stored, and the task then
+raises :class:`PointsFailed` naming the points that failed.
 
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
 oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
@@ -16,15 +22,25 @@ the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
 from __future__ import annotations
 
 import threading
+import time
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from flows.environment import tune_allocator
 from pipeline.cube import OutOfFold, RecordingsInfo
-from pipeline.scene import Scene
-from pipeline.stages import RATES, RECORDINGS, RESULTS, SPIKES, Level, Stopwatch, level_named
-from storage import RateEntry, ResultEntry, SpikeEntry, SweepStore
+from pipeline.scene import CanonicalMemo, Scene
+from pipeline.stages import (
+    LEVELS,
+    RATES,
+    RECORDINGS,
+    RESULTS,
+    SPIKES,
+    Level,
+    Stopwatch,
+    level_named,
+)
+from storage import ResultEntry, SpikeEntry, SweepStore
 
 # pipeline.training (torch, scikit-learn) is imported by the results level when it runs: the
 # coordinator imports this module only to name the function it submits, and never trains.
@@ -34,6 +50,12 @@ from storage import RateEntry, ResultEntry, SpikeEntry, SweepStore
 _KEPT_PER_LEVEL = 4
 _kept: dict[str, OrderedDict[str, tuple[Any, dict[str, float]]]] = {}
 _kept_lock = threading.Lock()
+
+#: A task writes its pending entries at least this often (s), so a killed worker loses at most
+#: this much work: a batch per minute keeps the files few even when points take seconds.
+FLUSH_S = 60.0
+#: ... and once its pending spike trains hold this many bytes, to bound a worker's memory.
+FLUSH_BYTES = 128 * 2**20
 
 # A level of the same point, made once: its output (or entry) and the seconds that holds.
 _Made = Callable[[Level], tuple[Any, dict[str, float]]]
@@ -63,34 +85,59 @@ def _result_entry(accuracy: Any, seconds: dict[str, float], made: _Made) -> Resu
 # the spike metrics and the seconds of the entries it was made from.
 _ENTRIES: dict[str, Callable[[Any, dict[str, float], _Made], Any]] = {
     SPIKES.name: lambda out, seconds, made: SpikeEntry(out.encoded, out.metrics, seconds),
-    RATES.name: lambda out, seconds, made: RateEntry(
-        out.counts, out.dropped, out.labels, out.class_names, seconds
-    ),
     RESULTS.name: _result_entry,
 }
 
 
-def ensure_entry(root: str, level: str, scene_data: dict[str, Any], *after: Any) -> str:
-    """Make sure the store at ``root`` holds the entry of ``level`` for a scene; return its key.
+class PointsFailed(RuntimeError):
+    """Some scenes of a task failed; every other one's entry is stored.
 
-    Nothing is computed if the entry is there. Otherwise the entries of the levels it runs after
-    are read from the store, or computed and written first if missing, then its own.
+    ``failures`` maps the level key of each failed scene (the result key, for results) to one
+    line saying why.
+    """
+
+    def __init__(self, failures: dict[str, str]):
+        shown = "; ".join(f"{key}: {why}" for key, why in list(failures.items())[:3])
+        more = f"; and {len(failures) - 3} more" if len(failures) > 3 else ""
+        super().__init__(f"{len(failures)} point(s) failed: {shown}{more}")
+        self.failures = dict(failures)
+
+    def __reduce__(self) -> tuple[Any, ...]:  # Dask pickles it back to the coordinator
+        return (PointsFailed, (self.failures,))
+
+
+def ensure_entries(root: str, level: str, scenes: Sequence[Scene], *after: Any) -> list[str]:
+    """Make sure the store at ``root`` holds ``level``'s entry of every scene; return the keys.
+
+    Nothing is computed for a scene whose entry is there. Otherwise the entries of the levels
+    it runs after are read from the store (or from this task's own pending ones), or computed
+    first, then its own. Entries are written in batches (see the module docstring).
 
     Parameters
     ----------
     root
         The run root.
     level
-        The name of a level the store keeps (``"spikes"``, ``"rates"``, ``"results"``).
-    scene_data
-        The scene, as :meth:`pipeline.scene.Scene.to_dict` gives it.
+        The name of a level the store keeps (``"spikes"``, ``"results"``).
+    scenes
+        The scenes; those that share entries (the spike trains of a window sweep) are best
+        given one after the other. Scenes of one grid share their part objects, and a list of
+        them pickles those once, so sending them costs little.
     after
-        Futures this task waits for (the spike trains of a point); their values are not used.
+        Futures this task waits for (the spike trains its scenes share with other tasks); their
+        values are not used.
+
+    Returns
+    -------
+    list of str
+        The level's key of each scene, in order.
 
     Raises
     ------
     ValueError
         ``level`` names no level the store keeps.
+    PointsFailed
+        Some scenes failed (after the others' entries were stored).
     """
     import torch
 
@@ -99,19 +146,107 @@ def ensure_entry(root: str, level: str, scene_data: dict[str, Any], *after: Any)
     wanted = level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
-    scene = Scene.from_dict(scene_data)
-    store = SweepStore.open(root)
-    key = wanted.key(scene)
-    if not store.has(wanted.name, key):
-        _Point(store, scene).made(wanted)
-    return key
+    task = _Task(SweepStore.open(root))
+    keys, failures = [], {}
+    for scene in scenes:
+        key = wanted.key(scene, task.memo)
+        keys.append(key)
+        try:
+            if not task.holds(wanted, key):
+                _Point(task, scene).made(wanted)
+        except Exception as error:  # reported per point; the others go on
+            failures[key] = " ".join(f"{type(error).__name__}: {error}".split())
+        task.flush_if_due()
+    task.flush()
+    if failures:
+        raise PointsFailed(failures)
+    return keys
+
+
+class _Task:
+    """The entries one task made or read: pending ones written in batches, a few recent kept.
+
+    The store is listed once per kind, when the task first asks: the entries a task needs from
+    other tasks (shared spike trains) are written before it starts.
+    """
+
+    def __init__(self, store: SweepStore):
+        self.store = store
+        # Canonical forms of the scene parts met so far: the scenes of a task share parts,
+        # and each level's key of each scene hashes them.
+        self.memo: CanonicalMemo = {}
+        self._stored: dict[str, frozenset[str]] = {}
+        self._pending: dict[str, dict[str, Any]] = {}
+        self._pending_bytes = 0
+        self._recent: OrderedDict[tuple[str, str], Any] = OrderedDict()
+        self._flushed = time.monotonic()
+
+    def holds(self, level: Level, key: str) -> bool:
+        """Whether the entry is pending here or was complete in the store at the listing."""
+        return key in self._pending.get(level.name, {}) or key in self._listed(level)
+
+    def entry(self, level: Level, key: str) -> Any:
+        """The entry ``level/key`` if this task or the store has it (a corrupt one is
+        discarded and recomputed), else None."""
+        pending = self._pending.get(level.name, {})
+        if key in pending:
+            return pending[key]
+        if (level.name, key) in self._recent:
+            self._recent.move_to_end((level.name, key))
+            return self._recent[level.name, key]
+        if key not in self._listed(level):
+            return None
+        found = self.store.read_valid(level.name, key)
+        if found is not None:
+            self._remember(level.name, key, found)
+        return found
+
+    def add(self, level: Level, key: str, entry: Any) -> None:
+        """Keep a new entry to write at the next flush."""
+        self._pending.setdefault(level.name, {})[key] = entry
+        self._pending_bytes += _entry_bytes(entry)
+        self._remember(level.name, key, entry)
+
+    def flush_if_due(self) -> None:
+        """Flush when the pending entries are :data:`FLUSH_S` old or hold :data:`FLUSH_BYTES`."""
+        if self._pending and (
+            time.monotonic() - self._flushed >= FLUSH_S or self._pending_bytes >= FLUSH_BYTES
+        ):
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the pending entries, one batch per level, inputs before the levels after."""
+        for level in LEVELS:
+            entries = self._pending.pop(level.name, None)
+            if entries:
+                self.store.write_entries(level.name, entries)
+        self._pending_bytes = 0
+        self._flushed = time.monotonic()
+
+    def _listed(self, level: Level) -> frozenset[str]:
+        if level.name not in self._stored:
+            self._stored[level.name] = self.store.complete_keys(level.name)
+        return self._stored[level.name]
+
+    def _remember(self, kind: str, key: str, entry: Any) -> None:
+        self._recent[kind, key] = entry
+        while len(self._recent) > _KEPT_PER_LEVEL * len(LEVELS):
+            self._recent.popitem(last=False)
+
+
+def _entry_bytes(entry: Any) -> int:
+    """Bytes of a pending entry's arrays that matter for memory: its spike trains."""
+    if not isinstance(entry, SpikeEntry):
+        return 0
+    trains = {id(t): t for t in (entry.encoded.true, entry.encoded.real)}.values()
+    return sum(a.nbytes for t in trains for a in (t.times_s, t.polarity, t.count))
 
 
 class _Point:
     """The levels of one scene as one task needs them: each read, recalled or computed once."""
 
-    def __init__(self, store: SweepStore, scene: Scene):
-        self.store = store
+    def __init__(self, task: _Task, scene: Scene):
+        self.task = task
         self.scene = scene
         self._made: dict[str, tuple[Any, dict[str, float]]] = {}
 
@@ -124,8 +259,8 @@ class _Point:
     def _make(self, level: Level) -> tuple[Any, dict[str, float]]:
         if not level.stored:
             return self._in_memory(level)
-        key = level.key(self.scene)
-        entry = self.store.read_valid(level.name, key)
+        key = level.key(self.scene, self.task.memo)
+        entry = self.task.entry(level, key)
         if entry is None:
             watch = Stopwatch(None)
             output = level.run(self.scene, self._inputs(level), watch)
@@ -135,11 +270,11 @@ class _Point:
                 for step, value in self.made(upstream)[1].items()
             }
             entry = _ENTRIES[level.name](output, {**seconds, **watch.seconds}, self.made)
-            self.store.write_entry(level.name, key, entry)
+            self.task.add(level, key, entry)
         return entry, entry.seconds
 
     def _in_memory(self, level: Level) -> tuple[Any, dict[str, float]]:
-        key = level.key(self.scene)
+        key = level.key(self.scene, self.task.memo)
         with _kept_lock:
             kept = _kept.setdefault(level.name, OrderedDict())
             if key in kept:

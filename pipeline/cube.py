@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import operator
 import platform
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -75,7 +76,7 @@ from typing import Any, Protocol
 import numpy as np
 import xarray as xr
 
-from pipeline.grid import Grid, GridPoint, Sweep, sweep_points
+from pipeline.grid import Grid, GridPoint, Sweep
 from pipeline.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_with_accuracy
 from pipeline.scene import EFFECT_TYPES, Effect, Model, Scene
 
@@ -220,29 +221,34 @@ def build_cube(
     ------
     KeyError
         A point of the sweep has no record.
+
+    Notes
+    -----
+    The points' results are gathered into arrays and written at once (and scene coordinates
+    read once per distinct scene part), so a cube costs some tens of microseconds per point;
+    only a point with several repeats is still visited alone, for its bootstrap interval.
     """
-    points = sweep_points(grid.base, sweep)
-    models = [m.value for m in Model if any(m in p.scene.training.models for p in points)]
-    n_folds = max(p.scene.training.folds for p in points)
-    n_repeats = max(p.scene.training.repeats for p in points)
-    stages = [*spike_stages, "coding", *(f"train_{m}" for m in models)]
+    points = grid.points_of(sweep)
+    results = [records[point.key] for point in points]
     shape = sweep.shape
-    accuracy = np.full((*shape, len(models), n_repeats, n_folds), np.nan)
-    metrics = {name: np.full(shape, np.nan) for name in METRICS}
-    seconds = np.full((*shape, len(stages)), np.nan)
-    for point in points:
-        record = records[point.key]
-        for m, model in enumerate(models):
-            folds = record.fold_accuracy.get(model)
-            if folds is not None:
-                folds = np.atleast_2d(folds)
-                accuracy[(*point.index, m, slice(0, folds.shape[0]), slice(0, folds.shape[1]))] = (
-                    folds
-                )
-        for name in METRICS:
-            metrics[name][point.index] = getattr(record.metrics, name)
-        for s, stage in enumerate(stages):
-            seconds[(*point.index, s)] = record.seconds.get(stage, np.nan)
+    # Where each point sits in the cube's flattened sweep dimensions: every per-point value is
+    # gathered into one array and scattered at once, rather than written point by point.
+    flat = np.ravel_multi_index(tuple(np.array([p.index for p in points]).T), shape)
+    # Points share their scene parts: read each distinct training part once.
+    trainings = list({id(p.scene.training): p.scene.training for p in points}.values())
+    models = [m.value for m in Model if any(m in t.models for t in trainings)]
+    n_folds = max(t.folds for t in trainings)
+    n_repeats = max(t.repeats for t in trainings)
+    stages = [*spike_stages, "coding", *(f"train_{m}" for m in models)]
+    size = int(np.prod(shape))
+    accuracy = _fold_accuracy(results, flat, size, models, n_repeats, n_folds)
+    accuracy = accuracy.reshape(*shape, *accuracy.shape[1:])
+    by_point = np.full((size, len(METRICS)), np.nan)
+    by_point[flat] = [operator.attrgetter(*METRICS)(result.metrics) for result in results]
+    metrics = {name: by_point[:, i].reshape(shape) for i, name in enumerate(METRICS)}
+    seconds = np.full((size, len(stages)), np.nan)
+    seconds[flat] = [[result.seconds.get(stage, np.nan) for stage in stages] for result in results]
+    seconds = seconds.reshape(*shape, len(stages))
     dims = sweep.dims
     data_vars: dict[str, Any] = {
         "accuracy": ((*dims, "model", "repeat", "fold"), accuracy),
@@ -255,7 +261,8 @@ def build_cube(
         "fold": ("fold", np.arange(n_folds)),
         "stage": ("stage", stages),
     }
-    out_of_fold = _out_of_fold_variables(points, records, models, n_repeats, dims, shape)
+    oofs = [result.out_of_fold for result in results]
+    out_of_fold = _out_of_fold_variables(oofs, flat, models, n_repeats, dims, shape)
     correct = label = None
     if out_of_fold is not None:
         predictions, recording_coords = out_of_fold
@@ -271,22 +278,48 @@ def build_cube(
         correlations = _correlations(cube, models)
         cube = cube.merge(correlations)
         cube.attrs.update(correlations.attrs)
-    keys = np.empty(shape, dtype=object)
-    for point in points:
-        keys[point.index] = point.key
+    keys = np.empty(size, dtype=object)
+    keys[flat] = [point.key for point in points]
+    keys = keys.reshape(shape)
     # A top-level field's name has no dot: a swept ``seed`` is already its dimension's coordinate,
     # and a dimension named after another ``*.seed`` leaves the scene seed to the attributes.
     fields = {
         name: variable
-        for name, variable in _scene_coordinates(points, sweep).items()
+        for name, variable in _scene_coordinates(points, flat, sweep).items()
         if name not in cube.variables and name not in cube.dims
     }
     cube = cube.assign_coords(result_key=(dims, keys.astype(str)), **fields)
     for name, variable in cube.variables.items():
         variable.attrs.update(describe(str(name), variable.attrs.get("field")))
     cube.attrs.update(_provenance(grid, sweep))
-    cube.attrs.update(_recordings_attrs([records[p.key].recordings for p in points]))
+    cube.attrs.update(_recordings_attrs([result.recordings for result in results]))
     return cube
+
+
+def _fold_accuracy(
+    results: Sequence[PointResult],
+    flat: np.ndarray,
+    size: int,
+    models: list[str],
+    n_repeats: int,
+    n_folds: int,
+) -> np.ndarray:
+    """float64 (points, model, repeat, fold) accuracy, points in flat cube order: NaN where a
+    point did not train a model, repeat or fold."""
+    accuracy = np.full((size, len(models), n_repeats, n_folds), np.nan)
+    for m, model in enumerate(models):
+        # Points with the same (repeats, folds) are written together.
+        groups: dict[tuple[int, ...], tuple[list[int], list[np.ndarray]]] = {}
+        for i, result in enumerate(results):
+            folds = result.fold_accuracy.get(model)
+            if folds is not None:
+                folds = np.atleast_2d(folds)
+                rows, values = groups.setdefault(folds.shape, ([], []))
+                rows.append(i)
+                values.append(folds)
+        for (repeats, n), (rows, values) in groups.items():
+            accuracy[flat[rows], m, :repeats, :n] = np.stack(values)
+    return accuracy
 
 
 def describe(name: str, field: str | None = None) -> dict[str, str]:
@@ -386,8 +419,8 @@ def _correlations(cube: xr.Dataset, models: list[str]) -> xr.Dataset:
 
 
 def _out_of_fold_variables(
-    points: list[GridPoint],
-    records: Mapping[str, PointResult],
+    oofs: Sequence[OutOfFold | None],
+    flat: np.ndarray,
     models: list[str],
     n_repeats: int,
     dims: tuple[str, ...],
@@ -395,31 +428,48 @@ def _out_of_fold_variables(
 ) -> tuple[dict[str, Any], dict[str, Any]] | None:
     """``predicted``, ``correct``, ``test_fold`` and the ``recording`` coordinates of a sweep.
 
-    The ``recording`` dimension is the union of the points' recordings, in the order first met
-    (points of a ``dataset.recordings_per_class`` sweep hold different numbers of recordings);
-    None when no point kept its predictions.
+    ``oofs`` are the points' predictions and ``flat`` their positions in the flattened sweep
+    dimensions. The ``recording`` dimension is the union of the points' recordings, in the
+    order first met (points of a ``dataset.recordings_per_class`` sweep hold different numbers
+    of recordings); None when no point kept its predictions.
     """
-    kept = [(p, records[p.key].out_of_fold) for p in points]
-    kept = [(p, oof) for p, oof in kept if oof is not None]
-    if not kept:
+    # Points holding the same recordings in the same order share one column index, and are
+    # written together; typically every point of a sweep is one group.
+    groups: dict[tuple[str, ...], list[int]] = {}
+    for i, oof in enumerate(oofs):
+        if oof is not None:
+            groups.setdefault(tuple(oof.recording_names), []).append(i)
+    if not groups:
         return None
     position: dict[str, int] = {}
     labels: list[int] = []
-    for _, oof in kept:
-        for name, label in zip(oof.recording_names, np.asarray(oof.labels), strict=True):
+    # A recording's label is that of the first point holding it: the first of its group.
+    for names, members in groups.items():
+        for name, label in zip(names, np.asarray(oofs[members[0]].labels), strict=True):
             if name not in position:
                 position[name] = len(position)
                 labels.append(int(label))
     n = len(position)
-    predicted = np.full((*shape, len(models), n_repeats, n), -1, dtype=np.int16)
-    test_fold = np.full((*shape, n_repeats, n), -1, dtype=np.int16)
-    for point, oof in kept:
-        columns = np.array([position[name] for name in oof.recording_names], dtype=np.int64)
-        repeats = np.asarray(oof.test_fold).shape[0]
-        test_fold[(*point.index, slice(0, repeats))][:, columns] = oof.test_fold
-        for m, model in enumerate(models):
-            if model in oof.predicted:
-                predicted[(*point.index, m, slice(0, repeats))][:, columns] = oof.predicted[model]
+    size = int(np.prod(shape))
+    predicted = np.full((size, len(models), n_repeats, n), -1, dtype=np.int16)
+    test_fold = np.full((size, n_repeats, n), -1, dtype=np.int16)
+    for names, members in groups.items():
+        columns = np.array([position[name] for name in names], dtype=np.int64)
+        by_repeats: dict[int, list[int]] = {}
+        for i in members:
+            by_repeats.setdefault(np.shape(oofs[i].test_fold)[0], []).append(i)
+        for repeats, same in by_repeats.items():
+            # (points, 1, 1), (1, repeats, 1) and (1, 1, recordings): each point's block.
+            rows = flat[same][:, np.newaxis, np.newaxis]
+            ran = np.arange(repeats)[np.newaxis, :, np.newaxis]
+            test_fold[rows, ran, columns] = np.stack([np.asarray(oofs[i].test_fold) for i in same])
+            for m, model in enumerate(models):
+                having = [i for i in same if model in oofs[i].predicted]
+                if having:
+                    values = np.stack([np.asarray(oofs[i].predicted[model]) for i in having])
+                    predicted[flat[having][:, np.newaxis, np.newaxis], m, ran, columns] = values
+    predicted = predicted.reshape(*shape, *predicted.shape[1:])
+    test_fold = test_fold.reshape(*shape, *test_fold.shape[1:])
     label = np.asarray(labels, dtype=np.int16)
     tested = predicted >= 0
     correct = np.where(tested, (predicted == label).astype(np.int8), np.int8(-1))
@@ -445,42 +495,64 @@ def _accuracy_summary(
     """``accuracy_mean``, ``accuracy_low``, ``accuracy_high`` (axes..., model) of every point.
 
     With out-of-fold predictions: the fraction of (recording, repeat) pairs classified correctly
-    and its 95 % interval (:func:`pipeline.stats.accuracy_interval`: Wilson score for one repeat,
-    a class-stratified bootstrap over recordings for several, its generator seeded from the
-    point's training seed and index). Without: the mean over folds, and no interval (NaN).
+    and its 95 % interval (as :func:`pipeline.stats.accuracy_interval` gives it: Wilson score for
+    one repeat, all at once by :func:`pipeline.stats.wilson_interval`; a class-stratified
+    bootstrap over recordings for several, its generator seeded from the point's training seed
+    and index). Without: the mean over folds, and no interval (NaN).
     """
-    from pipeline.stats import accuracy_interval
+    from pipeline.stats import WILSON_METHOD, accuracy_interval, wilson_interval
 
     shape = accuracy.shape[:-2]
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # an untrained model: all-NaN folds
-        mean = np.nanmean(accuracy.reshape(*shape, -1), axis=-1)
-    low, high = np.full(shape, np.nan), np.full(shape, np.nan)
+        mean = np.nanmean(accuracy.reshape(*shape, -1), axis=-1).reshape(-1)
+    low, high = np.full(mean.shape, np.nan), np.full(mean.shape, np.nan)
     methods = set()
     if correct is not None and label is not None:
-        for point in points:
-            for m in range(shape[-1]):
-                # (repeat, recording) of this point and model: -1 where it has no prediction
-                # (a recording it did not hold, a repeat or model it did not run).
-                cell = correct[(*point.index, m)]
-                cell = cell[(cell >= 0).any(axis=1)]
-                held = (cell >= 0).all(axis=0)
-                if cell.size == 0 or not held.any():
-                    continue
-                interval = accuracy_interval(
-                    cell[:, held] == 1,
-                    label[held],
-                    rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
-                )
-                mean[(*point.index, m)] = interval.estimate
-                low[(*point.index, m)] = interval.low
-                high[(*point.index, m)] = interval.high
-                methods.add(interval.method)
+        n_models = shape[-1]
+        # One cell per (point, model), in flat cube order: (cells, repeat, recording), -1 where
+        # the cell has no prediction (a recording it did not hold, a repeat or model it did not
+        # run).
+        cells = correct.reshape(-1, *correct.shape[-2:])
+        tested = cells >= 0
+        ran = tested.any(axis=-1)  # (cells, repeat): the repeats a cell ran
+        # The recordings every repeat the cell ran tested (a repeat it did not run does not
+        # count against them).
+        held = (tested | ~ran[..., np.newaxis]).all(axis=-2)
+        n_held = held.sum(axis=-1)
+        n_ran = ran.sum(axis=-1)
+        scored = (n_ran > 0) & (n_held > 0)
+        wilson = np.flatnonzero(scored & (n_ran == 1))
+        if wilson.size:
+            # With one repeat run, the held recordings are those it tested: every other entry
+            # (another repeat, a recording the point did not hold) is -1 and adds no success.
+            k = (cells[wilson] == 1).sum(axis=(-2, -1), dtype=np.int64)
+            n = n_held[wilson].astype(np.int64)
+            estimate = k / n
+            ci_low, ci_high = wilson_interval(k, n)
+            # Widened to contain the estimate, as accuracy_interval does.
+            mean[wilson] = estimate
+            low[wilson] = np.minimum(ci_low, estimate)
+            high[wilson] = np.maximum(ci_high, estimate)
+            methods.add(WILSON_METHOD)
+        bootstrap = np.flatnonzero(scored & (n_ran > 1))
+        if bootstrap.size:
+            by_cell = {int(np.ravel_multi_index(p.index, shape[:-1])): p for p in points}
+        for c in bootstrap:
+            point, m = by_cell[int(c) // n_models], int(c) % n_models
+            cell = cells[c][ran[c]]
+            interval = accuracy_interval(
+                cell[:, held[c]] == 1,
+                label[held[c]],
+                rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
+            )
+            mean[c], low[c], high[c] = interval.estimate, interval.low, interval.high
+            methods.add(interval.method)
     attrs = {"interval": "; ".join(sorted(methods)) or "none", "confidence": 0.95}
     return {
-        "accuracy_mean": ((*dims, "model"), mean),
-        "accuracy_low": ((*dims, "model"), low, attrs),
-        "accuracy_high": ((*dims, "model"), high, attrs),
+        "accuracy_mean": ((*dims, "model"), mean.reshape(shape)),
+        "accuracy_low": ((*dims, "model"), low.reshape(shape), attrs),
+        "accuracy_high": ((*dims, "model"), high.reshape(shape), attrs),
     }
 
 
@@ -493,22 +565,76 @@ def _coordinate(values: Sequence[Any]) -> np.ndarray:
     return np.asarray([json.dumps(v, sort_keys=True) for v in values])
 
 
-def _scene_coordinates(points: list[GridPoint], sweep: Sweep) -> dict[str, xr.Variable]:
-    """Every scene field (and derived one) that every point has, along the dims it varies with."""
-    flat = []
-    for point in points:
-        fields = _flatten({k: v for k, v in point.scene.to_dict().items() if k != "name"})
-        fields |= {name: value(point.scene) for name, (value, _) in DERIVED.items()}
-        flat.append(fields)
+def _scene_coordinates(
+    points: list[GridPoint], flat: np.ndarray, sweep: Sweep
+) -> dict[str, xr.Variable]:
+    """Every scene field (and derived one) that every point has, along the dims it varies with.
+
+    ``flat`` gives each point's position in the flattened sweep dimensions. A field's values are
+    read once per distinct object of the scene part holding it (the points of a sweep share
+    their parts), and derived ones once per point.
+    """
+    size = int(np.prod(sweep.shape))
+    tops = [f.name for f in dataclasses.fields(Scene) if f.name != "name"]
+    # Per top-level field: each point's part as an index into that part's distinct objects,
+    # and each distinct object's flattened fields.
+    owner = {top: np.empty(size, dtype=np.int64) for top in tops}
+    distinct: dict[str, dict[int, int]] = {top: {} for top in tops}
+    flattened: dict[str, list[dict[str, Any]]] = {top: [] for top in tops}
+    for i, point in zip(flat.tolist(), points, strict=True):
+        scene = point.scene
+        new = [top for top in tops if id(getattr(scene, top)) not in distinct[top]]
+        if new:
+            data = scene.to_dict()
+            for top in new:
+                distinct[top][id(getattr(scene, top))] = len(flattened[top])
+                flattened[top].append(_flatten({top: data[top]} if top in data else {}))
+        for top in tops:
+            owner[top][i] = distinct[top][id(getattr(scene, top))]
+    # A field with its owners, as above; a derived field is owned by each point.
+    fields: dict[str, tuple[np.ndarray, list[dict[str, Any]]]] = {}
+    first = points[0].scene
+    for top in tops:
+        for field in flattened[top][distinct[top][id(getattr(first, top))]]:
+            fields[field] = (owner[top], flattened[top])
+    for name, (value, _) in DERIVED.items():
+        derived = [{}] * size
+        for i, point in zip(flat.tolist(), points, strict=True):
+            derived[i] = {name: value(point.scene)}
+        fields[name] = (np.arange(size), derived)
     coords = {}
-    for field in flat[0]:
-        if not all(field in fields for fields in flat):
+    for field, (owners, values) in fields.items():
+        if not all(field in found for found in values):
             continue  # some points do not have it: a swept table's coordinate describes them
-        values = np.empty(sweep.shape, dtype=object)
-        for point, fields in zip(points, flat, strict=True):
-            values[point.index] = fields[field]
-        coords[field] = _along_varied(values, sweep.dims)
+        coords[field] = _along_varied_owned(
+            owners.reshape(sweep.shape), [found[field] for found in values], sweep.dims
+        )
     return coords
+
+
+def _along_varied_owned(
+    owners: np.ndarray, values: list[Any], dims: tuple[str, ...]
+) -> xr.Variable:
+    """:func:`_along_varied` of ``values[owners]`` (owners: int, sweep shape), comparing the
+    distinct ``values`` once rather than every point's."""
+    codes: dict[Any, int] = {}
+    try:
+        equal = np.array([codes.setdefault(label, len(codes)) for label in map(_label, values)])
+        comparable = all(label == label for label in codes)
+    except TypeError:  # an unhashable value: compared point by point instead
+        comparable = False
+    if not comparable:  # a value unequal to itself (NaN) differs even from itself
+        gathered = np.empty(owners.shape, dtype=object)
+        for index, i in np.ndenumerate(owners):
+            gathered[index] = values[i]
+        return _along_varied(gathered, dims)
+    labels = equal[owners]
+    varied = [k for k in range(labels.ndim) if np.any(labels != np.take(labels, [0], axis=k))]
+    if not varied:
+        return xr.Variable((), _coordinate([values[owners.flat[0]]]).reshape(()))
+    kept = owners[tuple(slice(None) if k in varied else 0 for k in range(owners.ndim))]
+    data = _coordinate([values[i] for i in kept.ravel().tolist()]).reshape(kept.shape)
+    return xr.Variable(tuple(dims[k] for k in varied), data)
 
 
 def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -56,6 +56,7 @@ import enum
 import functools
 import itertools
 import json
+import math
 import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -183,6 +184,20 @@ class Grid:
     def points(self) -> list[GridPoint]:
         """Every point of every sweep (a point shared by two sweeps appears in both)."""
         return list(self._points)
+
+    def points_of(self, sweep: Sweep) -> list[GridPoint]:
+        """The points of ``sweep``, as :func:`sweep_points` makes them.
+
+        For one of this grid's own sweep objects they are those of :meth:`points`, built once
+        per grid; for any other sweep they are made now.
+        """
+        start = 0
+        for own in self.sweeps:
+            count = math.prod(own.shape)
+            if own is sweep:
+                return list(self._points[start : start + count])
+            start += count
+        return sweep_points(self.base, sweep)
 
     @functools.cached_property
     def _points(self) -> tuple[GridPoint, ...]:

@@ -19,9 +19,13 @@ level           reads (scene parts)                       after (levels)        
 ==============  ========================================  =====================  =================
 
 Taxel signals are made inside ``spikes``, one recording at a time, and never kept (they are as
-large as the recordings times the taxels). ``recordings`` and ``front_end`` live in memory (a
-Dask worker keeps them per dataset); ``spikes``, ``rates`` and ``results`` are the cache levels,
-whose outputs the sweep store keeps as entries of the same names.
+large as the recordings times the taxels). ``recordings``, ``front_end`` and ``rates`` live in
+memory (a Dask worker keeps a few of each); ``spikes`` and ``results`` are the cache levels,
+whose outputs the sweep store keeps as entries of the same names. Rate matrices are not kept:
+coding a point's trains takes milliseconds, while its matrix is as large as its trains, and a
+sweep of many points would pay for them in files and bytes more than it saves in time. Spike
+trains are kept: encoding a high-density array takes seconds, and every window length and
+training seed of a sweep reuses one train.
 
 A level's cache key (:meth:`Level.key`) hashes :data:`pipeline.scene.MODEL_REVISION`, the level's
 name and the canonical form of the parts it and every level before it read: ``recordings`` hashes
@@ -142,7 +146,7 @@ class Spikes:
 
 @dataclass(frozen=True, eq=False)
 class Rates:
-    """Output of the ``rates`` level (the store's ``RateEntry`` has the same fields).
+    """Output of the ``rates`` level, kept in memory by the workers (not in the store).
 
     Attributes
     ----------
@@ -466,7 +470,7 @@ RATES = Level(
     after=(SPIKES, RECORDINGS),
     compute=code_rates,
     steps=("coding",),
-    stored=True,
+    stored=False,
 )
 RESULTS = Level(
     name="results",

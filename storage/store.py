@@ -2,75 +2,81 @@
 
 On-disk layout (every node is a Zarr v3 group or array, written and read through xarray)::
 
-    <root>/                          the run root; may also hold our own .state/, ...
-      store.lock                     the sweep lock (see :meth:`SweepStore.lock`)
-      store.zarr/                    group, attrs {"eskin_sweep_store": 1}
-        spikes/<key>/                one SpikeEntry  (key: 32 hex chars, pipeline.scene.cache_key)
-        rates/<key>/                 one RateEntry
-        results/<key>/               one ResultEntry
-        cubes/<name>/                one result cube (name: [A-Za-z0-9_-]{1,64})
-        <kind>/.partial-<key>-<hex>/ an entry being written (or abandoned); never read
+    <root>/                             the run root; may also hold our own .state/, ...
+      store.lock                        the sweep lock (see :meth:`SweepStore.lock`)
+      store.zarr/                       group, attrs {"eskin_sweep_store": 2} (the layout)
+        spikes/batch-<hex>/             a batch of SpikeEntry (keys: pipeline.scene.cache_key)
+        results/batch-<hex>/            a batch of ResultEntry
+        cubes/<name>/                   one result cube (name: [A-Za-z0-9_-]{1,64})
+        <kind>/.partial-batch-<hex>/    a batch being written (or abandoned); never read
+      store.zarr-layout-1-<time>/       a store of an older layout, set aside (never read)
 
-Entry groups (dimension names in parentheses; all arrays little-endian)
+A batch (:mod:`storage.batches`) holds the entries one task wrote at once, stacked variable by
+variable, with their keys, attributes and shapes in its group attributes: its files grow with
+its variables, not with its entries, so a sweep of 10,000 cheap points writes well under one
+file per point instead of about sixty. Rate matrices are not kept (see
+:mod:`pipeline.stages`: coding a point's trains takes milliseconds).
 
-``spikes/<key>``
+Entry variables (entry-level dimension names in parentheses; all arrays little-endian)
+
+spike entry
     ``true_times_s`` float64 (true_event) s, ``true_polarity`` int8 (true_event) +-1,
     ``true_start``/``true_count`` int64 (recording, taxel): train ``(r, t)`` is
     ``true_times_s[true_start[r, t] : true_start[r, t] + true_count[r, t]]``; the same four
     with ``real_`` on ``real_event`` unless attrs ``ideal`` is true (ideal readout: REAL *is*
     TRUE, stored once, and reading gives an :class:`~pipeline.simulate.Encoded` whose
-    ``real is true``);
-    ``duration_s`` float64 (recording) s, shared by TRUE and REAL; one 0-d float64 variable per
-    :class:`~pipeline.metrics.SpikeMetrics` field (``ssnr_db``, ``ste_s2``, ...), because those may
-    be +-inf or NaN, which JSON attributes cannot hold.
-``rates/<key>``
-    ``counts`` int64 (recording, channel, taxel, window), ``dropped`` int64 (recording, taxel),
-    ``labels`` int64 (recording); attrs ``class_names`` (list of str).
-``results/<key>``
-    ``accuracy`` float64 (model, repeat, fold) with the string coordinate ``model``; where the
-    writer kept them, the out-of-fold predictions: ``predicted`` int64 (model, repeat, recording),
-    ``test_fold`` int64 (repeat, recording), ``labels`` int64 (recording) and the string
-    coordinate ``recording`` (names); and the spike metrics as in ``spikes/<key>``. Entries written
-    before repeats existed hold ``accuracy`` (model, fold): read as one repeat. Attrs
-    ``dataset_name`` (str), ``class_names`` (list of str) and
-    ``sampling_rate_hz`` (float) where the writer stated them (each optional: older entries have
-    none, and a fact not stated is never guessed on reading).
+    ``real is true``); ``duration_s`` float64 (recording) s, shared by TRUE and REAL;
+    ``metrics`` float64 (metric), one value per :class:`~pipeline.metrics.SpikeMetrics` field
+    in its order (names and units in the variable's attrs), because those may be +-inf or
+    NaN, which JSON attributes cannot hold.
+result entry
+    ``accuracy`` float64 (model, repeat, fold) with the strings ``model``; where the writer kept
+    them, the out-of-fold predictions: ``predicted`` int64 (model, repeat, recording),
+    ``test_fold`` int64 (repeat, recording), ``labels`` int64 (recording) and the strings
+    ``recording`` (names); and ``metrics`` as for spikes. Attrs ``dataset_name`` (str),
+    ``class_names`` (list of str) and ``sampling_rate_hz`` (float) where the writer stated
+    them (a fact not stated is never guessed on reading).
 ``cubes/<name>``
-    any xarray Dataset, as the caller built it (:mod:`pipeline.cube` describes the result cubes).
+    any xarray Dataset, as the caller built it (:mod:`pipeline.cube` describes the result
+    cubes); every chunk carries a CRC-32C.
 
-Every entry's attrs hold ``eskin_entry`` (its kind), ``seconds`` (stage name -> wall seconds,
-finite floats) and ``sha256``: one hex digest per variable, over its dtype, shape and raw bytes
-after the cast to its stored dtype, plus ``"@attrs"`` over the canonical JSON of the other attrs.
-Cubes carry ``eskin_sha256`` (digests of their variables; NaN payloads are canonicalized because
-xarray's CF decoding of cubes rewrites them), removed again on reading.
+Every entry's attrs hold ``seconds`` (stage name -> wall seconds, finite floats). A batch's
+attrs hold ``sha256``: one hex digest per stored array, over its dtype, shape and raw bytes,
+plus ``"@entries"`` over the canonical JSON of its entry list. Cubes carry ``eskin_sha256``
+(digests of their variables; NaN payloads are canonicalized because xarray's CF decoding of
+cubes rewrites them), removed again on reading.
 
 Why this design
 ---------------
 * **Consolidated metadata is off everywhere** (``consolidated=False`` on every ``to_zarr`` and
-  ``open_zarr``): many independent workers add entries concurrently, and consolidation keeps one
-  copy of all metadata at the root that every addition would have to rewrite globally (a
+  ``open_zarr``): many independent workers add batches concurrently, and consolidation keeps
+  one copy of all metadata at the root that every addition would have to rewrite globally (a
   read-modify-write race between workers, and stale metadata for readers in between).
-* **Completeness by rename.** An entry is written in full under ``.partial-<key>-<uuid4 hex>``
-  beside its final place and then renamed to ``<key>`` (one ``os.rename`` of a directory, atomic
-  within a file system), so a killed worker never leaves an entry that :meth:`SweepStore.has`
-  reports. Two workers finishing the same key race harmlessly: the loser finds the name taken
-  and discards its copy (equal keys mean equal content). Nothing is fsynced (thousands of small
-  files), so this protects against killed processes, not power loss; a torn entry after a power
-  loss fails its checksum on reading instead (:class:`CorruptEntryError`) and can be discarded and
-  recomputed. A directory left at an entry's final name without its ``zarr.json`` (a writer
-  killed while the partial copy was being removed under it) is junk: the next writer of that
-  key replaces it.
+* **Completeness by rename.** A batch is written in full under ``.partial-batch-<uuid4 hex>``
+  beside its final place and then renamed to ``batch-<same hex>`` (one ``os.rename`` of a
+  directory, atomic within a file system), so a killed worker never leaves an entry that
+  :meth:`SweepStore.has` reports. Batch names are unique, so writers never race for a name;
+  two workers that made the same key store it twice (equal keys mean equal content) and
+  readers take either copy. Nothing is fsynced, so this protects against killed processes,
+  not power loss; a torn batch after a power loss fails its checksum on reading instead
+  (:class:`CorruptEntryError`) and is discarded (all its entries) and recomputed.
+* **Listing by metadata.** Which keys a kind holds is one directory listing plus, per batch
+  not seen before, one read of its small ``zarr.json`` (batches never change once in place,
+  so a process remembers their keys).
 * **One sweep per root.** :meth:`SweepStore.lock` takes an exclusive ``fcntl.flock`` on
   ``<root>/store.lock`` for a sweep's whole life. The kernel drops the lock when its process
   ends, however it ends (SIGKILL included), so a killed sweep never blocks the next one, and
-  the next one may then remove every partial entry (:meth:`SweepStore.clean_partials`): no
+  the next one may then remove every partial batch (:meth:`SweepStore.clean_partials`): no
   other writer of that root can be running. ``flock`` is advisory and, on network file
   systems, only as good as the file system's support for it.
-* **Exact round trips.** Entries are written with ``write_empty_chunks=True`` (otherwise a chunk
-  equal to the fill value, e.g. all ``-0.0`` or a NaN with another payload, would not be written
-  and would read back as the canonical fill value) and read with ``decode_cf=False`` (no masking
-  of fill values). Strings are stored as Zarr's variable-length ``string`` type (specified in v3,
-  unlike fixed-width ``<U``) and read back as numpy ``<U`` arrays.
+* **Old layouts are never misread.** A store of layout 1 (one group per entry) is set aside
+  whole by the next sweep of its root, which then computes every point again; nothing reads
+  it as if it were of this layout.
+* **Exact round trips.** Batches are written with ``write_empty_chunks=True`` (otherwise a
+  chunk equal to the fill value, e.g. all ``-0.0`` or a NaN with another payload, would not be
+  written and would read back as the canonical fill value) and read with ``decode_cf=False``
+  (no masking of fill values). Strings are stored as Zarr's variable-length ``string`` type
+  (specified in v3, unlike fixed-width ``<U``) and read back as numpy ``<U`` arrays.
 """
 
 from __future__ import annotations
@@ -81,7 +87,6 @@ import dataclasses
 import enum
 import errno
 import fcntl
-import hashlib
 import json
 import math
 import os
@@ -93,29 +98,40 @@ import threading
 import time
 import uuid
 import warnings
-from collections.abc import Callable, Iterator, Mapping
+from collections import OrderedDict
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import xarray as xr
 import zarr
+from zarr.codecs import Crc32cCodec, ZstdCodec
 
 from pipeline.cube import OutOfFold, RecordingsInfo
 from pipeline.errors import EskinError
 from pipeline.metrics import SpikeMetrics
 from pipeline.spikes import Encoded, SpikeTrains, train_starts
 from pipeline.stages import LEVELS
+from storage.batches import (
+    BATCH_PREFIX,
+    Record,
+    Variables,
+    digest,
+    read_batch,
+    read_batch_keys,
+    write_batch,
+)
 
 __all__ = [
     "CorruptEntryError",
     "EntryKind",
-    "RateEntry",
     "ResultEntry",
     "SpikeEntry",
     "StoreBusyError",
     "StoreError",
+    "StoreLayoutError",
     "SweepStore",
     "open_results",
     "replace_folder",
@@ -124,20 +140,23 @@ __all__ = [
 STORE_NAME = "store.zarr"
 LOCK_NAME = "store.lock"
 MARKER = "eskin_sweep_store"
-VERSION = 1
+#: The store layout this code writes and reads: 2 stores entries in batches
+#: (:mod:`storage.batches`); 1 stored one group per entry.
+VERSION = 2
+# A store of an older layout is kept beside the new one under this name (plus a suffix).
+OLD_STORE_PREFIX = "store.zarr-layout-"
 CUBES = "cubes"
 PARTIAL_PREFIX = ".partial-"
 # A new store is built here (inside the root, so the final rename stays on one file system).
 STORE_PARTIAL_PREFIX = ".store.zarr-partial-"
 CUBE_DIGESTS = "eskin_sha256"
 
-_T = TypeVar("_T")
-
 _KEY = re.compile(r"[0-9a-f]{32}")
+_BATCH = re.compile(BATCH_PREFIX + r"[0-9a-f]{32}")
 _CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 _METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
-_OPEN_ZARR = {"consolidated": False, "zarr_format": 3, "chunks": None}
+_OPEN_ZARR = {"consolidated": False, "zarr_format": 3}
 
 
 class StoreError(EskinError):
@@ -149,6 +168,17 @@ class StoreError(EskinError):
 
 class CorruptEntryError(StoreError):
     """An entry's data fails its checksum or cannot be read; discard and recompute it."""
+
+
+class StoreLayoutError(StoreError):
+    """The run root's store was written in an older layout, which this version does not read.
+
+    ``layout`` is that store's layout number.
+    """
+
+    def __init__(self, message: str, layout: int):
+        super().__init__(message)
+        self.layout = layout
 
 
 class StoreBusyError(StoreError):
@@ -182,31 +212,6 @@ class SpikeEntry:
 
     encoded: Encoded
     metrics: SpikeMetrics
-    seconds: dict[str, float]
-
-
-@dataclass(frozen=True, eq=False)
-class RateEntry:
-    """Cached output of the coding stage.
-
-    Attributes
-    ----------
-    counts : int64 (n_recordings, channels, n_taxels, n_windows)
-        Spikes per window.
-    dropped : int64 (n_recordings, n_taxels)
-        Spikes outside every window.
-    labels : int64 (n_recordings,)
-        Class index of each recording, into ``class_names``.
-    class_names : tuple[str, ...]
-        Class names.
-    seconds : dict[str, float]
-        Wall seconds per stage (finite).
-    """
-
-    counts: np.ndarray
-    dropped: np.ndarray
-    labels: np.ndarray
-    class_names: tuple[str, ...]
     seconds: dict[str, float]
 
 
@@ -286,7 +291,11 @@ class SweepStore:
         """
         root = Path(root)
         if root.exists() or root.is_symlink():
-            _check_store_root(root, need_store=False)
+            try:
+                _check_store_root(root, need_store=False)
+            except StoreLayoutError as error:
+                _check_writable(root)
+                _set_aside(root, error)
         else:
             try:
                 root.mkdir(parents=True, exist_ok=True)
@@ -328,7 +337,8 @@ class SweepStore:
         SweepStore or None
             None if ``root`` does not exist or is a directory without ``store.zarr`` that
             :meth:`open_or_create` would accept (empty, or only leftovers of an interrupted
-            store creation): nothing is cached there.
+            store creation), or holds a store of an older layout (a sweep sets it aside and
+            computes everything again): nothing usable is cached there.
 
         Raises
         ------
@@ -339,7 +349,10 @@ class SweepStore:
         root = Path(root)
         if not root.exists() and not root.is_symlink():
             return None
-        _check_store_root(root, need_store=False)
+        try:
+            _check_store_root(root, need_store=False)
+        except StoreLayoutError:
+            return None
         if not (root / STORE_NAME).exists():
             return None
         return cls(root)
@@ -415,74 +428,150 @@ class SweepStore:
     def read_valid(self, kind: EntryKind | str, key: str) -> Any:
         """The entry ``kind/key``, or None if absent or corrupt (then discarded, with a warning).
 
-        A corrupt entry (checksum mismatch, truncated or unreadable chunk) emits one
-        ``RuntimeWarning`` naming it and is removed, so that the caller recomputes it.
+        A corrupt batch (checksum mismatch, truncated or unreadable chunk) emits one
+        ``RuntimeWarning`` naming it and is removed with every entry it holds, so that the
+        caller recomputes what it needs.
+        """
+        return self.read_many(kind, [key], discard_corrupt=True).get(key)
+
+    def read_many(
+        self, kind: EntryKind | str, keys: Iterable[str], *, discard_corrupt: bool
+    ) -> dict[str, Any]:
+        """The stored entries of ``kind`` among ``keys``, reading each batch that holds one once.
+
+        Keys the store does not hold are left out. A batch that fails its checksums or cannot be
+        read is, with ``discard_corrupt``, removed (one ``RuntimeWarning`` naming it; its keys are
+        left out, to be recomputed); without, it raises.
+
+        Raises
+        ------
+        CorruptEntryError
+            A batch is corrupt and ``discard_corrupt`` is false.
         """
         kind = EntryKind(kind)
-        if not self.has(kind, key):
-            return None
-        reader = {
-            EntryKind.SPIKES: self.read_spikes,
-            EntryKind.RATES: self.read_rates,
-            EntryKind.RESULTS: self.read_result,
-        }[kind]
-        try:
-            return reader(key)
-        except CorruptEntryError as exc:
-            warnings.warn(f"{exc}; recomputing it", RuntimeWarning, stacklevel=2)
-            self.discard(kind, key)
-            return None
+        left = dict.fromkeys(_checked_key(kind, key) for key in keys)
+        found: dict[str, Any] = {}
+        tried: set[str] = set()
+        # A key may sit in two batches (two tasks made it); when the one read first is corrupt
+        # or gone, the next round reads the other.
+        while left:
+            index = self._index(kind)
+            by_batch: dict[str, list[str]] = {}
+            for key in left:
+                if key in index and index[key] not in tried:
+                    by_batch.setdefault(index[key], []).append(key)
+            if not by_batch:
+                break
+            for batch, wanted in by_batch.items():
+                tried.add(batch)
+                try:
+                    entries = self._read_batch(kind, batch)
+                except CorruptEntryError as exc:
+                    if not discard_corrupt:
+                        raise
+                    warnings.warn(f"{exc}; recomputing its entries", RuntimeWarning, stacklevel=2)
+                    self._discard_batch(kind, batch)
+                    continue
+                except StoreError:  # removed since it was listed (another worker discarded it)
+                    continue
+                for key in wanted:
+                    found[key] = entries[key]
+                    del left[key]
+        return found
+
+    def peek_results(self, keys: Iterable[str]) -> dict[str, ResultEntry]:
+        """The valid result entries among ``keys``; writes nothing.
+
+        Unlike :meth:`read_many`, a corrupt batch is left where it is (the next sweep that holds
+        the lock discards and recomputes it) and its keys are simply left out.
+        """
+        keys = [_checked_key(EntryKind.RESULTS, key) for key in keys]
+        index = self._index(EntryKind.RESULTS)
+        found: dict[str, ResultEntry] = {}
+        for batch in {index[key] for key in keys if key in index}:
+            try:
+                found |= self._read_batch(EntryKind.RESULTS, batch)
+            except (StoreError, OSError):
+                continue
+        return {key: found[key] for key in keys if key in found}
 
     def write_entry(self, kind: EntryKind | str, key: str, entry: Any) -> None:
-        """Store ``entry`` as ``kind/key`` (:meth:`write_spikes`, :meth:`write_rates` or
-        :meth:`write_result`, as ``kind`` says).
+        """Store one entry as a batch of its own (:meth:`write_entries`)."""
+        self.write_entries(kind, {key: entry})
+
+    def write_entries(self, kind: EntryKind | str, entries: Mapping[str, Any]) -> None:
+        """Store ``entries`` (key -> entry of ``kind``) as one batch, complete or not at all.
+
+        The batch is written under a partial name and renamed into place in one step, so a
+        killed writer leaves nothing that :meth:`has` reports. A key stored before is stored
+        again (the copies are equal: equal keys mean equal content).
 
         Raises
         ------
         TypeError
-            ``entry`` is not the entry type of ``kind``.
+            An entry is not the entry type of ``kind``.
         ValueError
-            As the writer of ``kind`` raises.
+            An invalid key; or as :func:`_spike_record` and :func:`_result_record` raise.
         """
         kind = EntryKind(kind)
-        entry_type, writer = {
-            EntryKind.SPIKES: (SpikeEntry, self.write_spikes),
-            EntryKind.RATES: (RateEntry, self.write_rates),
-            EntryKind.RESULTS: (ResultEntry, self.write_result),
-        }[kind]
-        if not isinstance(entry, entry_type):
-            raise TypeError(f"a {kind} entry must be a {entry_type.__name__}, got {type(entry)}")
-        writer(key, entry)
+        entry_type, to_record = _RECORDS[kind][:2]
+        records = []
+        for key, entry in entries.items():
+            _checked_key(kind, key)
+            if not isinstance(entry, entry_type):
+                raise TypeError(
+                    f"a {kind} entry must be a {entry_type.__name__}, got {type(entry)}"
+                )
+            records.append(to_record(key, entry))
+        if not records:
+            return
+        name = f"{BATCH_PREFIX}{uuid.uuid4().hex}"
+        final = self.path / kind.value / name
+        partial = final.parent / f"{PARTIAL_PREFIX}{name}"
+        try:
+            write_batch(partial, kind.value, records)
+            os.rename(partial, final)
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)
 
     def has(self, kind: EntryKind | str, key: str) -> bool:
-        """True only if a complete entry ``kind/key`` exists (partial copies are invisible)."""
-        return (self._entry_path(EntryKind(kind), key) / "zarr.json").is_file()
+        """True only if a complete entry ``kind/key`` exists (partial batches are invisible)."""
+        kind = EntryKind(kind)
+        return _checked_key(kind, key) in self._index(kind)
 
     def complete_keys(self, kind: EntryKind | str) -> frozenset[str]:
-        """Keys of the complete entries of ``kind``, from one listing of its folder.
+        """Keys of the complete entries of ``kind``, from one listing of its batches.
 
-        One directory listing instead of a look-up per key: planning a sweep of many points asks
-        which of them are stored. Partial copies and anything that is not an entry are left out.
+        Each batch's keys are read once per process from its group metadata (batches never
+        change once written); partial batches and anything that is not a batch are left out.
         """
-        try:
-            with os.scandir(self.path / EntryKind(kind).value) as entries:
-                return frozenset(
-                    entry.name
-                    for entry in entries
-                    if _KEY.fullmatch(entry.name) and os.path.isfile(Path(entry.path, "zarr.json"))
-                )
-        except FileNotFoundError:
-            return frozenset()
+        return frozenset(self._index(EntryKind(kind)))
+
+    def entry_location(self, kind: EntryKind | str, key: str) -> Path | None:
+        """The batch folder that holds the entry ``kind/key``, or None if none does."""
+        kind = EntryKind(kind)
+        batch = self._index(kind).get(_checked_key(kind, key))
+        return None if batch is None else self.path / kind.value / batch
 
     def discard(self, kind: EntryKind | str, key: str) -> bool:
-        """Remove entry ``kind/key`` (e.g. a corrupt one, to recompute it).
+        """Remove the entry ``kind/key`` (e.g. a corrupt one, to recompute it).
 
-        It is first renamed to a partial name, so :meth:`has` turns false at once and never sees
-        a half-deleted entry. Returns whether there was an entry to remove.
+        Entries are stored in batches, so the whole batch that holds it goes (every batch, if
+        two tasks stored it), with every other entry in it: they are recomputed when next
+        needed. The batch is first renamed to a
+        partial name, so :meth:`has` turns false at once and never sees a half-deleted batch.
+        Returns whether there was an entry to remove.
         """
         kind = EntryKind(kind)
-        path = self._entry_path(kind, key)
-        doomed = path.parent / f"{PARTIAL_PREFIX}{key}-{uuid.uuid4().hex}"
+        _checked_key(kind, key)
+        removed = False
+        while (batch := self._index(kind).get(key)) is not None:  # every copy of it
+            removed = self._discard_batch(kind, batch) or removed
+        return removed
+
+    def _discard_batch(self, kind: EntryKind, batch: str) -> bool:
+        path = self.path / kind.value / batch
+        doomed = path.parent / f"{PARTIAL_PREFIX}{batch}-{uuid.uuid4().hex}"
         try:
             os.rename(path, doomed)
         except FileNotFoundError:
@@ -491,7 +580,8 @@ class SweepStore:
         return True
 
     def clean_partials(self, *, older_than_s: float = 0.0) -> int:
-        """Remove leftover partial entries, cubes and store builds; return how many.
+        """Remove leftover partial batches, cubes and store builds, and batches whose metadata
+        cannot be read; return how many.
 
         Parameters
         ----------
@@ -506,6 +596,15 @@ class SweepStore:
             folder = self.path / name
             if folder.is_dir():
                 candidates += [p for p in folder.glob(f"{PARTIAL_PREFIX}*") if p.is_dir()]
+        for kind in EntryKind:
+            # A batch whose metadata cannot be read lists no entry: nothing would remove it.
+            folder = self.path / kind.value
+            if folder.is_dir():
+                candidates += [
+                    p
+                    for p in folder.glob(f"{BATCH_PREFIX}*")
+                    if _BATCH.fullmatch(p.name) and not _batch_keys(p)
+                ]
         removed = 0
         for path in candidates:
             try:
@@ -518,7 +617,8 @@ class SweepStore:
         return removed
 
     def write_spikes(self, key: str, entry: SpikeEntry) -> None:
-        """Store the spike trains and metrics of ``key``; see the module docstring for layout.
+        """Store the spike trains and metrics of ``key`` (a batch of one; see the module
+        docstring for its variables).
 
         Raises
         ------
@@ -526,25 +626,7 @@ class SweepStore:
             Inconsistent trains (counts not matching the event arrays, TRUE and REAL of different
             shapes or durations), values that do not fit the stored dtypes, non-finite seconds.
         """
-        path = self._entry_path(EntryKind.SPIKES, key)
-        encoded = entry.encoded
-        ideal = encoded.real is encoded.true
-        variables = _train_variables("true", encoded.true)
-        duration = _cast(encoded.true.duration_s, np.float64, "duration_s")
-        n_recordings, _ = variables["true_count"][1].shape
-        if duration.shape != (n_recordings,):
-            raise ValueError(f"duration_s: shape {duration.shape}, expected ({n_recordings},)")
-        if not ideal:
-            variables |= _train_variables("real", encoded.real)
-            if variables["real_count"][1].shape != variables["true_count"][1].shape:
-                raise ValueError("REAL and TRUE trains differ in (recording, taxel) shape")
-            real_duration = _cast(encoded.real.duration_s, np.float64, "real duration_s")
-            if real_duration.tobytes() != duration.tobytes():
-                raise ValueError("REAL and TRUE trains differ in duration_s")
-        variables["duration_s"] = (("recording",), duration, {"units": "s"})
-        variables |= _metric_variables(entry.metrics)
-        attrs = {"ideal": ideal, "seconds": _seconds(entry.seconds)}
-        self._write_entry(EntryKind.SPIKES, path, variables, attrs)
+        self.write_entries(EntryKind.SPIKES, {key: entry})
 
     def read_spikes(self, key: str) -> SpikeEntry:
         """The spike entry ``key``, bit for bit as written (``real is true`` if ideal).
@@ -554,80 +636,12 @@ class SweepStore:
         StoreError
             No complete entry ``key``.
         CorruptEntryError
-            The entry fails its checksum or cannot be read.
+            Its batch fails its checksum or cannot be read.
         """
-
-        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> SpikeEntry:
-            duration = _variable(ds, "duration_s", ("recording",), np.float64)
-            true = _read_trains(ds, "true", duration)
-            ideal = attrs["ideal"]
-            if not isinstance(ideal, bool):
-                raise TypeError("attribute 'ideal' is not a bool")
-            real = true if ideal else _read_trains(ds, "real", duration)
-            return SpikeEntry(Encoded(true, real), _read_metrics(ds), _read_seconds(attrs))
-
-        return self._read_entry(EntryKind.SPIKES, key, build)
-
-    def write_rates(self, key: str, entry: RateEntry) -> None:
-        """Store the rate-coded counts of ``key``.
-
-        Raises
-        ------
-        ValueError
-            Arrays of the wrong rank or inconsistent shapes, values that do not fit int64,
-            non-finite seconds.
-        """
-        path = self._entry_path(EntryKind.RATES, key)
-        counts = _cast(entry.counts, np.int64, "counts")
-        dropped = _cast(entry.dropped, np.int64, "dropped")
-        labels = _cast(entry.labels, np.int64, "labels")
-        if counts.ndim != 4:
-            raise ValueError(f"counts: {counts.ndim} dimensions, expected 4")
-        n_recordings, _, n_taxels, _ = counts.shape
-        if dropped.shape != (n_recordings, n_taxels):
-            raise ValueError(f"dropped: shape {dropped.shape}, expected {(n_recordings, n_taxels)}")
-        if labels.shape != (n_recordings,):
-            raise ValueError(f"labels: shape {labels.shape}, expected ({n_recordings},)")
-        class_names = list(entry.class_names)
-        if not all(isinstance(name, str) for name in class_names):
-            raise ValueError("class_names: every name must be a str")
-        variables = {
-            "counts": (("recording", "channel", "taxel", "window"), counts, {"units": "spikes"}),
-            "dropped": (("recording", "taxel"), dropped, {"units": "spikes"}),
-            "labels": (("recording",), labels, {}),
-        }
-        attrs = {"class_names": class_names, "seconds": _seconds(entry.seconds)}
-        self._write_entry(EntryKind.RATES, path, variables, attrs)
-
-    def read_rates(self, key: str) -> RateEntry:
-        """The rate entry ``key`` as written.
-
-        Raises
-        ------
-        StoreError
-            No complete entry ``key``.
-        CorruptEntryError
-            The entry fails its checksum or cannot be read.
-        """
-
-        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> RateEntry:
-            names = attrs["class_names"]
-            if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-                raise TypeError("attribute 'class_names' is not a list of str")
-            return RateEntry(
-                counts=_variable(
-                    ds, "counts", ("recording", "channel", "taxel", "window"), np.int64
-                ),
-                dropped=_variable(ds, "dropped", ("recording", "taxel"), np.int64),
-                labels=_variable(ds, "labels", ("recording",), np.int64),
-                class_names=tuple(names),
-                seconds=_read_seconds(attrs),
-            )
-
-        return self._read_entry(EntryKind.RATES, key, build)
+        return self._read_one(EntryKind.SPIKES, key)
 
     def write_result(self, key: str, entry: ResultEntry) -> None:
-        """Store the per-fold accuracy of every model of ``key``.
+        """Store the per-fold accuracy of every model of ``key`` (a batch of one).
 
         Raises
         ------
@@ -635,27 +649,7 @@ class SweepStore:
             No model, models with different (repeats, folds) shapes, out-of-fold predictions
             that do not match the models and repeats, non-finite seconds.
         """
-        path = self._entry_path(EntryKind.RESULTS, key)
-        if not entry.fold_accuracy:
-            raise ValueError("fold_accuracy: no model")
-        models = [str(model) for model in entry.fold_accuracy]
-        rows = [
-            np.atleast_2d(_cast(values, np.float64, f"fold_accuracy[{model!r}]"))
-            for model, values in zip(models, entry.fold_accuracy.values(), strict=True)
-        ]
-        if any(row.ndim != 2 or row.shape != rows[0].shape for row in rows):
-            shapes = {m: r.shape for m, r in zip(models, rows, strict=True)}
-            raise ValueError(
-                f"fold_accuracy: every model needs the same (repeats, folds) shape: {shapes}"
-            )
-        variables = {
-            "accuracy": (("model", "repeat", "fold"), np.stack(rows), {"units": "1"}),
-            "model": (("model",), np.array(models, dtype=object), {}),
-            **_out_of_fold_variables(entry.out_of_fold, models, rows[0].shape[0]),
-            **_metric_variables(entry.metrics),
-        }
-        attrs = {"seconds": _seconds(entry.seconds), **_recordings_attrs(entry.recordings)}
-        self._write_entry(EntryKind.RESULTS, path, variables, attrs)
+        self.write_entries(EntryKind.RESULTS, {key: entry})
 
     def read_result(self, key: str) -> ResultEntry:
         """The result entry ``key`` as written (models in their original order).
@@ -665,39 +659,50 @@ class SweepStore:
         StoreError
             No complete entry ``key``.
         CorruptEntryError
-            The entry fails its checksum or cannot be read.
+            Its batch fails its checksum or cannot be read.
         """
-
-        def build(ds: xr.Dataset, attrs: dict[str, Any]) -> ResultEntry:
-            if ds.variables["accuracy"].ndim == 2:  # written before repeats: one repeat
-                accuracy = _variable(ds, "accuracy", ("model", "fold"), np.float64)[:, None]
-            else:
-                accuracy = _variable(ds, "accuracy", ("model", "repeat", "fold"), np.float64)
-            models = _strings(ds.variables["model"].values).tolist()
-            if len(models) != accuracy.shape[0]:
-                raise ValueError("model coordinate does not match accuracy")
-            fold_accuracy = {m: accuracy[i].copy() for i, m in enumerate(models)}
-            return ResultEntry(
-                fold_accuracy,
-                _read_seconds(attrs),
-                _read_metrics(ds),
-                _read_recordings(attrs),
-                _read_out_of_fold(ds, models),
-            )
-
-        return self._read_entry(EntryKind.RESULTS, key, build)
+        return self._read_one(EntryKind.RESULTS, key)
 
     def peek_result(self, key: str) -> ResultEntry | None:
-        """The result entry ``key`` if it is complete and valid, else None; writes nothing.
+        """The result entry ``key`` if it is complete and valid, else None; writes nothing
+        (:meth:`peek_results` of one key)."""
+        return self.peek_results([key]).get(key)
 
-        Unlike :meth:`read_valid`, a corrupt entry is left where it is (the next sweep that
-        holds the lock discards and recomputes it); unlike :meth:`read_result`, no problem
-        raises.
-        """
+    def _read_one(self, kind: EntryKind, key: str) -> Any:
+        found = self.read_many(kind, [key], discard_corrupt=False)
+        if key not in found:
+            raise StoreError(f"no {kind} entry {key} in {self.root}")
+        return found[key]
+
+    def _index(self, kind: EntryKind) -> dict[str, str]:
+        """Key -> name of a complete batch holding it, from one listing of the kind's folder."""
+        folder = self.path / kind.value
         try:
-            return self.read_result(key)
-        except (StoreError, OSError):
-            return None
+            with os.scandir(folder) as found:
+                names = sorted(e.name for e in found if _BATCH.fullmatch(e.name))
+        except FileNotFoundError:
+            return {}
+        index: dict[str, str] = {}
+        for name in names:
+            for key in _batch_keys(folder / name):
+                index.setdefault(key, name)
+        return index
+
+    def _read_batch(self, kind: EntryKind, batch: str) -> dict[str, Any]:
+        """Every entry of one batch, by key; any failure to read or verify it is corruption."""
+        path = self.path / kind.value / batch
+        keys = _batch_keys(path)
+        shown = ", ".join(keys[:3]) + (f" and {len(keys) - 3} more" if len(keys) > 3 else "")
+        where = f"{kind} batch {batch} (entries {shown or 'unknown'}) in {self.root}"
+        if not (path / "zarr.json").is_file():
+            raise StoreError(f"no {where}")
+        from_record = _RECORDS[kind][2]
+        try:
+            return {record.key: from_record(record) for record in read_batch(path, kind.value)}
+        except FileNotFoundError as error:
+            raise StoreError(f"no {where} (removed while reading)") from error
+        except Exception as error:
+            raise CorruptEntryError(f"corrupt {where}: {_one_line(error)}") from error
 
     # -----------------------------------------------------------------------------------------
     # Cubes
@@ -726,12 +731,15 @@ class SweepStore:
         if CUBE_DIGESTS in cube.attrs:
             raise ValueError(f"cube {name!r}: attribute {CUBE_DIGESTS!r} is reserved")
         cube = cube.compute().drop_encoding()
-        digests = {str(n): _digest(v.values, canonical_nan=True) for n, v in cube.variables.items()}
+        digests = {str(n): digest(v.values, canonical_nan=True) for n, v in cube.variables.items()}
         cube = _strings_to_objects(cube)
         cube.attrs = {**cube.attrs, CUBE_DIGESTS: digests}
+        # Every chunk carries a CRC-32C, which Zarr checks on each read: a lazy reader, which
+        # never reads a whole variable to check its sha256, still never reads a torn chunk.
+        encoding = {str(n): {"compressors": (ZstdCodec(), Crc32cCodec())} for n in cube.variables}
         partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
         try:
-            cube.to_zarr(str(partial), mode="w-", **_TO_ZARR)
+            cube.to_zarr(str(partial), mode="w-", encoding=encoding, **_TO_ZARR)
             replace_folder(partial, path)
         finally:
             shutil.rmtree(partial, ignore_errors=True)
@@ -747,28 +755,40 @@ class SweepStore:
             if _CUBE_NAME.fullmatch(p.name) and (p / "zarr.json").is_file()
         )
 
-    def read_cube(self, name: str) -> xr.Dataset:
-        """The cube ``name``, loaded into memory (not lazy), string variables as ``<U``.
+    def read_cube(self, name: str, *, lazy: bool = False) -> xr.Dataset:
+        """The cube ``name``, string variables as ``<U``.
+
+        Parameters
+        ----------
+        lazy
+            False (default): loaded into memory and checked against its sha256 digests. True:
+            its data variables are Dask arrays, read chunk by chunk when computed (for cubes
+            larger than memory); each chunk is checked against its CRC-32C as it is read (a
+            mismatch raises then), the whole-variable digests are not. Coordinates are loaded.
 
         Raises
         ------
         StoreError
             No cube ``name``.
         CorruptEntryError
-            The cube fails its checksum or cannot be read.
+            The cube fails its checksum or cannot be read (when loaded).
         """
         path = self._cube_path(name)
         if not (path / "zarr.json").is_file():
             raise StoreError(f"no cube {name!r} in {self.root}")
         where = f"cube {name} in {self.root}"
         try:
-            with xr.open_zarr(str(path), **_OPEN_ZARR) as lazy:
-                cube = _objects_to_strings(lazy.load())
+            if lazy:
+                cube = _objects_to_strings(xr.open_zarr(str(path), **_OPEN_ZARR, chunks={}))
+                cube.attrs.pop(CUBE_DIGESTS, None)
+                return cube
+            with xr.open_zarr(str(path), **_OPEN_ZARR, chunks=None) as opened:
+                cube = _objects_to_strings(opened.load())
             digests = cube.attrs.pop(CUBE_DIGESTS)
             if not isinstance(digests, dict) or set(digests) != {str(n) for n in cube.variables}:
                 raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
             for var, variable in cube.variables.items():
-                if _digest(variable.values, canonical_nan=True) != digests[str(var)]:
+                if digest(variable.values, canonical_nan=True) != digests[str(var)]:
                     raise CorruptEntryError(f"corrupt {where}: variable {var!r} fails its sha256")
         except StoreError:
             raise
@@ -779,76 +799,21 @@ class SweepStore:
     # -----------------------------------------------------------------------------------------
     # Internals
 
-    def _entry_path(self, kind: EntryKind, key: str) -> Path:
-        if not isinstance(key, str) or not _KEY.fullmatch(key):
-            raise ValueError(f"invalid {kind} key {key!r}: expected 32 lowercase hex characters")
-        return self.path / kind.value / key
-
     def _cube_path(self, name: str) -> Path:
         if not isinstance(name, str) or not _CUBE_NAME.fullmatch(name):
             raise ValueError(f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}")
         return self.path / CUBES / name
 
-    def _write_entry(
-        self,
-        kind: EntryKind,
-        path: Path,
-        variables: dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]],
-        attrs: dict[str, Any],
-    ) -> None:
-        """Write one entry under a partial name, then rename it to ``path``."""
-        attrs = {"eskin_entry": kind.value, **attrs}
-        digests = {name: _digest(values) for name, (_, values, _) in variables.items()}
-        digests["@attrs"] = _attrs_digest(attrs)
-        data = {name: xr.Variable(*spec) for name, spec in variables.items()}
-        ds = xr.Dataset(data, attrs={**attrs, "sha256": digests})
-        partial = path.parent / f"{PARTIAL_PREFIX}{path.name}-{uuid.uuid4().hex}"
-        try:
-            ds.to_zarr(str(partial), mode="w-", **_TO_ZARR)
-            for _ in range(2):
-                try:
-                    os.rename(partial, path)
-                    break
-                except OSError as error:
-                    if error.errno not in (errno.EEXIST, errno.ENOTEMPTY) or not path.is_dir():
-                        raise
-                    if (path / "zarr.json").is_file():
-                        break  # another worker finished the same key first; keep its equal entry
-                    self.discard(kind, path.name)  # junk without metadata: replace it
-        finally:
-            shutil.rmtree(partial, ignore_errors=True)
 
-    def _read_entry(
-        self, kind: EntryKind, key: str, build: Callable[[xr.Dataset, dict[str, Any]], _T]
-    ) -> _T:
-        """Open, verify and convert one entry; every failure but a missing entry is corruption."""
-        path = self._entry_path(kind, key)
-        if not (path / "zarr.json").is_file():
-            raise StoreError(f"no {kind} entry {key} in {self.root}")
-        where = f"{kind} entry {key} in {self.root}"
-        try:
-            with xr.open_zarr(str(path), decode_cf=False, **_OPEN_ZARR) as lazy:
-                ds = lazy.load()
-            attrs = dict(ds.attrs)
-            digests = attrs.pop("sha256")
-            if attrs.get("eskin_entry") != kind.value:
-                raise CorruptEntryError(f"corrupt {where}: it is not a {kind} entry")
-            if not isinstance(digests, dict) or set(digests) != {*map(str, ds.variables), "@attrs"}:
-                raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
-            if _attrs_digest(attrs) != digests["@attrs"]:
-                raise CorruptEntryError(f"corrupt {where}: attributes fail their sha256")
-            for name, variable in ds.variables.items():
-                if _digest(variable.values) != digests[str(name)]:
-                    raise CorruptEntryError(f"corrupt {where}: variable {name!r} fails its sha256")
-            return build(ds, attrs)
-        except StoreError:
-            raise
-        except Exception as error:
-            raise CorruptEntryError(f"corrupt {where}: {_one_line(error)}") from error
+def open_results(root: str | Path, *, lazy: bool = False) -> dict[str, xr.Dataset]:
+    """Every result cube of the run root ``root``, by sweep name.
 
-
-def open_results(root: str | Path) -> dict[str, xr.Dataset]:
-    """Every result cube of the run root ``root``, by sweep name, loaded into memory.
+    Parameters
+    ----------
+    lazy
+        False (default): loaded into memory and checked whole. True: Dask-backed, read chunk by
+        chunk (each chunk checked as it is read) when computed: for cubes larger than memory,
+        e.g. ``open_results(root, lazy=True)["grid"]["accuracy_mean"].max("threshold_v")``.
 
     Raises
     ------
@@ -858,7 +823,40 @@ def open_results(root: str | Path) -> dict[str, xr.Dataset]:
         A cube fails its checksum or cannot be read.
     """
     store = SweepStore.open(root)
-    return {name: store.read_cube(name) for name in store.cube_names()}
+    return {name: store.read_cube(name, lazy=lazy) for name in store.cube_names()}
+
+
+def _checked_key(kind: EntryKind, key: str) -> str:
+    if not isinstance(key, str) or not _KEY.fullmatch(key):
+        raise ValueError(f"invalid {kind} key {key!r}: expected 32 lowercase hex characters")
+    return key
+
+
+# Keys of the batches this process has listed, by batch path. A batch never changes once
+# renamed into place (and a removed one's name never comes back), so its keys are read once.
+_BATCH_KEYS: OrderedDict[str, tuple[str, ...]] = OrderedDict()
+_BATCH_KEYS_LIMIT = 100_000
+_BATCH_KEYS_GUARD = threading.Lock()
+
+
+def _batch_keys(path: Path) -> tuple[str, ...]:
+    """The keys of the complete batch at ``path``; none if its metadata is unreadable."""
+    name = str(path)
+    with _BATCH_KEYS_GUARD:
+        if name in _BATCH_KEYS:
+            _BATCH_KEYS.move_to_end(name)
+            return _BATCH_KEYS[name]
+    try:
+        keys = tuple(key for key in read_batch_keys(path) if _KEY.fullmatch(key))
+    except (OSError, ValueError, KeyError, TypeError):
+        # Unreadable metadata: its entries count as absent and are recomputed; reading the
+        # batch would report it corrupt.
+        return ()
+    with _BATCH_KEYS_GUARD:
+        _BATCH_KEYS[name] = keys
+        while len(_BATCH_KEYS) > _BATCH_KEYS_LIMIT:
+            _BATCH_KEYS.popitem(last=False)
+    return keys
 
 
 # ---------------------------------------------------------------------------------------------
@@ -913,7 +911,9 @@ def _check_store_root(root: Path, *, need_store: bool) -> None:
             contents = [p.name for p in root.iterdir()]
         except OSError as error:
             raise StoreError(f"cannot list run root {root}: {_one_line(error)}") from error
-        contents = [n for n in contents if not n.startswith(STORE_PARTIAL_PREFIX)]
+        contents = [
+            n for n in contents if not n.startswith((STORE_PARTIAL_PREFIX, OLD_STORE_PREFIX))
+        ]
         if need_store:
             raise StoreError(f"not a sweep store: {root} has no {STORE_NAME}")
         if contents:
@@ -940,8 +940,37 @@ def _check_store_root(root: Path, *, need_store: bool) -> None:
     version = attributes.get(MARKER) if isinstance(attributes, dict) else None
     if version is None:
         raise StoreError(f"not a sweep store: {store} lacks the {MARKER!r} marker (foreign store)")
+    if isinstance(version, int) and not isinstance(version, bool) and 0 < version < VERSION:
+        raise StoreLayoutError(
+            f"{store} was written by an older eskin-sweep (store layout {version}) and is not "
+            f"read: a sweep of run root {root} sets it aside as {OLD_STORE_PREFIX}{version}-* "
+            "and computes its points again",
+            version,
+        )
     if version != VERSION:
         raise StoreError(f"unsupported sweep store version {version!r} in {store}")
+
+
+def _set_aside(root: Path, reason: StoreLayoutError) -> None:
+    """Move a store of an older layout out of the way (kept, never deleted), with a warning.
+
+    Its entries cannot be read by this version, and reading them as if they could would give
+    wrong results; the user keeps them (and their cubes) under the new name.
+    """
+    old = root / STORE_NAME
+    kept = root / f"{OLD_STORE_PREFIX}{reason.layout}-{time.strftime('%Y%m%dT%H%M%S')}"
+    try:
+        os.rename(old, kept)
+    except FileNotFoundError:  # another sweep set it aside first
+        return
+    except OSError as error:
+        raise StoreError(f"cannot set aside {old}: {_one_line(error)}") from error
+    warnings.warn(
+        f"{old} was written by an older eskin-sweep in a layout this version does not read; "
+        f"kept as {kept.name}, its points are computed again",
+        RuntimeWarning,
+        stacklevel=3,
+    )
 
 
 def _check_writable(root: Path) -> None:
@@ -977,9 +1006,85 @@ def _cast(value: Any, dtype: type, what: str) -> np.ndarray:
     return cast
 
 
-def _train_variables(
-    prefix: str, trains: SpikeTrains
-) -> dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]:
+def _spike_record(key: str, entry: SpikeEntry) -> Record:
+    """A spike entry as a batch stores it, checked for consistency."""
+    encoded = entry.encoded
+    ideal = encoded.real is encoded.true
+    variables = _train_variables("true", encoded.true)
+    duration = _cast(encoded.true.duration_s, np.float64, "duration_s")
+    n_recordings, _ = variables["true_count"][1].shape
+    if duration.shape != (n_recordings,):
+        raise ValueError(f"duration_s: shape {duration.shape}, expected ({n_recordings},)")
+    if not ideal:
+        variables |= _train_variables("real", encoded.real)
+        if variables["real_count"][1].shape != variables["true_count"][1].shape:
+            raise ValueError("REAL and TRUE trains differ in (recording, taxel) shape")
+        real_duration = _cast(encoded.real.duration_s, np.float64, "real duration_s")
+        if real_duration.tobytes() != duration.tobytes():
+            raise ValueError("REAL and TRUE trains differ in duration_s")
+    variables["duration_s"] = (("recording",), duration, {"units": "s"})
+    variables |= _metric_variables(entry.metrics)
+    return Record(key, variables, {"ideal": ideal, "seconds": _seconds(entry.seconds)})
+
+
+def _spike_entry(record: Record) -> SpikeEntry:
+    variables, attrs = record.variables, record.attrs
+    duration = _variable(variables, "duration_s", ("recording",), np.float64)
+    true = _read_trains(variables, "true", duration)
+    ideal = attrs["ideal"]
+    if not isinstance(ideal, bool):
+        raise TypeError("attribute 'ideal' is not a bool")
+    real = true if ideal else _read_trains(variables, "real", duration)
+    return SpikeEntry(Encoded(true, real), _read_metrics(variables), _read_seconds(attrs))
+
+
+def _result_record(key: str, entry: ResultEntry) -> Record:
+    """A result entry as a batch stores it, checked for consistency."""
+    if not entry.fold_accuracy:
+        raise ValueError("fold_accuracy: no model")
+    models = [str(model) for model in entry.fold_accuracy]
+    rows = [
+        np.atleast_2d(_cast(values, np.float64, f"fold_accuracy[{model!r}]"))
+        for model, values in zip(models, entry.fold_accuracy.values(), strict=True)
+    ]
+    if any(row.ndim != 2 or row.shape != rows[0].shape for row in rows):
+        shapes = {m: r.shape for m, r in zip(models, rows, strict=True)}
+        raise ValueError(
+            f"fold_accuracy: every model needs the same (repeats, folds) shape: {shapes}"
+        )
+    variables = {
+        "accuracy": (("model", "repeat", "fold"), np.stack(rows), {"units": "1"}),
+        "model": (("model",), np.array(models, dtype=object), {}),
+        **_out_of_fold_variables(entry.out_of_fold, models, rows[0].shape[0]),
+        **_metric_variables(entry.metrics),
+    }
+    attrs = {"seconds": _seconds(entry.seconds), **_recordings_attrs(entry.recordings)}
+    return Record(key, variables, attrs)
+
+
+def _result_entry(record: Record) -> ResultEntry:
+    variables, attrs = record.variables, record.attrs
+    accuracy = _variable(variables, "accuracy", ("model", "repeat", "fold"), np.float64)
+    models = _strings(variables["model"][1]).tolist()
+    if len(models) != accuracy.shape[0]:
+        raise ValueError("model coordinate does not match accuracy")
+    return ResultEntry(
+        {m: accuracy[i] for i, m in enumerate(models)},
+        _read_seconds(attrs),
+        _read_metrics(variables),
+        _read_recordings(attrs),
+        _read_out_of_fold(variables, models),
+    )
+
+
+# Per kind: the entry type, how it becomes a batch record, how a record becomes it again.
+_RECORDS: dict[EntryKind, tuple[type, Callable[[str, Any], Record], Callable[[Record], Any]]] = {
+    EntryKind.SPIKES: (SpikeEntry, _spike_record, _spike_entry),
+    EntryKind.RESULTS: (ResultEntry, _result_record, _result_entry),
+}
+
+
+def _train_variables(prefix: str, trains: SpikeTrains) -> Variables:
     """Flat variables of one set of ragged trains, checked for consistency."""
     times = _cast(trains.times_s, np.float64, f"{prefix} times_s")
     polarity = _cast(trains.polarity, np.int8, f"{prefix} polarity")
@@ -1000,12 +1105,12 @@ def _train_variables(
     }
 
 
-def _read_trains(ds: xr.Dataset, prefix: str, duration: np.ndarray) -> SpikeTrains:
+def _read_trains(variables: Variables, prefix: str, duration: np.ndarray) -> SpikeTrains:
     event = (f"{prefix}_event",)
-    times = _variable(ds, f"{prefix}_times_s", event, np.float64)
-    polarity = _variable(ds, f"{prefix}_polarity", event, np.int8)
-    count = _variable(ds, f"{prefix}_count", ("recording", "taxel"), np.int64)
-    start = _variable(ds, f"{prefix}_start", ("recording", "taxel"), np.int64)
+    times = _variable(variables, f"{prefix}_times_s", event, np.float64)
+    polarity = _variable(variables, f"{prefix}_polarity", event, np.int8)
+    count = _variable(variables, f"{prefix}_count", ("recording", "taxel"), np.int64)
+    start = _variable(variables, f"{prefix}_start", ("recording", "taxel"), np.int64)
     flat = count.ravel()
     if (flat < 0).any() or int(flat.sum()) != times.size:
         raise ValueError(f"{prefix}_count does not match {prefix}_times_s")
@@ -1014,12 +1119,12 @@ def _read_trains(ds: xr.Dataset, prefix: str, duration: np.ndarray) -> SpikeTrai
     return SpikeTrains(times_s=times, polarity=polarity, count=count, duration_s=duration)
 
 
-def _variable(ds: xr.Dataset, name: str, dims: tuple[str, ...], dtype: type) -> np.ndarray:
+def _variable(variables: Variables, name: str, dims: tuple[str, ...], dtype: type) -> np.ndarray:
     """A stored variable's values, checked against the dims and dtype this module writes."""
-    variable = ds.variables[name]
-    if variable.dims != dims or variable.dtype != np.dtype(dtype):
-        raise TypeError(f"variable {name!r} is {variable.dtype} {variable.dims}, not {dims}")
-    return np.asarray(variable.values)
+    found_dims, values, _ = variables[name]
+    if tuple(found_dims) != dims or values.dtype != np.dtype(dtype):
+        raise TypeError(f"variable {name!r} is {values.dtype} {found_dims}, not {dims}")
+    return np.asarray(values)
 
 
 def _seconds(seconds: Mapping[str, float]) -> dict[str, float]:
@@ -1030,25 +1135,29 @@ def _seconds(seconds: Mapping[str, float]) -> dict[str, float]:
     return out
 
 
-def _metric_variables(metrics: SpikeMetrics) -> dict[str, tuple]:
-    """One 0-d float64 variable per metric: attrs are JSON, which cannot hold +-inf."""
-    return {
-        field.name: (
-            (),
-            _cast(getattr(metrics, field.name), np.float64, field.name),
-            {"units": field.metadata["units"], "long_name": field.metadata["long_name"]},
-        )
-        for field in dataclasses.fields(SpikeMetrics)
+def _metric_variables(metrics: SpikeMetrics) -> Variables:
+    """The metrics as one float64 variable on ``metric`` (attrs are JSON, which cannot hold
+    +-inf): one array per batch rather than one per metric, each a file or two."""
+    fields = dataclasses.fields(SpikeMetrics)
+    values = np.array([_cast(getattr(metrics, f.name), np.float64, f.name) for f in fields])
+    attrs = {
+        "metric": [f.name for f in fields],
+        "units": [f.metadata["units"] for f in fields],
+        "long_name": [f.metadata["long_name"] for f in fields],
     }
+    return {"metrics": (("metric",), values, attrs)}
 
 
-def _read_metrics(ds: xr.Dataset) -> SpikeMetrics:
-    return SpikeMetrics(**{name: float(_variable(ds, name, (), np.float64)) for name in _METRICS})
+def _read_metrics(variables: Variables) -> SpikeMetrics:
+    values = _variable(variables, "metrics", ("metric",), np.float64)
+    if values.shape != (len(_METRICS),):
+        raise ValueError(f"metrics: {values.shape[0]} values, expected {len(_METRICS)}")
+    return SpikeMetrics(*(float(value) for value in values))
 
 
 def _out_of_fold_variables(
     out_of_fold: OutOfFold | None, models: list[str], repeats: int
-) -> dict[str, tuple]:
+) -> Variables:
     """The variables of a result's out-of-fold predictions; none when it kept none."""
     if out_of_fold is None:
         return {}
@@ -1070,18 +1179,18 @@ def _out_of_fold_variables(
     }
 
 
-def _read_out_of_fold(ds: xr.Dataset, models: list[str]) -> OutOfFold | None:
+def _read_out_of_fold(variables: Variables, models: list[str]) -> OutOfFold | None:
     """The out-of-fold predictions of a result entry; None for an entry that kept none."""
-    if "predicted" not in ds.variables:
+    if "predicted" not in variables:
         return None
-    predicted = _variable(ds, "predicted", ("model", "repeat", "recording"), np.int64)
+    predicted = _variable(variables, "predicted", ("model", "repeat", "recording"), np.int64)
     if predicted.shape[0] != len(models):
         raise ValueError("model coordinate does not match predicted")
     return OutOfFold(
-        recording_names=tuple(_strings(ds.variables["recording"].values).tolist()),
-        labels=_variable(ds, "labels", ("recording",), np.int64),
-        predicted={m: predicted[i].copy() for i, m in enumerate(models)},
-        test_fold=_variable(ds, "test_fold", ("repeat", "recording"), np.int64),
+        recording_names=tuple(_strings(variables["recording"][1]).tolist()),
+        labels=_variable(variables, "labels", ("recording",), np.int64),
+        predicted={m: predicted[i] for i, m in enumerate(models)},
+        test_fold=_variable(variables, "test_fold", ("repeat", "recording"), np.int64),
     )
 
 
@@ -1130,29 +1239,6 @@ def _read_seconds(attrs: dict[str, Any]) -> dict[str, float]:
     if not isinstance(seconds, dict):
         raise TypeError("attribute 'seconds' is not a mapping")
     return {str(stage): float(value) for stage, value in seconds.items()}
-
-
-def _digest(values: np.ndarray, *, canonical_nan: bool = False) -> str:
-    """sha256 hex of dtype, shape and little-endian bytes; strings by value, not by width."""
-    values = np.asarray(values)
-    hasher = hashlib.sha256()
-    if values.dtype.kind in "OTUS":
-        # <U, object and StringDType hold the same strings in different widths/layouts.
-        hasher.update(f"str{values.shape}".encode())
-        hasher.update(json.dumps([str(v) for v in values.ravel().tolist()]).encode())
-        return hasher.hexdigest()
-    values = np.asarray(values, dtype=values.dtype.newbyteorder("<"), order="C")
-    if canonical_nan and values.dtype.kind in "fc":
-        values = values.copy()
-        values[np.isnan(values)] = np.nan
-    hasher.update(f"{values.dtype.str}{values.shape}".encode())
-    hasher.update(values.tobytes())
-    return hasher.hexdigest()
-
-
-def _attrs_digest(attrs: Mapping[str, Any]) -> str:
-    text = json.dumps(attrs, sort_keys=True, allow_nan=False, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _strings(values: np.ndarray) -> np.ndarray:

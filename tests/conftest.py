@@ -41,3 +41,17 @@ def smoke_sweep(tmp_path_factory):
     proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return root, json.loads(proc.stdout), env
+
+
+@pytest.fixture(scope="module")
+def client():
+    """A Dask client on an in-process cluster of one single-thread worker."""
+    from distributed import Client, LocalCluster
+
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client

@@ -10,7 +10,7 @@ import flows.api
 from flows import orchestrate
 from flows.api import SweepFailed, open_results, run_sweep
 from flows.cluster import ClusterError
-from flows.work import ensure_entry
+from flows.work import ensure_entries
 from storage.runlog import RUN_LOG
 
 GRID = """
@@ -30,19 +30,6 @@ def grid(tmp_path):
     path = tmp_path / "api.toml"
     path.write_text(GRID)
     return str(path)
-
-
-@pytest.fixture(scope="module")
-def client():
-    from distributed import Client, LocalCluster
-
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
-        yield client
 
 
 def test_every_name_of_the_api_resolves_without_importing_prefect():
@@ -89,16 +76,16 @@ def test_a_sweep_on_a_given_client_writes_cubes_and_leaves_the_client_open(
     xr.testing.assert_identical(open_results(root)["threshold"], cubes["threshold"])
 
 
-def failing_at_5_mv(root, level, scene_data, *after):
-    if scene_data["readout"]["threshold_v"] == 0.05:
+def failing_at_5_mv(root, level, scenes, *after):
+    if any(scene.readout.threshold_v == 0.05 for scene in scenes):
         raise RuntimeError("broken point")
-    return ensure_entry(root, level, scene_data, *after)
+    return ensure_entries(root, level, scenes, *after)
 
 
 def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     tmp_path, grid, client, monkeypatch
 ):
-    monkeypatch.setattr(orchestrate, "ensure_entry", failing_at_5_mv)
+    monkeypatch.setattr(orchestrate, "ensure_entries", failing_at_5_mv)
     with pytest.raises(SweepFailed, match=r"^1 of 3 points failed .*broken point"):
         run_sweep(grid, tmp_path / "run", client=client)
     assert sorted(open_results(tmp_path / "run")) == ["window"]

@@ -5,25 +5,29 @@ import hashlib
 import json
 import math
 import os
+import pickle
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from flows import orchestrate
 from flows.orchestrate import (
     SweepCounts,
     SweepPlan,
     assemble_cube,
     check_grid,
     cost_kind,
+    default_points_per_task,
     dry_run,
     format_dry_run,
     load_sweep_grid,
     open_root,
     plan_sweep,
+    point_failures,
     training_cost,
-    with_recordings,
 )
+from flows.work import PointsFailed
 from pipeline.coding import MAX_AUTO_WINDOWS
 from pipeline.cube import RecordingsInfo
 from pipeline.errors import DatasetError
@@ -31,7 +35,7 @@ from pipeline.grid import DatasetFacts, Grid, load_grid
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import Scene, cache_key
 from storage import EntryKind, StoreError
-from storage.store import RateEntry, ResultEntry, SweepStore
+from storage.store import ResultEntry, SweepStore
 
 
 def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():
@@ -142,12 +146,12 @@ def test_dry_run_counts_cached_points_and_estimates_the_rest_writing_nothing(tmp
     # A corrupt result (its attributes edited) counts as missing, and the dry run leaves it.
     corrupt = point_key(grid, "window", 1)
     store.write_result(corrupt, ResultEntry({"ffnn": np.array([0.5])}, {"a": 1.0}, METRICS))
-    meta = root / "store.zarr" / "results" / corrupt / "zarr.json"
+    meta = store.entry_location(EntryKind.RESULTS, corrupt) / "zarr.json"
     data = json.loads(meta.read_text())
-    data["attributes"]["seconds"] = {"a": 100.0}
+    data["attributes"]["entries"][0]["attrs"]["seconds"] = {"a": 100.0}
     meta.write_text(json.dumps(data))
-    # So does a partial entry, as a killed writer leaves it.
-    (root / "store.zarr" / "results" / f".partial-{corrupt}-0").mkdir()
+    # So does a partial batch, as a killed writer leaves it.
+    (root / "store.zarr" / "results" / ".partial-batch-0").mkdir()
     before = tree(root)
 
     d = dry_run(grid, root, workers=2)
@@ -187,21 +191,20 @@ def test_dry_run_of_a_missing_root_has_nothing_cached_and_creates_nothing(tmp_pa
 # Assembling cubes
 
 
-def test_cubes_state_the_recordings_of_entries_written_before_results_did(tmp_path):
-    """Class names come from the points' rate entries, dataset name and sampling rate from the
-    facts the grid was checked against; an entry that states them itself is taken as it is."""
+def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_point(tmp_path):
     grid = Grid.from_dict(
         {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
     )
     store = SweepStore.open_or_create(tmp_path / "run")
     scenes = grid.unique_points()
-    for key, scene in scenes.items():
-        counts, dropped = np.zeros((2, 1, 4, 1), np.int64), np.zeros((2, 4), np.int64)
-        rates = RateEntry(counts, dropped, np.array([0, 1]), ("bark", "cloth"), {})
-        store.write_rates(cache_key(scene, "rates"), rates)
-        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
-    facts = DatasetFacts(fs_hz=250.0, min_samples=100, min_class_size=1, dataset="mine")
-    plan = SweepPlan(grid, str(store.root), scenes, {}, {cache_key(grid.base, "recordings"): facts})
+    first, second = scenes
+    plan = SweepPlan(grid, str(store.root), scenes, {})
+    own = RecordingsInfo("mine", ("bark", "cloth"), 250.0)
+    store.write_result(first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    with pytest.raises(StoreError, match=f"1 point.*no result.*first: {second}"):
+        assemble_cube(plan, "t")
+    assert store.cube_names() == []
+    store.write_result(second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
     cube = assemble_cube(plan, "t")
     stated = {k: cube.attrs.get(k) for k in ("dataset_name", "sampling_rate_hz", "class_names")}
     assert stated == {
@@ -209,12 +212,7 @@ def test_cubes_state_the_recordings_of_entries_written_before_results_did(tmp_pa
         "sampling_rate_hz": 250.0,
         "class_names": ["bark", "cloth"],
     }
-    assert cube.attrs["n_classes"] == 2
     assert store.read_cube("t").attrs["n_classes"] == 2
-    own = RecordingsInfo("theirs", ("x",), 100.0)
-    first = next(iter(scenes))
-    entry = ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own)
-    assert with_recordings(plan, store, {first: entry})[first].recordings is own
     # Nothing known anywhere: the facts stay unknown, and out of the cube.
     bare = SweepPlan(grid, str(tmp_path / "other"), scenes, {})
     empty = SweepStore.open_or_create(bare.root)
@@ -261,8 +259,8 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
     assert SweepStore(tmp_path / "absent").complete_keys(EntryKind.RESULTS) == frozenset()
     for key in (keys[2], keys[0]):
         store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
-    (store.path / "results" / f".partial-{keys[1]}-0").mkdir()
-    (store.path / "results" / keys[3]).mkdir()  # no metadata: not a complete entry
+    (store.path / "results" / ".partial-batch-0").mkdir()
+    (store.path / "results" / f"batch-{keys[3]}").mkdir()  # no metadata: not a complete batch
     assert store.complete_keys(EntryKind.RESULTS) == {keys[0], keys[2]}
     plan = plan_sweep("smoke", str(store.root))
     assert list(plan.scenes) == keys
@@ -272,7 +270,7 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
         s.name: tuple(dict.fromkeys(p.key for p in grid.points() if p.sweep == s.name))
         for s in grid.sweeps
     }
-    assert not (store.path / "results" / f".partial-{keys[1]}-0").exists()
+    assert not (store.path / "results" / ".partial-batch-0").exists()
 
 
 def test_an_equal_grid_loaded_again_is_the_last_one_with_its_points(tmp_path):
@@ -290,3 +288,57 @@ def test_an_equal_grid_loaded_again_is_the_last_one_with_its_points(tmp_path):
     (tmp_path / "Z.csv").write_text("")
     moved = load_sweep_grid(str(path), str(tmp_path))
     assert {p.scene.dataset.kind for p in moved.points()} == {"vibtac12"}
+
+
+# ---------------------------------------------------------------------------------------------
+# Batching points into tasks
+
+
+@pytest.mark.parametrize(
+    ("n_points", "n_threads", "expected"),
+    [(0, 2, 1), (1, 2, 1), (48, 2, 3), (10_000, 2, 500), (10_000, 64, 20), (7, 0, 1)],
+)
+def test_default_points_per_task_is_about_eight_tasks_per_thread(n_points, n_threads, expected):
+    assert default_points_per_task(n_points, n_threads) == expected
+
+
+def test_batches_keep_a_trains_points_together_where_they_fit_and_spread_big_ones():
+    by_train = {"a": ["a1", "a2"], "b": ["b1", "b2", "b3"], "c": ["c1"], "d": list("dddddddd")}
+    batches = orchestrate._batches({t: list(k) for t, k in by_train.items()}, 4)
+    flat = [[(train, tuple(keys)) for train, keys in batch] for batch in batches]
+    assert flat == [
+        [("a", ("a1", "a2"))],  # b does not fit beside a: it starts a batch of its own
+        [("b", ("b1", "b2", "b3")), ("c", ("c1",))],
+        [("d", tuple("dddd"))],  # d has more points than a batch: spread, full batches
+        [("d", tuple("dddd"))],
+    ]
+    # Every point once, in order, and no batch above the size.
+    points = [k for batch in batches for _, keys in batch for k in keys]
+    assert points == [k for keys in by_train.values() for k in keys]
+    assert max(sum(len(keys) for _, keys in batch) for batch in batches) == 4
+    assert orchestrate._batches(by_train, 1) == [
+        [(t, [k])] for t, ks in by_train.items() for k in ks
+    ]
+
+
+class _Finished:
+    """A finished Dask future, as far as :func:`point_failures` looks at it."""
+
+    def __init__(self, error=None):
+        self.status = "error" if error else "finished"
+        self.key = "points-abc"
+        self._error = error
+
+    def exception(self):
+        return self._error
+
+
+def test_point_failures_name_only_the_failed_points_of_a_partly_failed_task():
+    assert point_failures(_Finished(), ["a", "b"]) == {}
+    partly = PointsFailed({"b": "ValueError: bad"})
+    assert point_failures(_Finished(partly), ["a", "b"]) == {"b": "point b: ValueError: bad"}
+    whole = point_failures(_Finished(MemoryError("killed")), ["a", "b"])
+    assert whole == {"a": "points-abc: killed", "b": "points-abc: killed"}
+    again = pickle.loads(pickle.dumps(partly))  # Dask ships it back to the coordinator
+    assert isinstance(again, PointsFailed) and again.failures == partly.failures
+    assert "1 point(s) failed: b: ValueError: bad" in str(again)

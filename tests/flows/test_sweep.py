@@ -10,7 +10,8 @@ import pytest
 import xarray as xr
 
 from flows.cli import main
-from storage import open_results
+from storage import EntryKind, SweepStore, open_results
+from storage.batches import BATCH_PREFIX, read_batch_keys
 from tests.flows.helpers import eskin, hermetic_env
 
 SMOKE_SWEEPS = {"threshold", "window", "noise"}
@@ -111,9 +112,11 @@ def test_xarray_queries_from_the_readme(smoke_sweep):
 
 
 def test_window_sweep_reuses_spike_trains(smoke_sweep):
-    spikes = [p for p in (smoke_sweep[0] / "store.zarr" / "spikes").iterdir() if p.is_dir()]
-    # thresholds 0.05 and 0.09 (shared by both windows) and four noise levels.
-    assert len([p for p in spikes if not p.name.startswith(".")]) == 6
+    folder = SweepStore.open(smoke_sweep[0]).path / EntryKind.SPIKES.value
+    batches = [p for p in folder.iterdir() if p.name.startswith(BATCH_PREFIX)]
+    written = [key for batch in batches for key in read_batch_keys(batch)]
+    # thresholds 0.05 and 0.09 (shared by both windows) and four noise levels, each made once.
+    assert len(written) == len(set(written)) == 6
 
 
 def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep):

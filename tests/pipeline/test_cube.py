@@ -1,8 +1,10 @@
 """Result cubes from point results: layout, gaps, correlations, and what they say of themselves."""
 
 import dataclasses
+import json
 import math
 import types
+import warnings
 
 import numpy as np
 import pytest
@@ -17,6 +19,7 @@ from pipeline.cube import (
     field_attrs,
     metric_attrs,
 )
+from pipeline.cube import _flatten as flatten
 from pipeline.grid import Grid, sweep_points
 from pipeline.metrics import SpikeMetrics
 from pipeline.scene import ReadoutSpec, ThresholdMismatch
@@ -398,3 +401,144 @@ def test_provenance_attributes_are_plain_values():
     )
     assert not {"axes", "fixed", "base_scene", "grid_description"} & set(cube.attrs)
     assert all(isinstance(v, str | int | float | list) for v in cube.attrs.values())
+
+
+# ---------------------------------------------------------------------------------------------
+# The cube is assembled all at once; it is what a point-by-point assembly gives
+
+
+MIXED = {
+    "base": "smoke",
+    "sweeps": {
+        "mixed": {
+            "axes": {
+                "training.models": [["ffnn"], ["cnn", "ffnn"]],
+                "training.repeats": [1, 2],
+                "readout.threshold_v": [0.05, 0.1, 0.2],
+            }
+        }
+    },
+}
+NAMES = [f"c{i % 3}/r{i}" for i in range(9)]
+LABELS = [i % 3 for i in range(9)]
+
+
+def mixed_entry(point) -> ResultEntry:
+    """A point's result, drawn from a generator seeded by its index: some points without
+    predictions, with fewer recordings, in another order, or missing a model's predictions."""
+    i, r, t = point.index
+    generator = np.random.default_rng([i, r, t])
+    models = [m.value for m in point.scene.training.models]
+    repeats = point.scene.training.repeats
+    folds = {m: generator.random((repeats, 4)) for m in models}
+    seconds = {"load": 0.5, "coding": 0.25} if t else {f"train_{m}": 1.0 + t for m in models}
+    oof = None
+    if (i, t) != (0, 2):
+        order = list(range(9)) if t == 0 else list(range(6)) if t == 1 else list(range(8, -1, -1))
+        names = [NAMES[j] for j in order]
+        labels = np.array([LABELS[j] for j in order])
+        right = generator.random((len(models), repeats, len(order))) < 0.7
+        predicted = {
+            m: np.where(right[k], labels, (labels + 1) % 3)
+            for k, m in enumerate(models)
+            if (i, r, t, m) != (1, 0, 1, "cnn")  # predictions of one model lost
+        }
+        test_fold = generator.integers(0, 4, (repeats, len(order)))
+        oof = OutOfFold(tuple(names), labels, predicted, test_fold)
+    return ResultEntry(folds, seconds, metrics(ssnr_db=10.0 * t, ste_s2=0.1 * i), None, oof)
+
+
+def test_the_cube_is_what_a_point_by_point_assembly_gives():
+    """Every variable of a sweep mixing one and two repeats, one and two models, points with and
+    without predictions, on different recordings in different orders, against the cube written
+    out point by point, model by model (intervals from ``accuracy_interval`` one at a time)."""
+    from pipeline.stats import accuracy_interval
+
+    grid = Grid.from_dict(MIXED)
+    sweep = grid.sweeps[0]
+    points = sweep_points(grid.base, sweep)
+    cube = build(grid, sweep, {p.key: mixed_entry(p) for p in points})
+    models = cube["model"].values.tolist()
+    assert models == ["ffnn", "cnn"] and cube.sizes["repeat"] == 2
+    order = [NAMES[j] for j in range(9)]  # the first point holds every recording, in order
+    assert cube["recording"].values.tolist() == order
+    assert cube["label"].values.tolist() == LABELS
+    stages = cube["stage"].values.tolist()
+    methods = set()
+    for point in points:
+        entry = mixed_entry(point)
+        at = dict(zip(sweep.dims, point.index, strict=True))
+        here = cube.isel(at)
+        assert here["result_key"].item() == point.key
+        assert here["ssnr_db"].item() == entry.metrics.ssnr_db
+        expected_seconds = [entry.seconds.get(stage, np.nan) for stage in stages]
+        np.testing.assert_array_equal(here["seconds"].values, expected_seconds)
+        oof = entry.out_of_fold
+        test_fold = np.full((2, 9), -1)
+        if oof is not None:
+            columns = [order.index(name) for name in oof.recording_names]
+            test_fold[: oof.test_fold.shape[0], columns] = oof.test_fold
+        np.testing.assert_array_equal(here["test_fold"].values, test_fold)
+        for m, model in enumerate(models):
+            one = here.isel(model=m)
+            accuracy = np.full((2, 4), np.nan)
+            if model in entry.fold_accuracy:
+                folds = entry.fold_accuracy[model]
+                accuracy[: folds.shape[0]] = folds
+            np.testing.assert_array_equal(one["accuracy"].values, accuracy)
+            predicted = np.full((2, 9), -1)
+            if oof is not None and model in oof.predicted:
+                predicted[: oof.test_fold.shape[0], columns] = oof.predicted[model]
+            np.testing.assert_array_equal(one["predicted"].values, predicted)
+            correct = np.where(predicted >= 0, predicted == np.array(LABELS), -1)
+            np.testing.assert_array_equal(one["correct"].values, correct)
+            ran = (correct >= 0).any(axis=1)
+            held = (correct[ran] >= 0).all(axis=0)
+            if ran.any() and held.any():
+                interval = accuracy_interval(
+                    correct[ran][:, held] == 1,
+                    np.array(LABELS)[held],
+                    rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
+                )
+                methods.add(interval.method)
+                assert one["accuracy_mean"].item() == interval.estimate
+                low, high = one["accuracy_low"].item(), one["accuracy_high"].item()
+                assert (low, high) == pytest.approx((interval.low, interval.high), abs=1e-12)
+            else:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    assert np.array_equal(
+                        one["accuracy_mean"].item(), np.nanmean(accuracy), equal_nan=True
+                    )
+                assert np.isnan(one["accuracy_low"].item()) and np.isnan(one["accuracy_high"])
+        # Every scene field, by its dotted name, has the point's value there.
+        for field, value in flatten(point.scene.to_dict()).items():
+            if field in cube.coords and field != "name":
+                table = isinstance(value, list | dict)
+                expected = json.dumps(value, sort_keys=True) if table else value
+                assert here[field].item() == expected, field
+    assert len(methods) == 2  # a Wilson interval and a bootstrap both met
+    assert cube["accuracy_low"].attrs["interval"] == "; ".join(sorted(methods))
+    assert cube["correct"].dtype == np.int8 and cube["test_fold"].dtype == np.int16
+    assert cube["readout.equivalent_bits"].dims == ("threshold_v",)
+    assert cube["training.repeats"].dims == ("repeats",)
+    assert cube["array.rows"].dims == ()
+
+
+def test_a_sweep_of_the_grid_takes_the_points_the_grid_built():
+    grid = Grid.from_dict({"base": "smoke", "sweeps": {**golden.GRID["sweeps"], **MIXED["sweeps"]}})
+    start = 0
+    for sweep in grid.sweeps:
+        expected = sweep_points(grid.base, sweep)
+        points = grid.points_of(sweep)
+        assert points == expected
+        assert [p.key for p in points] == [p.key for p in expected]
+        # The very points the grid built once, not new ones.
+        assert all(a is b for a, b in zip(points, grid.points()[start:], strict=False))
+        start += len(points)
+    # An equal sweep that is not one of the grid's own objects is expanded from its values.
+    own = grid.sweeps[2]
+    other = dataclasses.replace(own)
+    points = grid.points_of(other)
+    assert points == sweep_points(grid.base, other)
+    assert not any(a is b for a, b in zip(points, grid.points()[4:], strict=False))

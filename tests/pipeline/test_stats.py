@@ -15,6 +15,7 @@ from pipeline.stats import (
     compare_paired,
     holm,
     trend,
+    wilson_interval,
 )
 
 
@@ -44,6 +45,60 @@ def test_single_repeat_interval_is_scipys_wilson_interval(k, n, confidence):
     assert result.method == "Wilson score"
     assert result.confidence == confidence
     assert result.low <= result.estimate <= result.high
+
+
+def wilson_cases():
+    """(k, n) pairs: every k for small n (n = 1 among them), the ends and a spread for larger."""
+    pairs = [(k, n) for n in range(1, 25) for k in range(n + 1)]
+    for n in (60, 119, 120, 121, 1000, 4096, 10**6):
+        pairs += [(k, n) for k in {0, 1, 2, n // 3, n // 2, n - 1, n, *range(0, n + 1, n // 17)}]
+    return np.array(pairs).T
+
+
+@pytest.mark.parametrize("confidence", [0.95, 0.9, 0.5, 0.999])
+def test_vectorized_wilson_interval_is_scipys_for_every_proportion(confidence):
+    k, n = wilson_cases()
+    low, high = wilson_interval(k, n, confidence)
+    assert low.dtype == high.dtype == np.float64 and low.shape == k.shape
+    expected = np.array(
+        [
+            (ci.low, ci.high)
+            for ci in (
+                scipy.stats.binomtest(int(a), int(b)).proportion_ci(confidence, method="wilson")
+                for a, b in zip(k, n, strict=True)
+            )
+        ]
+    )
+    np.testing.assert_allclose(low, expected[:, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(high, expected[:, 1], rtol=0, atol=1e-12)
+    assert np.all(low[k == 0] == 0.0) and np.all(high[k == n] == 1.0)
+
+
+def test_vectorized_wilson_interval_broadcasts_and_matches_accuracy_interval():
+    k = np.array([[0, 3, 7], [1, 5, 12]])
+    low, high = wilson_interval(k, 12)
+    assert low.shape == high.shape == (2, 3)
+    for (i, j), successes in np.ndenumerate(k):
+        one = accuracy_interval(with_k_correct(successes, 12), np.arange(12) % 3, rng=rng())
+        assert (low[i, j], high[i, j]) == pytest.approx((one.low, one.high), abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("k", "n", "confidence", "message"),
+    [
+        (3, 2, 0.95, "k must lie in"),
+        (-1, 2, 0.95, "k must lie in"),
+        (0, 0, 0.95, "n must be >= 1"),
+        (1.0, 2, 0.95, "k must be integers"),
+        (1, 2.0, 0.95, "n must be integers"),
+        ([1, 2], [3, 4, 5], 0.95, "do not broadcast"),
+        (1, 2, 1.0, "confidence"),
+        (1, 2, True, "confidence"),
+    ],
+)
+def test_vectorized_wilson_interval_refuses_bad_input(k, n, confidence, message):
+    with pytest.raises(ValueError, match=message):
+        wilson_interval(k, n, confidence)
 
 
 def test_repeated_interval_is_a_bootstrap_that_brackets_the_estimate():

@@ -10,7 +10,7 @@ import json
 import pytest
 
 from flows.orchestrate import assemble_cubes, plan_sweep
-from flows.work import ensure_entry
+from flows.work import ensure_entries
 from storage import SweepStore
 from tests.flows.helpers import assert_same_cubes, eskin
 
@@ -36,6 +36,6 @@ def test_reversed_completion_order_gives_the_same_cubes(smoke_sweep, tmp_path):
     with store.lock():
         plan = plan_sweep("smoke", str(store.root))
         for key in reversed(plan.missing):
-            ensure_entry(plan.root, "results", plan.scenes[key].to_dict())
+            ensure_entries(plan.root, "results", [plan.scenes[key]])
         assemble_cubes(plan)
     assert_same_cubes(smoke_sweep[0], store.root)

@@ -7,6 +7,7 @@ with the uninterrupted session run (``smoke_sweep``): every variable but the mea
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -17,6 +18,7 @@ import pytest
 
 from flows import server
 from storage import SweepStore
+from storage.batches import BATCH_PREFIX, read_batch_keys
 from tests.flows.helpers import assert_same_cubes, eskin, live_tree, stop, wait_for
 
 pytestmark = pytest.mark.slow
@@ -25,17 +27,20 @@ POINTS = 7  # distinct points of the smoke grid
 
 
 def results(root: Path) -> dict[str, int]:
-    """Complete result entries of a root, each with its metadata's mtime in ns."""
+    """Complete result entries of a root, each with its batch's metadata mtime in ns."""
     folder = root / "store.zarr" / "results"
     if not folder.is_dir():
         return {}
     found = {}
-    for entry in folder.iterdir():
-        try:
-            found[entry.name] = (entry / "zarr.json").stat().st_mtime_ns
-        except (FileNotFoundError, NotADirectoryError):  # the group's own zarr.json, a partial
+    for batch in folder.iterdir():
+        if not batch.name.startswith(BATCH_PREFIX):  # the group's own zarr.json, a partial
             continue
-    return {k: v for k, v in found.items() if not k.startswith(".")}
+        try:
+            mtime = (batch / "zarr.json").stat().st_mtime_ns
+            found |= dict.fromkeys(read_batch_keys(batch), mtime)
+        except FileNotFoundError:
+            continue
+    return found
 
 
 def start_sweep(root: Path, env: dict[str, str], *extra: str) -> subprocess.Popen:
@@ -222,19 +227,19 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     store = SweepStore.open(root)
     scene = next(iter(load_grid("smoke").unique_points().values()))
     result_key, spikes_key = cache_key(scene, "results"), cache_key(scene, "spikes")
-    chunk = first_file(store.path / "results" / result_key / "accuracy")
+    chunk = first_file(store.entry_location(EntryKind.RESULTS, result_key) / "accuracy")
     data = bytearray(chunk.read_bytes())
     data[len(data) // 2] ^= 0xFF
     chunk.write_bytes(bytes(data))
-    train = first_file(store.path / "spikes" / spikes_key / "true_times_s")
+    train = first_file(store.entry_location(EntryKind.SPIKES, spikes_key) / "true_times_s")
     train.write_bytes(train.read_bytes()[:3])
 
     proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads(proc.stdout)
     assert summary["cache_hits"] == POINTS - 1 and summary["computed"] == 1
-    assert f"corrupt results entry {result_key}" in proc.stderr
-    assert f"corrupt spikes entry {spikes_key}" in proc.stderr
+    assert re.search(f"corrupt results batch [^\\n]*{result_key}", proc.stderr)
+    assert re.search(f"corrupt spikes batch [^\\n]*{spikes_key}", proc.stderr)
     assert proc.stderr.count("RuntimeWarning") >= 2
     assert store.read_valid(EntryKind.SPIKES, spikes_key) is not None
     assert_same_cubes(smoke_sweep[0], root)

@@ -17,13 +17,14 @@ def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
     metrics = SpikeMetrics(*([1.0] * 6))
     for key in keys[:2]:
         store.write_result(key, ResultEntry({"ffnn": np.array([0.5, 0.5])}, {"x": 1.0}, metrics))
-    partial = store.path / "spikes" / f".partial-{keys[3]}-{uuid.uuid4().hex}"
+    partial = store.path / "spikes" / f".partial-batch-{uuid.uuid4().hex}"
     (partial / "true_times_s").mkdir(parents=True)
-    chunk = next(p for p in (store.path / "results" / keys[0] / "accuracy").rglob("*")
+    batch = store.entry_location(EntryKind.RESULTS, keys[0])
+    chunk = next(p for p in (batch / "accuracy").rglob("*")
                  if p.is_file() and p.name != "zarr.json")  # fmt: skip
     chunk.write_bytes(chunk.read_bytes()[::-1])
 
-    with store.lock(), pytest.warns(RuntimeWarning, match=f"corrupt results entry {keys[0]}"):
+    with store.lock(), pytest.warns(RuntimeWarning, match=f"corrupt results batch .*{keys[0]}"):
         plan = plan_sweep("smoke", str(store.root))
     assert plan.cached == {keys[1]}
     assert keys[0] in plan.missing and not store.has(EntryKind.RESULTS, keys[0])

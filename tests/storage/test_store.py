@@ -1,15 +1,17 @@
-"""Sweep store: layout, exact round trips, completeness by rename, checksums, root refusal."""
+"""Sweep store: layout, exact round trips, batches complete by rename, checksums, root refusal."""
 
 import errno
 import json
 import os
 import pickle
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
 import threading
 import uuid
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -29,18 +31,25 @@ from pipeline.spikes import Encoded, SpikeTrains
 from storage import (
     CorruptEntryError,
     EntryKind,
-    RateEntry,
     ResultEntry,
     SpikeEntry,
     StoreBusyError,
     StoreError,
+    StoreLayoutError,
     SweepStore,
     open_results,
 )
+from storage.batches import json_digest
 
 KEY = "0123456789abcdef0123456789abcdef"
 OTHER_KEY = "fedcba9876543210fedcba9876543210"
+THIRD_KEY = "00000000000000000000000000000003"
 NEG_NAN = -np.float64("nan")  # a NaN with the sign bit set, as x86 produces for 0/0
+BATCH_NAME = re.compile(r"batch-[0-9a-f]{32}")
+
+
+def key(i: int) -> str:
+    return f"{i:032x}"
 
 
 def random_trains(
@@ -91,16 +100,76 @@ def assert_metrics_identical(actual: SpikeMetrics, expected: SpikeMetrics) -> No
     assert bits(actual.equivalent_bits) == bits(expected.equivalent_bits)
 
 
+def assert_results_identical(actual: ResultEntry, expected: ResultEntry) -> None:
+    """Equal models in order, accuracy bit for bit, seconds, metrics, recordings, predictions."""
+    assert list(actual.fold_accuracy) == [str(model) for model in expected.fold_accuracy]
+    for model, values in zip(
+        actual.fold_accuracy.values(), expected.fold_accuracy.values(), strict=True
+    ):
+        assert model.dtype == np.float64
+        np.testing.assert_array_equal(bits(model), bits(np.atleast_2d(values)))
+    assert actual.seconds == {k: float(v) for k, v in expected.seconds.items()}
+    assert_metrics_identical(actual.metrics, expected.metrics)
+    assert actual.recordings == expected.recordings
+    if expected.out_of_fold is None:
+        assert actual.out_of_fold is None
+        return
+    got, want = actual.out_of_fold, expected.out_of_fold
+    assert got.recording_names == tuple(want.recording_names)
+    assert list(got.predicted) == list(want.predicted)
+    for model, values in want.predicted.items():
+        assert got.predicted[model].dtype == np.int64
+        np.testing.assert_array_equal(got.predicted[model], values)
+    assert got.labels.dtype == np.int64 and got.test_fold.dtype == np.int64
+    np.testing.assert_array_equal(got.labels, want.labels)
+    np.testing.assert_array_equal(got.test_fold, want.test_fold)
+
+
 def listing(path: Path) -> list[tuple[str, int]]:
     """Every path below ``path`` with its size (0 for directories), to prove nothing changed."""
     out = []
     for dirpath, dirnames, filenames in os.walk(path):
         for name in dirnames:
-            out.append((os.path.join(dirpath, name), 0))
+            out.append((os.path.relpath(os.path.join(dirpath, name), path), 0))
         for name in filenames:
             full = os.path.join(dirpath, name)
-            out.append((full, os.path.getsize(full)))
+            out.append((os.path.relpath(full, path), os.path.getsize(full)))
     return sorted(out)
+
+
+def batches(store: SweepStore, kind: str) -> list[Path]:
+    """The complete batch folders of ``kind``, found by listing (not by the store's index)."""
+    folder = store.path / kind
+    return sorted(folder / name for name in os.listdir(folder) if name.startswith("batch-"))
+
+
+def batch_meta(batch: Path) -> dict:
+    return json.loads((batch / "zarr.json").read_text())["attributes"]
+
+
+def batch_of(store: SweepStore, kind: str, key: str) -> Path:
+    """The one batch of ``kind`` whose entry list names ``key``."""
+    found = [
+        batch
+        for batch in batches(store, kind)
+        if key in [entry["key"] for entry in batch_meta(batch)["entries"]]
+    ]
+    assert len(found) == 1, found
+    return found[0]
+
+
+def chunk(batch: Path, variable: str) -> Path:
+    """The one chunk file of ``variable`` in ``batch``."""
+    files = [p for p in (batch / variable / "c").rglob("*") if p.is_file()]
+    assert len(files) == 1
+    return files[0]
+
+
+def edit_batch_attributes(batch: Path, change) -> None:
+    meta_path = batch / "zarr.json"
+    meta = json.loads(meta_path.read_text())
+    change(meta["attributes"])
+    meta_path.write_text(json.dumps(meta))
 
 
 @pytest.fixture
@@ -117,6 +186,11 @@ def spike_entry() -> SpikeEntry:
     return SpikeEntry(Encoded(true, real), metrics(), {"taxels": 0.25, "readout": 1.5})
 
 
+def result_entry(i: int = 0) -> ResultEntry:
+    """A small result entry whose values depend on ``i``."""
+    return ResultEntry({"ffnn": [0.5, i / 8], "cnn": [0.25, -0.0]}, {"train_ffnn": i}, metrics())
+
+
 # ---------------------------------------------------------------------------------------------
 # Layout
 
@@ -125,7 +199,8 @@ def test_public_names_are_reexported():
     # The package is the store's public names plus the run root as one DataTree.
     assert set(storage.__all__) == set(store_module.__all__) | {"open_tree"}
     assert issubclass(CorruptEntryError, StoreError) and issubclass(StoreError, EskinError)
-    assert [k.value for k in EntryKind] == ["spikes", "rates", "results"]
+    assert issubclass(StoreLayoutError, StoreError)
+    assert [k.value for k in EntryKind] == ["spikes", "results"]  # rate matrices are not kept
 
 
 def test_layout_is_a_marked_zarr_v3_group_without_consolidated_metadata(tmp_path):
@@ -135,21 +210,43 @@ def test_layout_is_a_marked_zarr_v3_group_without_consolidated_metadata(tmp_path
     assert sorted(os.listdir(root)) == ["store.zarr"]  # no probe or partial left behind
     meta = json.loads((root / "store.zarr" / "zarr.json").read_text())
     assert meta["zarr_format"] == 3 and meta["node_type"] == "group"
-    assert meta["attributes"] == {"eskin_sweep_store": 1}
+    assert meta["attributes"] == {"eskin_sweep_store": 2}
     assert meta.get("consolidated_metadata") is None
     group = zarr.open_group(root / "store.zarr", mode="r", zarr_format=3, use_consolidated=False)
-    assert sorted(name for name, _ in group.groups()) == ["cubes", "rates", "results", "spikes"]
+    assert sorted(name for name, _ in group.groups()) == ["cubes", "results", "spikes"]
 
 
-def test_entries_are_subgroups_named_by_key(store, spike_entry):
+def test_entries_are_stored_in_batches(store, spike_entry):
     store.write_spikes(KEY, spike_entry)
-    entry = store.path / "spikes" / KEY
-    assert sorted(os.listdir(store.path / "spikes")) == sorted(["zarr.json", KEY])
-    meta = json.loads((entry / "zarr.json").read_text())
-    assert meta["node_type"] == "group" and meta["attributes"]["eskin_entry"] == "spikes"
-    assert meta.get("consolidated_metadata") is None
-    times = json.loads((entry / "true_times_s" / "zarr.json").read_text())
-    assert times["data_type"] == "float64" and times["dimension_names"] == ["true_event"]
+    names = sorted(os.listdir(store.path / "spikes"))
+    assert len(names) == 2 and names[1] == "zarr.json" and BATCH_NAME.fullmatch(names[0])
+    batch = store.path / "spikes" / names[0]
+    assert store.entry_location(EntryKind.SPIKES, KEY) == batch
+    assert store.entry_location(EntryKind.SPIKES, OTHER_KEY) is None
+    meta = json.loads((batch / "zarr.json").read_text())
+    assert meta["node_type"] == "group" and meta.get("consolidated_metadata") is None
+    attrs = meta["attributes"]
+    assert attrs["eskin_batch"] == "spikes"
+    assert [entry["key"] for entry in attrs["entries"]] == [KEY]
+    assert attrs["entries"][0]["attrs"] == {
+        "ideal": False,
+        "seconds": {"taxels": 0.25, "readout": 1.5},
+    }
+    times = json.loads((batch / "true_times_s" / "zarr.json").read_text())
+    assert times["data_type"] == "float64" and times["dimension_names"] == ["flat_true_times_s"]
+    assert times["attributes"]["dims"] == ["true_event"]
+    assert times["attributes"]["units"] == "s"
+
+
+def test_a_batch_has_as_many_files_for_many_entries_as_for_one(store, spike_entry):
+    def files(batch: Path) -> int:
+        return sum(len(names) for _, _, names in os.walk(batch))
+
+    store.write_spikes(KEY, spike_entry)
+    store.write_entries(EntryKind.SPIKES, {key(i): spike_entry for i in range(20)})
+    one, many = batch_of(store, "spikes", KEY), batch_of(store, "spikes", key(0))
+    assert len(batch_meta(many)["entries"]) == 20
+    assert files(many) == files(one)
 
 
 def test_store_pickles_for_workers(store, spike_entry):
@@ -184,17 +281,33 @@ def test_spikes_round_trip_ideal_keeps_real_is_true_and_stores_once(store, spike
     assert_trains_identical(read.encoded.true, true)
     assert_metrics_identical(read.metrics, entry.metrics)
     assert read.seconds == {}
-    stored = sorted(os.listdir(store.path / "spikes" / KEY))
+    stored = sorted(os.listdir(batch_of(store, "spikes", KEY)))
     assert not any(name.startswith("real_") for name in stored)
     assert {"true_times_s", "true_polarity", "true_start", "true_count"} <= set(stored)
 
 
+def test_one_batch_mixes_ideal_and_non_ideal_spike_entries(store, spike_entry):
+    true = spike_entry.encoded.true
+    ideal = SpikeEntry(Encoded(true, true), metrics(ssnr_db=1.0), {"readout": 2.0})
+    store.write_entries(EntryKind.SPIKES, {KEY: spike_entry, OTHER_KEY: ideal})
+    assert batch_of(store, "spikes", KEY) == batch_of(store, "spikes", OTHER_KEY)
+    read = store.read_many(EntryKind.SPIKES, [OTHER_KEY, KEY], discard_corrupt=False)
+    assert read[OTHER_KEY].encoded.real is read[OTHER_KEY].encoded.true
+    assert read[KEY].encoded.real is not read[KEY].encoded.true
+    assert_trains_identical(read[OTHER_KEY].encoded.true, true)
+    assert_trains_identical(read[KEY].encoded.real, spike_entry.encoded.real)
+    assert_metrics_identical(read[OTHER_KEY].metrics, ideal.metrics)
+    assert read[OTHER_KEY].seconds == {"readout": 2.0}
+
+
 def test_spikes_start_is_stored_for_lazy_readers(store, spike_entry):
     store.write_spikes(KEY, spike_entry)
-    with xr.open_zarr(store.path / "spikes" / KEY, consolidated=False, zarr_format=3) as ds:
-        np.testing.assert_array_equal(ds["true_start"].values, spike_entry.encoded.true.start)
-        assert ds["true_start"].dims == ("recording", "taxel")
-        assert ds.attrs["ideal"] is False
+    batch = batch_of(store, "spikes", KEY)
+    with xr.open_zarr(batch, consolidated=False, zarr_format=3) as ds:
+        start = ds["true_start"]
+        np.testing.assert_array_equal(start.values, spike_entry.encoded.true.start.ravel())
+        assert start.attrs["dims"] == ["recording", "taxel"]
+    assert batch_meta(batch)["entries"][0]["shapes"]["true_start"] == [4, 5]
 
 
 @st.composite
@@ -217,47 +330,40 @@ def ragged(draw) -> tuple[SpikeTrains, SpikeTrains | None]:
     return true, real
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    ragged(),
-    st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=6, max_size=6),
+METRIC_NAMES = (
+    "ssnr_db",
+    "ste_s2",
+    "ste_sign_safe_s2",
+    "event_rate_hz",
+    "data_rate_bps",
+    "equivalent_bits",
 )
-def test_property_ragged_spike_trains_round_trip(trains, values):
-    true, real = trains
-    names = ("ssnr_db", "ste_s2", "ste_sign_safe_s2", "event_rate_hz", "data_rate_bps")
-    entry = SpikeEntry(
-        Encoded(true, true if real is None else real),
-        SpikeMetrics(**dict(zip((*names, "equivalent_bits"), values, strict=True))),
-        {"readout": 0.5},
-    )
+METRIC_VALUES = st.lists(
+    st.floats(allow_nan=True, allow_infinity=True), min_size=6, max_size=6
+).map(lambda values: SpikeMetrics(**dict(zip(METRIC_NAMES, values, strict=True))))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(ragged(), METRIC_VALUES), min_size=1, max_size=3))
+def test_property_ragged_spike_trains_round_trip_in_one_batch(points):
+    entries = {
+        key(i): SpikeEntry(Encoded(true, true if real is None else real), values, {"readout": i})
+        for i, ((true, real), values) in enumerate(points)
+    }
     with tempfile.TemporaryDirectory() as tmp:
         store = SweepStore.open_or_create(tmp)
-        store.write_spikes(KEY, entry)
-        read = store.read_spikes(KEY)
-    assert (read.encoded.real is read.encoded.true) == (real is None)
-    assert_trains_identical(read.encoded.true, true)
-    if real is not None:
-        assert_trains_identical(read.encoded.real, real)
-    for name in (*names, "equivalent_bits"):
-        assert bits(getattr(read.metrics, name)) == bits(getattr(entry.metrics, name))
-
-
-def test_rates_round_trip(store):
-    rng = np.random.default_rng(3)
-    entry = RateEntry(
-        counts=rng.integers(0, 2**40, (3, 2, 4, 5)),
-        dropped=np.array([[0, 1, 2, 3], [4, 5, 6, 7], [0, 0, 0, 0]], dtype=np.int32),
-        labels=np.array([2, 0, 1]),
-        class_names=("bark", "cloth", "µ-foam"),
-        seconds={"coding": 0.125},
-    )
-    store.write_rates(KEY, entry)
-    read = store.read_rates(KEY)
-    for name in ("counts", "dropped", "labels"):
-        assert getattr(read, name).dtype == np.int64
-        np.testing.assert_array_equal(getattr(read, name), getattr(entry, name))
-    assert read.class_names == ("bark", "cloth", "µ-foam")
-    assert read.seconds == {"coding": 0.125}
+        store.write_entries(EntryKind.SPIKES, entries)
+        assert len(batches(store, "spikes")) == 1
+        read = store.read_many(EntryKind.SPIKES, list(entries), discard_corrupt=False)
+    assert list(read) == list(entries)
+    for k, entry in entries.items():
+        ideal = entry.encoded.real is entry.encoded.true
+        assert (read[k].encoded.real is read[k].encoded.true) == ideal
+        assert_trains_identical(read[k].encoded.true, entry.encoded.true)
+        assert_trains_identical(read[k].encoded.real, entry.encoded.real)
+        for name in METRIC_NAMES:
+            assert bits(getattr(read[k].metrics, name)) == bits(getattr(entry.metrics, name))
+        assert read[k].seconds == entry.seconds
 
 
 def test_results_round_trip_keeps_model_order(store):
@@ -278,10 +384,12 @@ def test_results_round_trip_keeps_model_order(store):
     assert read.seconds == {"train_ffnn": 1.2, "train_cnn": 5.0}
     for name in ("ssnr_db", "ste_s2", "equivalent_bits"):  # +inf, -inf, a negative NaN
         assert bits(getattr(read.metrics, name)) == bits(getattr(entry.metrics, name))
-    with xr.open_zarr(store.path / "results" / KEY, consolidated=False, zarr_format=3) as ds:
-        assert ds["accuracy"].dims == ("model", "repeat", "fold")
+    batch = batch_of(store, "results", KEY)
+    with xr.open_zarr(batch, consolidated=False, zarr_format=3) as ds:
+        assert ds["accuracy"].attrs["dims"] == ["model", "repeat", "fold"]
         assert ds["model"].values.tolist() == ["ffnn", "cnn"]
         assert "predicted" not in ds  # kept no predictions: none written
+    assert batch_meta(batch)["entries"][0]["shapes"]["accuracy"] == [2, 1, 4]
     assert read.recordings is None  # stated nothing: read as unknown, never as empty
     assert read.out_of_fold is None
 
@@ -296,17 +404,36 @@ OUT_OF_FOLD = OutOfFold(
 
 def test_results_round_trip_out_of_fold_predictions_exactly(store):
     accuracy = {"ffnn": [[0.5, 1.0], [1.0, 1.0]], "cnn": [[0.5, 0.5], [0.5, 0.5]]}
-    store.write_result(KEY, ResultEntry(accuracy, {}, metrics(), None, OUT_OF_FOLD))
-    read = store.read_result(KEY)
-    np.testing.assert_array_equal(read.fold_accuracy["ffnn"], accuracy["ffnn"])
-    oof = read.out_of_fold
-    assert oof.recording_names == OUT_OF_FOLD.recording_names
-    assert list(oof.predicted) == ["ffnn", "cnn"]
-    for model, values in OUT_OF_FOLD.predicted.items():
-        assert oof.predicted[model].dtype == np.int64
-        np.testing.assert_array_equal(oof.predicted[model], values)
-    np.testing.assert_array_equal(oof.labels, OUT_OF_FOLD.labels)
-    np.testing.assert_array_equal(oof.test_fold, OUT_OF_FOLD.test_fold)
+    entry = ResultEntry(accuracy, {}, metrics(), None, OUT_OF_FOLD)
+    store.write_result(KEY, entry)
+    assert_results_identical(store.read_result(KEY), entry)
+
+
+def test_one_batch_holds_results_of_different_shapes(store):
+    # Entries of one batch differ in models, repeats, folds, recordings and what they kept.
+    entries = {
+        KEY: ResultEntry(
+            {"ffnn": [[0.5, 1.0], [1.0, 1.0]], "cnn": [[0.5, 0.5], [0.5, 0.5]]},
+            {"train_ffnn": 1.0},
+            metrics(),
+            RecordingsInfo("three", ("bark", "µ-foam"), 500.0),
+            OUT_OF_FOLD,
+        ),
+        OTHER_KEY: ResultEntry({"svm": [0.1, 0.2, NEG_NAN]}, {}, metrics(ssnr_db=NEG_NAN)),
+        THIRD_KEY: ResultEntry(
+            {"ffnn": [1.0]},
+            {},
+            metrics(),
+            RecordingsInfo(class_names=("a",)),
+            OutOfFold(("x",), np.array([4]), {"ffnn": np.array([[4]])}, np.array([[0]])),
+        ),
+    }
+    store.write_entries(EntryKind.RESULTS, entries)
+    assert len(batches(store, "results")) == 1
+    read = store.read_many(EntryKind.RESULTS, list(entries), discard_corrupt=False)
+    assert set(read) == set(entries)
+    for k, entry in entries.items():
+        assert_results_identical(read[k], entry)
 
 
 def test_out_of_fold_predictions_must_match_the_models_and_repeats(store):
@@ -321,22 +448,7 @@ def test_out_of_fold_predictions_must_match_the_models_and_repeats(store):
     with pytest.raises(ValueError, match="labels"):
         OutOfFold(("a", "b"), np.array([0]), {}, np.zeros((1, 2)))
     assert not store.has("results", KEY)  # nothing half-written
-
-
-def test_results_written_before_repeats_read_as_one_repeat(store):
-    """An entry with ``accuracy`` (model, fold), as written before repeats existed."""
-    store.write_result(KEY, ResultEntry({"ffnn": [0.5, 0.25]}, {}, metrics()))
-    group = zarr.open_group(store.path / "results" / KEY, mode="r+")
-    stored = group["accuracy"]
-    old = stored[:][:, 0]  # (model, fold)
-    attrs = dict(stored.attrs)
-    del group["accuracy"]
-    group.create_array("accuracy", data=old, dimension_names=["model", "fold"]).attrs.update(attrs)
-    digests = dict(group.attrs["sha256"])
-    digests["accuracy"] = store_module._digest(old)
-    group.attrs["sha256"] = digests
-    read = store.read_result(KEY)
-    np.testing.assert_array_equal(read.fold_accuracy["ffnn"], [[0.5, 0.25]])
+    assert os.listdir(store.path / "results") == ["zarr.json"]
 
 
 @pytest.mark.parametrize(
@@ -358,15 +470,18 @@ def test_malformed_recordings_facts_are_refused_or_corrupt(store):
     with pytest.raises(ValueError, match="sampling_rate_hz"):
         store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), negative))
     store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), RecordingsInfo("d")))
-    meta_path = store.path / "results" / KEY / "zarr.json"
-    meta = json.loads(meta_path.read_text())
-    meta["attributes"]["dataset_name"] = 3
-    digests = meta["attributes"].pop("sha256")
-    digests["@attrs"] = store_module._attrs_digest(meta["attributes"])  # a consistent writer
-    meta["attributes"]["sha256"] = digests
-    meta_path.write_text(json.dumps(meta))
+
+    def consistent_writer(attrs):  # a wrong type, with the entry list's digest to match
+        attrs["entries"][0]["attrs"]["dataset_name"] = 3
+        attrs["sha256"]["@entries"] = json_digest(attrs["entries"])
+
+    edit_batch_attributes(batch_of(store, "results", KEY), consistent_writer)
     with pytest.raises(CorruptEntryError, match="dataset_name"):
         store.read_result(KEY)
+
+
+# ---------------------------------------------------------------------------------------------
+# Cubes
 
 
 def make_cube(scale: float = 1.0) -> xr.Dataset:
@@ -453,35 +568,40 @@ def test_cube_refuses_reserved_attribute(store):
 # Completeness
 
 
-def test_partial_entries_are_invisible_and_cleaned(store, spike_entry):
-    partial = store.path / "spikes" / f".partial-{KEY}-{uuid.uuid4().hex}"
+def test_partial_batches_are_invisible_and_cleaned(store, spike_entry):
     store.write_spikes(OTHER_KEY, spike_entry)
-    os.rename(store.path / "spikes" / OTHER_KEY, partial)  # a complete copy, never renamed
+    batch = batch_of(store, "spikes", OTHER_KEY)
+    partial = batch.parent / f".partial-{batch.name}"
+    os.rename(batch, partial)  # a complete copy, never renamed into place
     assert not store.has(EntryKind.SPIKES, KEY)
     assert not store.has(EntryKind.SPIKES, OTHER_KEY)
-    with pytest.raises(StoreError, match=f"no spikes entry {KEY}") as info:
-        store.read_spikes(KEY)
+    assert store.complete_keys(EntryKind.SPIKES) == frozenset()
+    assert store.read_many(EntryKind.SPIKES, [OTHER_KEY], discard_corrupt=True) == {}
+    with pytest.raises(StoreError, match=f"no spikes entry {OTHER_KEY}") as info:
+        store.read_spikes(OTHER_KEY)
     assert not isinstance(info.value, CorruptEntryError)
     assert store.clean_partials(older_than_s=3600) == 0  # too fresh to be abandoned
     assert partial.exists()
     assert store.clean_partials() == 1
     assert not partial.exists()
+    assert os.listdir(store.path / "spikes") == ["zarr.json"]
 
 
-def test_same_key_written_twice_keeps_one_readable_entry(store, spike_entry):
+def test_same_key_written_twice_stays_one_readable_entry(store, spike_entry):
     store.write_spikes(KEY, spike_entry)
-    store.write_spikes(KEY, spike_entry)  # loses the rename race, discards its copy
-    assert sorted(os.listdir(store.path / "spikes")) == sorted(["zarr.json", KEY])
+    store.write_spikes(KEY, spike_entry)  # stored again, in a batch of its own
+    assert len(batches(store, "spikes")) == 2
+    assert store.complete_keys(EntryKind.SPIKES) == {KEY}
     assert_trains_identical(store.read_spikes(KEY).encoded.real, spike_entry.encoded.real)
 
 
 def test_concurrent_writers_of_one_key(store):
-    entry = RateEntry(np.ones((2, 1, 3, 4), int), np.zeros((2, 3), int), [0, 1], ("a", "b"), {})
+    entry = ResultEntry({"ffnn": [[0.5, 1.0]]}, {"train_ffnn": 1.0}, metrics(), None, None)
     errors = []
 
     def write():
         try:
-            store.write_rates(KEY, entry)
+            store.write_result(KEY, entry)
         except Exception as error:  # pragma: no cover - reported below
             errors.append(error)
 
@@ -491,8 +611,10 @@ def test_concurrent_writers_of_one_key(store):
     for thread in threads:
         thread.join()
     assert errors == []
-    assert sorted(os.listdir(store.path / "rates")) == sorted(["zarr.json", KEY])
-    np.testing.assert_array_equal(store.read_rates(KEY).counts, entry.counts)
+    assert len(batches(store, "results")) == 4  # one whole batch per writer, none torn
+    assert not [name for name in os.listdir(store.path / "results") if name.startswith(".")]
+    assert store.complete_keys(EntryKind.RESULTS) == {KEY}
+    assert_results_identical(store.read_result(KEY), entry)
 
 
 def test_failed_write_leaves_nothing(store, spike_entry, monkeypatch):
@@ -501,8 +623,13 @@ def test_failed_write_leaves_nothing(store, spike_entry, monkeypatch):
 
     monkeypatch.setattr(store_module.os, "rename", boom)
     with pytest.raises(OSError, match="disk full"):
-        store.write_spikes(KEY, spike_entry)
+        store.write_entries(EntryKind.SPIKES, {KEY: spike_entry, OTHER_KEY: spike_entry})
     assert os.listdir(store.path / "spikes") == ["zarr.json"]
+
+
+def test_write_entries_of_nothing_writes_nothing(store):
+    store.write_entries(EntryKind.RESULTS, {})
+    assert os.listdir(store.path / "results") == ["zarr.json"]
 
 
 def test_discard(store, spike_entry):
@@ -513,72 +640,209 @@ def test_discard(store, spike_entry):
     assert store.discard(EntryKind.SPIKES, KEY) is False
 
 
+def test_discard_removes_the_whole_batch_of_a_key(store):
+    store.write_entries(EntryKind.RESULTS, {KEY: result_entry(1), OTHER_KEY: result_entry(2)})
+    store.write_result(THIRD_KEY, result_entry(3))
+    kept = batch_of(store, "results", THIRD_KEY)
+    assert store.discard("results", KEY) is True
+    assert not store.has("results", KEY)
+    assert not store.has("results", OTHER_KEY)  # it shared the batch
+    assert store.discard("results", OTHER_KEY) is False
+    assert batches(store, "results") == [kept]
+    assert store.complete_keys("results") == {THIRD_KEY}
+    assert_results_identical(store.read_result(THIRD_KEY), result_entry(3))
+
+
+def test_complete_keys_after_writing_many_keys(store, spike_entry):
+    assert store.complete_keys(EntryKind.SPIKES) == frozenset()
+    many = {key(i): result_entry(i) for i in range(40)}
+    store.write_entries(EntryKind.RESULTS, many)
+    store.write_result(KEY, result_entry())
+    store.write_spikes(OTHER_KEY, spike_entry)
+    found = store.complete_keys(EntryKind.RESULTS)
+    assert isinstance(found, frozenset)
+    assert found == {*many, KEY}
+    assert store.complete_keys("spikes") == {OTHER_KEY}
+    assert all(store.has(EntryKind.RESULTS, k) for k in many)
+
+
+def test_read_many_reads_keys_from_one_batch_and_from_several(store, monkeypatch):
+    first = {key(i): result_entry(i) for i in range(5)}
+    store.write_entries(EntryKind.RESULTS, first)
+    store.write_entries(EntryKind.RESULTS, {KEY: result_entry(9), OTHER_KEY: result_entry(8)})
+    reads = []
+    read_batch = store_module.read_batch
+
+    def counting(path, kind):
+        reads.append(Path(path).name)
+        return read_batch(path, kind)
+
+    monkeypatch.setattr(store_module, "read_batch", counting)
+    wanted = [key(3), key(0), THIRD_KEY, key(3)]  # an absent key and a repeated one
+    read = store.read_many(EntryKind.RESULTS, wanted, discard_corrupt=False)
+    assert sorted(read) == sorted([key(0), key(3)])
+    for k in read:
+        assert_results_identical(read[k], first[k])
+    assert reads == [batch_of(store, "results", key(0)).name]  # one batch, read once
+
+    reads.clear()
+    read = store.read_many(EntryKind.RESULTS, [OTHER_KEY, key(4), KEY], discard_corrupt=True)
+    assert sorted(read) == sorted([OTHER_KEY, key(4), KEY])
+    assert_results_identical(read[OTHER_KEY], result_entry(8))
+    assert_results_identical(read[KEY], result_entry(9))
+    assert_results_identical(read[key(4)], first[key(4)])
+    assert sorted(reads) == sorted(b.name for b in batches(store, "results"))
+    assert store.read_many(EntryKind.RESULTS, [], discard_corrupt=False) == {}
+
+
+def truncate_a_chunk(batch: Path) -> None:
+    path = chunk(batch, "accuracy")
+    path.write_bytes(path.read_bytes()[:3])
+
+
+def test_read_many_discards_a_corrupt_batch_whole_or_raises(store):
+    store.write_entries(EntryKind.RESULTS, {KEY: result_entry(1), OTHER_KEY: result_entry(2)})
+    store.write_result(THIRD_KEY, result_entry(3))
+    corrupt = batch_of(store, "results", KEY)
+    truncate_a_chunk(corrupt)
+    keys = [KEY, THIRD_KEY]
+    with pytest.raises(CorruptEntryError, match=f"corrupt results batch {corrupt.name}"):
+        store.read_many(EntryKind.RESULTS, keys, discard_corrupt=False)
+    assert corrupt.exists()  # raising discards nothing
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read = store.read_many(EntryKind.RESULTS, keys, discard_corrupt=True)
+    assert [type(w.message) for w in caught] == [RuntimeWarning]  # one warning per batch
+    assert corrupt.name in str(caught[0].message) and "recomputing" in str(caught[0].message)
+    assert list(read) == [THIRD_KEY]
+    assert_results_identical(read[THIRD_KEY], result_entry(3))
+    assert not corrupt.exists()
+    assert store.complete_keys(EntryKind.RESULTS) == {THIRD_KEY}  # OTHER_KEY went with it
+
+
+def test_read_valid_discards_a_corrupt_entry_with_a_warning(store, spike_entry):
+    assert store.read_valid(EntryKind.SPIKES, KEY) is None
+    store.write_spikes(KEY, spike_entry)
+    assert store.read_valid(EntryKind.SPIKES, KEY) is not None
+    batch = batch_of(store, "spikes", KEY)
+    path = chunk(batch, "true_times_s")
+    path.write_bytes(path.read_bytes()[:3])
+    with pytest.warns(RuntimeWarning, match=f"corrupt spikes batch {batch.name}.*recomputing"):
+        assert store.read_valid(EntryKind.SPIKES, KEY) is None
+    assert not batch.exists()
+    assert os.listdir(store.path / "spikes") == ["zarr.json"]
+
+
+def test_peek_results_skips_a_corrupt_batch_without_removing_it(store):
+    store.write_entries(EntryKind.RESULTS, {KEY: result_entry(1), OTHER_KEY: result_entry(2)})
+    store.write_result(THIRD_KEY, result_entry(3))
+    truncate_a_chunk(batch_of(store, "results", KEY))
+    before = listing(store.root)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning either
+        found = store.peek_results([KEY, THIRD_KEY, OTHER_KEY, key(7)])
+        assert store.peek_result(KEY) is None
+        assert_results_identical(store.peek_result(THIRD_KEY), result_entry(3))
+    assert list(found) == [THIRD_KEY]
+    assert_results_identical(found[THIRD_KEY], result_entry(3))
+    assert listing(store.root) == before  # writes nothing, removes nothing
+    assert store.has(EntryKind.RESULTS, KEY)
+
+
+def test_a_batch_discarded_by_another_worker_reads_as_absent(store, monkeypatch):
+    store.write_result(KEY, result_entry())
+    index = SweepStore._index
+
+    def listed_then_discarded(self, kind):
+        found = index(self, kind)
+        for batch in set(found.values()):
+            shutil.rmtree(self.path / kind.value / batch)  # another worker's discard
+        return found
+
+    monkeypatch.setattr(SweepStore, "_index", listed_then_discarded)
+    assert store.read_valid(EntryKind.RESULTS, KEY) is None
+
+
+def test_junk_in_a_kind_folder_is_invisible(store, spike_entry):
+    # A batch-named folder without metadata and an entry folder of the old layout.
+    junk = store.path / "spikes" / f"batch-{uuid.uuid4().hex}" / "true_times_s" / "c"
+    junk.mkdir(parents=True)
+    (junk / "0").write_bytes(b"junk")
+    old = store.path / "spikes" / KEY
+    old.mkdir()
+    (old / "zarr.json").write_text(json.dumps({"zarr_format": 3, "node_type": "group"}))
+    assert not store.has(EntryKind.SPIKES, KEY)
+    assert store.complete_keys(EntryKind.SPIKES) == frozenset()
+    assert store.read_valid(EntryKind.SPIKES, KEY) is None
+    store.write_spikes(KEY, spike_entry)
+    assert_trains_identical(store.read_spikes(KEY).encoded.true, spike_entry.encoded.true)
+
+
 # ---------------------------------------------------------------------------------------------
 # Integrity
-
-
-def chunk(store: SweepStore, key: str, variable: str) -> Path:
-    files = [p for p in (store.path / "spikes" / key / variable / "c").rglob("*") if p.is_file()]
-    assert len(files) == 1
-    return files[0]
 
 
 @pytest.mark.parametrize("offset", [0, 4, -8], ids=["header", "early", "late"])
 def test_flipped_bytes_are_corruption(store, spike_entry, offset):
     store.write_spikes(KEY, spike_entry)
-    path = chunk(store, KEY, "true_times_s")
+    batch = batch_of(store, "spikes", KEY)
+    path = chunk(batch, "true_times_s")
     data = bytearray(path.read_bytes())
     data[offset] ^= 0xFF
     data[offset + 1] ^= 0x55
     path.write_bytes(bytes(data))
-    with pytest.raises(CorruptEntryError, match=f"spikes entry {KEY}") as info:
+    with pytest.raises(CorruptEntryError, match=f"corrupt spikes batch {batch.name}") as info:
         store.read_spikes(KEY)
-    assert "\n" not in str(info.value)
+    assert str(store.root) in str(info.value) and "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize("size", [0, 5], ids=["empty", "short"])
 def test_truncated_chunk_is_corruption(store, spike_entry, size):
     store.write_spikes(KEY, spike_entry)
-    path = chunk(store, KEY, "real_count")
+    batch = batch_of(store, "spikes", KEY)
+    path = chunk(batch, "real_count")
     path.write_bytes(path.read_bytes()[:size])
-    with pytest.raises(CorruptEntryError, match=f"spikes entry {KEY}"):
+    with pytest.raises(CorruptEntryError, match=f"corrupt spikes batch {batch.name}"):
         store.read_spikes(KEY)
 
 
 def test_missing_chunk_is_corruption(store, spike_entry):
     # Zarr reads a missing chunk as its fill value; only the checksum notices.
     store.write_spikes(KEY, spike_entry)
-    chunk(store, KEY, "true_polarity").unlink()
+    chunk(batch_of(store, "spikes", KEY), "true_polarity").unlink()
     with pytest.raises(CorruptEntryError, match="'true_polarity' fails its sha256"):
         store.read_spikes(KEY)
 
 
 def test_edited_attributes_are_corruption(store):
     store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {"train_ffnn": 1.0}, metrics()))
-    meta_path = store.path / "results" / KEY / "zarr.json"
-    meta = json.loads(meta_path.read_text())
-    meta["attributes"]["seconds"]["train_ffnn"] = 2.0
-    meta_path.write_text(json.dumps(meta))
-    with pytest.raises(CorruptEntryError, match="attributes fail their sha256"):
+
+    def edit(attrs):
+        attrs["entries"][0]["attrs"]["seconds"]["train_ffnn"] = 2.0
+
+    edit_batch_attributes(batch_of(store, "results", KEY), edit)
+    with pytest.raises(CorruptEntryError, match="entry list fails its sha256"):
         store.read_result(KEY)
 
 
 def test_unreadable_metadata_is_corruption_and_discard_allows_recompute(store):
     entry = ResultEntry({"ffnn": [0.5, 0.25]}, {}, metrics())
     store.write_result(KEY, entry)
-    (store.path / "results" / KEY / "accuracy" / "zarr.json").write_text("{not json")
-    with pytest.raises(CorruptEntryError, match=f"results entry {KEY}"):
+    (batch_of(store, "results", KEY) / "accuracy" / "zarr.json").write_text("{not json")
+    with pytest.raises(CorruptEntryError, match=f"results batch .* in {store.root}"):
         store.read_result(KEY)
-    store.discard(EntryKind.RESULTS, KEY)
+    assert store.discard(EntryKind.RESULTS, KEY) is True
     store.write_result(KEY, entry)
     np.testing.assert_array_equal(store.read_result(KEY).fold_accuracy["ffnn"], [[0.5, 0.25]])
 
 
-def test_entry_of_another_kind_is_corruption(store):
+def test_batch_of_another_kind_is_corruption(store):
     store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics()))
-    os.rename(store.path / "results" / KEY, store.path / "rates" / KEY)
-    with pytest.raises(CorruptEntryError, match="not a rates entry"):
-        store.read_rates(KEY)
+    batch = batch_of(store, "results", KEY)
+    os.rename(batch, store.path / "spikes" / batch.name)
+    assert store.has(EntryKind.SPIKES, KEY)  # its entry list names the key
+    with pytest.raises(CorruptEntryError, match="not a batch of spikes entries"):
+        store.read_spikes(KEY)
 
 
 def test_corrupt_cube(store):
@@ -597,14 +861,13 @@ def test_corrupt_cube(store):
 
 def test_existing_empty_directory_becomes_a_store_and_reopens(tmp_path):
     first = SweepStore.open_or_create(tmp_path)
-    first.write_rates(
-        KEY, RateEntry(np.zeros((1, 1, 1, 1), int), np.zeros((1, 1), int), [0], ("a",), {})
-    )
+    first.write_result(KEY, result_entry())
     for extra in (".prefect", ".dask", "logs"):  # our own companions make it non-empty
         (tmp_path / extra).mkdir()
     again = SweepStore.open_or_create(tmp_path)
-    assert again.has(EntryKind.RATES, KEY)
-    assert SweepStore.open(tmp_path).has(EntryKind.RATES, KEY)
+    assert again.has(EntryKind.RESULTS, KEY)
+    assert SweepStore.open(tmp_path).has(EntryKind.RESULTS, KEY)
+    assert SweepStore.open_readonly(tmp_path).has(EntryKind.RESULTS, KEY)
 
 
 def test_leftover_store_build_does_not_block_creation(tmp_path):
@@ -612,6 +875,17 @@ def test_leftover_store_build_does_not_block_creation(tmp_path):
     store = SweepStore.open_or_create(tmp_path)
     assert store.clean_partials() == 1
     assert sorted(os.listdir(tmp_path)) == ["store.zarr"]
+
+
+def test_open_readonly_writes_nothing(tmp_path):
+    assert SweepStore.open_readonly(tmp_path / "missing") is None
+    assert not (tmp_path / "missing").exists()
+    assert SweepStore.open_readonly(tmp_path) is None  # empty: nothing cached
+    assert os.listdir(tmp_path) == []
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(StoreError, match="not empty and holds no store.zarr"):
+        SweepStore.open_readonly(tmp_path)
+    assert os.listdir(tmp_path) == ["notes.txt"]
 
 
 def make_file(root: Path) -> Path:
@@ -631,11 +905,14 @@ def make_foreign_zarr(root: Path) -> Path:
     return root
 
 
-def make_newer_store(root: Path) -> Path:
-    zarr.open_group(
-        root / "store.zarr", mode="w", zarr_format=3, attributes={"eskin_sweep_store": 2}
-    )
-    return root
+def marked_store(version):
+    def make(root: Path) -> Path:
+        zarr.open_group(
+            root / "store.zarr", mode="w", zarr_format=3, attributes={"eskin_sweep_store": version}
+        )
+        return root
+
+    return make
 
 
 def make_zarr_array(root: Path) -> Path:
@@ -649,9 +926,13 @@ def make_zarr_array(root: Path) -> Path:
         (make_file, "is a file"),
         (make_foreign_dir, "not empty and holds no store.zarr"),
         (make_foreign_zarr, "lacks the 'eskin_sweep_store' marker"),
-        (make_newer_store, "unsupported sweep store version 2"),
+        (marked_store(3), "unsupported sweep store version 3"),
+        (marked_store(0), "unsupported sweep store version 0"),
+        (marked_store(True), "unsupported sweep store version True"),
+        (marked_store("1"), "unsupported sweep store version '1'"),
         (make_zarr_array, "not a Zarr v3 group"),
     ],
+    ids=["file", "foreign-dir", "foreign-zarr", "newer", "zero", "bool", "str", "array"],
 )
 def test_refused_roots_are_left_untouched(tmp_path, make, message):
     root = make(tmp_path / "run")
@@ -659,11 +940,85 @@ def test_refused_roots_are_left_untouched(tmp_path, make, message):
     with pytest.raises(StoreError, match=message) as info:
         SweepStore.open_or_create(root)
     assert str(root) in str(info.value) and "\n" not in str(info.value)
+    assert not isinstance(info.value, StoreLayoutError)
     with pytest.raises(StoreError):
         SweepStore.open(root)
     with pytest.raises(StoreError):
+        SweepStore.open_readonly(root)
+    with pytest.raises(StoreError):
         open_results(root)
     assert listing(tmp_path) == before
+
+
+def make_layout_1_store(root: Path) -> Path:
+    """A store as layout 1 left it: the marker 1 and one group per entry."""
+    store = root / "store.zarr"
+    (store / "spikes" / KEY / "true_times_s" / "c").mkdir(parents=True)
+    (store / "rates").mkdir()
+    meta = {"zarr_format": 3, "node_type": "group", "attributes": {"eskin_sweep_store": 1}}
+    (store / "zarr.json").write_text(json.dumps(meta))
+    entry = {"zarr_format": 3, "node_type": "group", "attributes": {"eskin_entry": "spikes"}}
+    (store / "spikes" / KEY / "zarr.json").write_text(json.dumps(entry))
+    (store / "spikes" / KEY / "true_times_s" / "c" / "0").write_bytes(b"\x01\x02\x03")
+    return root
+
+
+def test_layout_1_store_is_set_aside_and_a_new_one_created(tmp_path, spike_entry):
+    root = make_layout_1_store(tmp_path / "run")
+    (root / "logs").mkdir()  # a companion stays where it is
+    before = listing(root / "store.zarr")
+    contents = (root / "store.zarr" / "spikes" / KEY / "true_times_s" / "c" / "0").read_bytes()
+    with pytest.warns(RuntimeWarning, match="older eskin-sweep") as caught:
+        store = SweepStore.open_or_create(root)
+    assert len(caught) == 1
+    names = sorted(os.listdir(root))
+    kept = [name for name in names if name.startswith("store.zarr-layout-")]
+    assert len(kept) == 1 and re.fullmatch(r"store\.zarr-layout-1-\d{8}T\d{6}", kept[0])
+    assert kept[0] in str(caught[0].message)
+    assert sorted(set(names) - set(kept)) == ["logs", "store.zarr"]
+    old = root / kept[0]
+    assert listing(old) == before  # kept whole, untouched
+    assert (old / "spikes" / KEY / "true_times_s" / "c" / "0").read_bytes() == contents
+    # The new store is of the current layout, empty and usable.
+    assert json.loads((store.path / "zarr.json").read_text())["attributes"] == {
+        "eskin_sweep_store": 2
+    }
+    assert not store.has(EntryKind.SPIKES, KEY)
+    store.write_spikes(KEY, spike_entry)
+    assert_trains_identical(store.read_spikes(KEY).encoded.real, spike_entry.encoded.real)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # opened again: nothing more is set aside
+        assert SweepStore.open_or_create(root).has(EntryKind.SPIKES, KEY)
+    assert sorted(os.listdir(root)) == names
+    assert listing(old) == before
+
+
+def test_a_root_holding_only_a_set_aside_store_is_accepted(tmp_path):
+    root = make_layout_1_store(tmp_path / "run")
+    with pytest.warns(RuntimeWarning):
+        store = SweepStore.open_or_create(root)
+    shutil.rmtree(store.path)
+    assert SweepStore.open_readonly(root) is None  # nothing usable is cached
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        store = SweepStore.open_or_create(root)
+    assert store.complete_keys(EntryKind.SPIKES) == frozenset()
+
+
+def test_layout_1_store_is_refused_by_open_and_ignored_by_open_readonly(tmp_path):
+    root = make_layout_1_store(tmp_path / "run")
+    before = listing(tmp_path)
+    with pytest.raises(StoreLayoutError) as info:
+        SweepStore.open(root)
+    message = str(info.value)
+    assert str(root) in message and "store layout 1" in message and "\n" not in message
+    assert info.value.layout == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert SweepStore.open_readonly(root) is None
+    with pytest.raises(StoreLayoutError):
+        open_results(root)
+    assert listing(tmp_path) == before  # neither writes anything
 
 
 @pytest.mark.skipif(
@@ -687,6 +1042,17 @@ def test_unwritable_root_by_access_check(tmp_path, monkeypatch):
     with pytest.raises(StoreError, match="not writable"):
         SweepStore.open_or_create(tmp_path)
     assert os.listdir(tmp_path) == []
+
+
+def test_unwritable_root_with_a_layout_1_store_is_refused_before_setting_it_aside(
+    tmp_path, monkeypatch
+):
+    root = make_layout_1_store(tmp_path / "run")
+    before = listing(tmp_path)
+    monkeypatch.setattr(store_module.os, "access", lambda *args, **kwargs: False)
+    with pytest.raises(StoreError, match="not writable"):
+        SweepStore.open_or_create(root)
+    assert listing(tmp_path) == before
 
 
 def test_unwritable_root_by_probe(tmp_path, monkeypatch):
@@ -718,11 +1084,20 @@ def test_open_requires_an_existing_store(tmp_path):
     "key",
     [KEY.upper(), KEY[:-1], KEY + "0", "../" + KEY[3:], f".partial-{KEY}", "", None, 12],
 )
-def test_invalid_keys(store, key):
+def test_invalid_keys(store, key, spike_entry):
     with pytest.raises(ValueError, match="invalid spikes key"):
         store.has(EntryKind.SPIKES, key)
     with pytest.raises(ValueError, match="invalid results key"):
         store.read_result(key)
+    with pytest.raises(ValueError, match="invalid results key"):
+        store.read_many(EntryKind.RESULTS, [KEY, key], discard_corrupt=True)
+    with pytest.raises(ValueError, match="invalid results key"):
+        store.peek_results([key])
+    with pytest.raises(ValueError, match="invalid spikes key"):
+        store.discard(EntryKind.SPIKES, key)
+    with pytest.raises(ValueError, match="invalid spikes key"):
+        store.write_entries(EntryKind.SPIKES, {OTHER_KEY: spike_entry, key: spike_entry})
+    assert os.listdir(store.path / "spikes") == ["zarr.json"]  # the valid key neither
 
 
 @pytest.mark.parametrize("name", ["", "a" * 65, "../x", "a/b", ".hidden", "a b", "é", None])
@@ -733,9 +1108,21 @@ def test_invalid_cube_names(store, name):
         store.read_cube(name)
 
 
-def test_unknown_kind(store):
+@pytest.mark.parametrize("kind", ["cubes", "rates", "batch"])
+def test_unknown_kind(store, kind):
     with pytest.raises(ValueError):
-        store.has("cubes", KEY)
+        store.has(kind, KEY)
+    with pytest.raises(ValueError):
+        store.complete_keys(kind)
+
+
+def test_entries_of_the_wrong_type_are_refused(store, spike_entry):
+    with pytest.raises(TypeError, match="must be a ResultEntry"):
+        store.write_entries(EntryKind.RESULTS, {KEY: result_entry(), OTHER_KEY: spike_entry})
+    with pytest.raises(TypeError, match="must be a SpikeEntry"):
+        store.write_entry("spikes", KEY, result_entry())
+    for kind in EntryKind:
+        assert os.listdir(store.path / kind.value) == ["zarr.json"]
 
 
 def test_inconsistent_values_are_refused_before_writing(store, spike_entry):
@@ -750,22 +1137,26 @@ def test_inconsistent_values_are_refused_before_writing(store, spike_entry):
     for entry, message in cases:
         with pytest.raises(ValueError, match=message):
             store.write_spikes(KEY, entry)
+        with pytest.raises(ValueError, match=message):  # one bad entry refuses the batch
+            store.write_entries(EntryKind.SPIKES, {OTHER_KEY: spike_entry, KEY: entry})
     with pytest.raises(ValueError, match="cannot store float64"):
-        store.write_rates(
-            KEY, RateEntry(np.zeros((1, 1, 1, 1), int), np.zeros((1, 1), int), [0.5], (), {})
-        )
+        labels = OutOfFold(("a",), np.array([0.5]), {"ffnn": np.array([[0]])}, np.array([[0]]))
+        store.write_result(KEY, ResultEntry({"ffnn": [0.5]}, {}, metrics(), None, labels))
     with pytest.raises(ValueError, match="values do not fit int8"):
         polarity = true.polarity.astype(np.int64) * 300
         trains = SpikeTrains(true.times_s, polarity, true.count, true.duration_s)
         store.write_spikes(KEY, SpikeEntry(Encoded(trains, trains), metrics(), {}))
     with pytest.raises(ValueError, match="same"):
         store.write_result(KEY, ResultEntry({"ffnn": [0.5], "cnn": [0.5, 1.0]}, {}, metrics()))
+    with pytest.raises(ValueError, match="no model"):
+        store.write_result(KEY, ResultEntry({}, {}, metrics()))
     for kind in EntryKind:
         assert os.listdir(store.path / kind.value) == ["zarr.json"]
 
 
 # ---------------------------------------------------------------------------------------------
-# The sweep lock and leftovers of killed writers
+# The sweep lock
+
 
 HOLD_LOCK = """
 import sys, time
@@ -805,25 +1196,3 @@ def test_lock_nests_within_one_process_and_is_released_by_the_outermost(store):
     child = hold_lock_in_child(store.root)  # free again
     child.kill()
     child.wait()
-
-
-def test_read_valid_discards_a_corrupt_entry_with_a_warning(store, spike_entry):
-    assert store.read_valid(EntryKind.SPIKES, KEY) is None
-    store.write_spikes(KEY, spike_entry)
-    assert store.read_valid(EntryKind.SPIKES, KEY) is not None
-    path = chunk(store, KEY, "true_times_s")
-    path.write_bytes(path.read_bytes()[:3])
-    with pytest.warns(RuntimeWarning, match=f"corrupt spikes entry {KEY}.*recomputing"):
-        assert store.read_valid(EntryKind.SPIKES, KEY) is None
-    assert not (store.path / "spikes" / KEY).exists()
-
-
-def test_junk_left_at_an_entry_name_is_replaced(store, spike_entry):
-    # A writer killed while its partial copy was removed under it can leave a folder without
-    # metadata at the final name: invisible, and replaced by the next write of that key.
-    junk = store.path / "spikes" / KEY / "true_times_s" / "c"
-    junk.mkdir(parents=True)
-    (junk / "0").write_bytes(b"junk")
-    assert not store.has(EntryKind.SPIKES, KEY)
-    store.write_spikes(KEY, spike_entry)
-    assert_trains_identical(store.read_spikes(KEY).encoded.true, spike_entry.encoded.true)
