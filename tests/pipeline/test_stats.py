@@ -366,6 +366,110 @@ def test_a_single_recording_gives_a_degenerate_bootstrap_interval():
     assert (result.estimate, result.low, result.high) == (0.75, 0.75, 0.75)
 
 
+# The bootstraps against the weight-matrix formula, bit for bit
+
+
+def reference_weights(labels, resamples, generator):
+    """float64 (resamples, n): how often each recording is drawn, as the formula states it.
+
+    One ``integers`` call per class in ascending label order, then one count over all resamples
+    and recordings; the functions must draw the same and give the same bits without this matrix.
+    """
+    n = labels.size
+    row_start = (np.arange(resamples, dtype=np.int64) * n)[:, np.newaxis]
+    drawn = []
+    for cls in np.unique(labels):
+        members = np.flatnonzero(labels == cls)
+        picks = generator.integers(0, members.size, size=(resamples, members.size))
+        drawn.append((members[picks] + row_start).ravel())
+    counts = np.bincount(np.concatenate(drawn), minlength=resamples * n)
+    return counts.reshape(resamples, n).astype(np.float64)
+
+
+def reference_bounds(estimate, boot, confidence):
+    """The percentile interval of ``boot`` widened to contain ``estimate``."""
+    tail = (1.0 - confidence) / 2.0
+    low, high = np.quantile(boot, [tail, 1.0 - tail])
+    return min(float(low), estimate), max(float(high), estimate)
+
+
+def reference_p(observed, boot):
+    if observed == 0.0:
+        return 1.0
+    extreme = min(np.count_nonzero(boot <= 0.0), np.count_nonzero(boot >= 0.0))
+    return min(1.0, 2.0 * (extreme + 1) / (boot.size + 1))
+
+
+def bits(*values):
+    """The float64 bytes of ``values``: equal only if equal to the last bit (and sign of 0)."""
+    return np.array(values, dtype=np.float64).tobytes()
+
+
+def bootstrap_case(seed):
+    """Random inputs: 1-150 recordings in 1-5 classes (half the time one more class of a single
+    recording), 2-5 repeats, all right, all wrong or mixed, 2-4 trend levels."""
+    generator = rng(seed)
+    n = int(generator.integers(1, 151))
+    labels = generator.integers(0, int(generator.integers(1, 6)), n)
+    if seed % 2:
+        labels[generator.integers(n)] = -1
+    repeats = int(generator.integers(2, 6))
+    rate = [0.0, 1.0, generator.random()][seed % 3]
+    a = generator.random((repeats, n)) < rate
+    b = generator.random((repeats, n)) < generator.random()
+    levels = int(generator.integers(2, 5))
+    correct = generator.random((levels, repeats, n)) < generator.random((levels, 1, 1))
+    x = generator.normal(size=levels)
+    settings = {
+        "resamples": int(generator.choice([1, 7, 400, 2000])),
+        "confidence": float(generator.choice([0.95, 0.8])),
+    }
+    return labels, a, b, correct, x, settings, int(generator.integers(2**32))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_bootstraps_equal_the_weight_matrix_formula_bit_for_bit(seed):
+    labels, a, b, correct, x, settings, draws = bootstrap_case(seed)
+    resamples, confidence = settings["resamples"], settings["confidence"]
+    repeats, n = a.shape
+    expected_rng = rng(draws)
+    weights = reference_weights(labels, resamples, expected_rng)
+
+    generator = rng(draws)
+    result = accuracy_interval(a, labels, rng=generator, **settings)
+    assert generator.bit_generator.state == expected_rng.bit_generator.state
+    estimate = int(a.sum()) / (n * repeats)
+    boot = weights @ a.sum(axis=0).astype(np.float64) / (n * repeats)
+    expected = (estimate, *reference_bounds(estimate, boot, confidence))
+    assert bits(result.estimate, result.low, result.high) == bits(*expected)
+
+    for r in (repeats, 1):  # one repeat: McNemar's p, but the same bootstrap interval
+        generator = rng(draws)
+        result = compare_paired(a[:r], b[:r], labels, rng=generator, **settings)
+        assert generator.bit_generator.state == expected_rng.bit_generator.state
+        difference = (int(a[:r].sum()) - int(b[:r].sum())) / (n * r)
+        per_recording = a[:r].sum(axis=0) - b[:r].sum(axis=0)
+        boot = weights @ per_recording.astype(np.float64) / (n * r)
+        expected = (difference, *reference_bounds(difference, boot, confidence))
+        assert bits(result.difference, result.low, result.high) == bits(*expected)
+        if r > 1:
+            assert bits(result.p_value) == bits(reference_p(difference, boot))
+
+    generator = rng(draws)
+    result = trend(correct, x, labels, rng=generator, **settings)
+    assert generator.bit_generator.state == expected_rng.bit_generator.state
+    counts = correct.sum(axis=1).T
+    centred_x = x - x.mean()
+    scale = n * repeats * float(centred_x @ centred_x)
+    per_recording = (counts - counts[:, :1]).astype(np.float64) @ centred_x
+    slope = float(per_recording.sum() / scale)
+    boot = weights @ per_recording / scale
+    expected = (slope, *reference_bounds(slope, boot, confidence), reference_p(slope, boot))
+    assert bits(result.slope, result.low, result.high, result.p_value) == bits(*expected)
+
+    assert _bootstrap_weights(labels, resamples, rng(draws)).tobytes() == weights.tobytes()
+
+
 # Input validation
 
 
