@@ -1,11 +1,11 @@
 """Planning a sweep: load, check and plan grids of 1,000, 10,000 and 100,000 points.
 
-What ``eskin sweep`` does before any point is computed, timed as the user meets it: the command
-line loads the grid and checks it against its recordings (:func:`flows.orchestrate.check_grid`),
-then the flow opens the root (loading the grid again) and plans it
-(:func:`flows.orchestrate.plan_sweep`: load, check, distinct points by key, cached entries) on
-an empty store. Each grid is a product of five axes over the ``paper`` scene (threshold,
-window, taxel rows, threshold mismatch, training seed), the same sweep at every size.
+What ``eskin sweep`` does before any point is computed, timed as the user meets it: the
+command line loads the grid once and checks it against its recordings
+(:func:`flows.planning.check_grid`), then the flow opens the root and plans the checked grid
+(:func:`flows.planning.plan_sweep`: distinct points by key, cached entries) on an empty store.
+Each grid is a product of five axes over the ``paper`` scene (threshold, window, taxel rows,
+threshold mismatch, training seed), the same sweep at every size.
 
 Rows: the 100,000-point plan against its absolute target (10 s on 2 cores); the cost per point
 at 100,000 over that at 1,000 (linear growth keeps it near 1); and, side by side in this
@@ -30,7 +30,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from benchmarks.timing import median_seconds
-from flows.orchestrate import check_grid, load_sweep_grid, open_root, plan_sweep
+from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
 from pipeline.grid import DatasetFacts, Grid, check_scene_fits, load_grid
 from pipeline.scene import MODEL_REVISION, Scene, _selected
 from pipeline.stages import RECORDINGS, RESULTS, Level
@@ -67,10 +67,10 @@ def sweep_before_work(grid_path: str, root: str) -> int:
 
     Returns the number of distinct points planned.
     """
-    grid = load_sweep_grid(grid_path)  # held, as the command line holds it, while the flow runs
+    grid = load_sweep_grid(grid_path)
     check_grid(grid)
-    store = open_root(grid_path, root)
-    return len(plan_sweep(grid_path, str(store.root)).scenes)
+    store = open_root(grid, root)
+    return len(plan_sweep(grid, store.root).scenes)
 
 
 def reference_key(scene: Scene, level: Level) -> str:
@@ -126,8 +126,8 @@ def phases(grid_path: str, root: str) -> dict[str, float]:
     seconds["points()"] = timed(grid.points)
     seconds["check_grid"] = timed(lambda: check_grid(grid))
     seconds["unique_points()"] = timed(grid.unique_points)
-    store = open_root(grid_path, root)
-    seconds["plan_sweep"] = timed(lambda: plan_sweep(grid_path, str(store.root)))
+    store = open_root(grid, root)
+    seconds["plan_sweep"] = timed(lambda: plan_sweep(grid, store.root))
     return seconds
 
 

@@ -1,11 +1,11 @@
 """The sweep machinery at scale: plan, compute and assemble 1,000, 10,000 and 100,000 points.
 
 Each size runs the real machinery of ``eskin sweep`` on a fresh root, phase by phase, as
-:func:`flows.orchestrate.run_sweep` calls it: the store opened (or created) and its lock held,
-:func:`~flows.orchestrate.plan_sweep` (planning), :func:`~flows.orchestrate.submit_missing` and
-:func:`~flows.orchestrate.completed_points` on a fresh local cluster of 2 single-thread worker
-processes (:func:`flows.cluster.dask_client`; compute), then
-:func:`~flows.orchestrate.assemble_cubes` (assembly). Only the science is left out: the ``spikes``
+:func:`flows.run.run_sweep` calls it: the store opened (or created) and its lock held,
+:func:`~flows.planning.checked_grid` and :func:`~flows.planning.plan_sweep` (planning),
+:func:`~flows.scheduling.submit_missing` and :func:`~flows.progress.completed_points` on a fresh
+local cluster of 2 single-thread worker processes (:func:`flows.cluster.dask_client`; compute),
+then :func:`~flows.assembly.assemble_cubes` (assembly). Only the science is left out: the ``spikes``
 and ``results`` levels' compute functions are replaced, in this process and in every worker
 process (a ``distributed.WorkerPlugin``), by stand-ins that take microseconds and return outputs
 of the real shapes. The spike stand-in returns the real spike trains of one point, computed once
@@ -61,15 +61,12 @@ import numpy as np
 import xarray as xr
 from distributed import WorkerPlugin
 
+from flows.assembly import assemble_cubes
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment, restored_environment
-from flows.orchestrate import (
-    assemble_cubes,
-    completed_points,
-    failure_message,
-    plan_sweep,
-    submit_missing,
-)
+from flows.planning import checked_grid, plan_sweep
+from flows.progress import completed_points, failure_message
+from flows.scheduling import submit_missing
 from pipeline.scene import Scene
 from pipeline.stages import LEVELS, RESULTS, SPIKES, Rates, Spikes, Stopwatch
 from storage import SweepStore
@@ -445,7 +442,7 @@ def measure_size(
     store = SweepStore.open_or_create(folder / f"root{n_points}")
     with store.lock():
         start = time.perf_counter()
-        plan = plan_sweep(str(grid), str(store.root))
+        plan = plan_sweep(checked_grid(grid), store.root)
         plan_s = time.perf_counter() - start
         if len(plan.scenes) != n_points or plan.cached:
             raise RuntimeError(

@@ -15,8 +15,10 @@
 Nothing here imports Prefect.
 """
 
-from flows.orchestrate import SweepFailed, best_points, run_sweep
+from flows.assembly import best_points
+from flows.progress import SweepFailed
 from flows.report import write_run_report
+from flows.run import run_sweep
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 from pipeline.grid import Grid, load_grid

@@ -255,14 +255,16 @@ def _run(args: argparse.Namespace) -> int:
 
 def _sweep(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
+    from flows.dry_run import dry_run, format_dry_run
     from flows.environment import hermetic_environment
-    from flows.orchestrate import check_grid, default_root, dry_run, format_dry_run, load_sweep_grid
+    from flows.planning import check_grid, default_root, load_sweep_grid
     from flows.server import prefect_server
     from storage import SweepStore
 
     workers = args.workers or cluster.available_cores()
+    # The grid is loaded and checked once, here, before the store is created and Prefect
+    # imported (bad input writes nothing); the flow is handed the checked grid.
     grid = load_sweep_grid(args.grid, args.dataset)
-    # Every check runs before the store is created and Prefect imported: bad input writes nothing.
     check_grid(grid)
     if args.address is not None:
         probe_scheduler(args.address)
@@ -287,11 +289,10 @@ def _sweep(args: argparse.Namespace) -> int:
             from flows.sweep import sweep
 
             summary = sweep(
-                grid=args.grid,
+                grid=grid,
                 root=str(store.root),
                 workers=workers,
                 address=args.address,
-                dataset=args.dataset,
                 report=args.report,
                 show_progress=not args.quiet,
             )
@@ -359,7 +360,7 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    from flows.orchestrate import load_sweep_grid
+    from flows.planning import load_sweep_grid
     from flows.server import prefect_server
 
     load_sweep_grid(args.grid)

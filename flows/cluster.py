@@ -35,7 +35,7 @@ def check_workers(value: object, *, name: str | None = None) -> int:
     """``value`` as a number of workers: a whole number >= 1, or its decimal text.
 
     The one rule for worker counts: the command line's ``--workers`` type and every Python
-    entry point (:func:`dask_client`, :func:`flows.orchestrate.run_sweep`) call it before
+    entry point (:func:`dask_client`, :func:`flows.run.run_sweep`) call it before
     anything starts.
 
     Raises

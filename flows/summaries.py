@@ -3,7 +3,7 @@
 A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.simulate.RunResult`
 into the JSON-able dict of ``eskin run --json``, :func:`format_summary` prints it as
 ``eskin run`` does, and :func:`format_sweep_summary` prints a sweep's summary (what
-:func:`flows.orchestrate.run_sweep` and the ``sweep`` flow return) with the best point per model
+:func:`flows.run.run_sweep` and the ``sweep`` flow return) with the best point per model
 of each cube. :func:`json_safe` writes infinite numbers as the strings ``"inf"`` and ``"-inf"``
 (JSON has none; ``float("inf")`` reads them back).
 """
@@ -126,7 +126,7 @@ def format_sweep_summary(
         The sweep's cubes by name; default: read from ``summary["root"]``
         (:func:`storage.open_results`).
     """
-    from flows.orchestrate import best_points
+    from flows.assembly import best_points
     from storage import open_results
 
     if cubes is None:

@@ -6,8 +6,11 @@ task waits for its own points, assembles its cube and publishes a table artifact
 point per model, so the UI shows each sweep's state as its points finish. Meanwhile the flow
 follows all points: a progress bar on the terminal, a progress artifact, and run-logger lines
 (points done, cache hits, failures). With ``report=True`` a last task writes the report and a
-link artifact to it. :func:`flows.orchestrate.run_sweep` does the same without Prefect, on a
-Dask client the caller may give.
+link artifact to it. :func:`flows.run.run_sweep` does the same without Prefect, on a Dask
+client the caller may give.
+
+The command line loads and checks the grid before Prefect starts and hands the checked
+:class:`pipeline.grid.Grid` to the flow, which plans it once and hands the plan to its tasks.
 
 Prefect runs only in this process; the Dask workers run the plain functions of
 :mod:`flows.work` and never call the Prefect API (worker processes that did would each start a
@@ -32,23 +35,18 @@ from prefect.artifacts import (
 from prefect.cache_policies import NO_CACHE
 from prefect.task_runners import ThreadPoolTaskRunner
 
-from flows.orchestrate import (
+from flows.assembly import assemble_cube, best_points, cube_location
+from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
+from flows.progress import (
     SweepFailed,
-    SweepPlan,
-    assemble_cube,
-    best_points,
     completed_points,
-    cube_location,
     failure_message,
-    log_sweep_run,
-    open_root,
-    plan_sweep,
     point_failures,
     progress_bar,
-    submit_missing,
-    sweep_client,
-    sweep_summary,
 )
+from flows.run import log_sweep_run, sweep_summary
+from flows.scheduling import submit_missing, sweep_client
+from pipeline.grid import Grid
 
 #: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
 REPORT_EVERY_S = 5.0
@@ -71,8 +69,8 @@ def artifact_key(*parts: str) -> str:
 
 
 @task(name="plan", cache_policy=NO_CACHE)
-def plan_task(grid: str, root: str, dataset: str | None) -> SweepPlan:
-    plan = plan_sweep(grid, root, dataset)
+def plan_task(grid: Grid, root: str) -> SweepPlan:
+    plan = plan_sweep(grid, root)
     get_run_logger().info(
         "%d distinct points in %d sweeps: %d cached, %d to compute",
         len(plan.scenes),
@@ -86,12 +84,12 @@ def plan_task(grid: str, root: str, dataset: str | None) -> SweepPlan:
 @task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
 def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
     """Wait for the sweep's points, assemble its cube, publish its best points as a table."""
-    from distributed import wait
-
     logger = get_run_logger()
     keys = plan.sweep_keys[name]
     mine = {futures[key] for key in keys if key in futures}
     if mine:
+        from distributed import wait
+
         wait(mine)
     failed = [
         why for f in mine for why in point_failures(f, [k for k in keys if k in futures]).values()
@@ -132,7 +130,7 @@ def report_task(root: str) -> str:
     log_prints=False,
 )
 def sweep(
-    grid: str = "smoke",
+    grid: str | Grid = "smoke",
     root: str | None = None,
     workers: int | None = None,
     address: str | None = None,
@@ -140,15 +138,20 @@ def sweep(
     report: bool = False,
     show_progress: bool = False,
 ) -> dict[str, Any]:
-    """Sweep a grid (a built-in name or a TOML file) into labelled cubes under ``root``.
+    """Sweep a grid into labelled cubes under ``root``.
 
-    ``root`` defaults to ``runs/<grid name>``; ``address`` (``tcp://HOST:PORT``) uses an
-    existing Dask scheduler instead of a local cluster of ``workers`` processes (default: one
-    per available core); ``dataset`` (a folder or ``synthetic``) replaces the grid's recordings;
-    ``report`` writes the report under ``<root>/report`` at the end.
+    ``grid`` is a built-in name or a TOML file, loaded and checked here, or a
+    :class:`pipeline.grid.Grid` its caller has checked (:func:`flows.planning.check_grid`), as
+    the command line does before Prefect starts. ``root`` defaults to ``runs/<grid name>``;
+    ``address`` (``tcp://HOST:PORT``) uses an existing Dask scheduler instead of a local
+    cluster of ``workers`` processes (default: one per available core); ``dataset`` (a folder
+    or ``synthetic``) replaces the recordings of a grid given by name or file; ``report``
+    writes the report under ``<root>/report`` at the end.
     """
     start = time.perf_counter()
     logger = get_run_logger()
+    if not isinstance(grid, Grid) or dataset is not None:
+        grid = checked_grid(grid, dataset)
     store = open_root(grid, root, dataset)
     summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
     if show_progress and summary["flow_run_url"]:
@@ -156,7 +159,7 @@ def sweep(
     # One sweep per root: a second one is refused here (the command line takes the lock before
     # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
     with store.lock():
-        plan = plan_task(grid, str(store.root), dataset)
+        plan = plan_task(grid, str(store.root))
         with sweep_client(plan, workers=workers, address=address) as client:
             futures: dict[str, Any] = {}
             if client is not None:

@@ -24,12 +24,12 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from flows.environment import tune_allocator
 from pipeline.cube import OutOfFold, RecordingsInfo
-from pipeline.scene import CanonicalMemo, Scene
+from pipeline.scene import Scene
 from pipeline.stages import (
     LEVELS,
     RATES,
@@ -106,8 +106,10 @@ class PointsFailed(RuntimeError):
         return (PointsFailed, (self.failures,))
 
 
-def ensure_entries(root: str, level: str, scenes: Sequence[Scene], *after: Any) -> list[str]:
-    """Make sure the store at ``root`` holds ``level``'s entry of every scene; return the keys.
+def ensure_entries(
+    root: str, level: str, points: Sequence[tuple[Scene, Mapping[str, str]]], *after: Any
+) -> list[str]:
+    """Make sure the store at ``root`` holds ``level``'s entry of every point; return the keys.
 
     Nothing is computed for a scene whose entry is there. Otherwise the entries of the levels
     it runs after are read from the store (or from this task's own pending ones), or computed
@@ -119,10 +121,12 @@ def ensure_entries(root: str, level: str, scenes: Sequence[Scene], *after: Any) 
         The run root.
     level
         The name of a level the store keeps (``"spikes"``, ``"results"``).
-    scenes
-        The scenes; those that share entries (the spike trains of a window sweep) are best
-        given one after the other. Scenes of one grid share their part objects, and a list of
-        them pickles those once, so sending them costs little.
+    points
+        ``(scene, keys)`` pairs: a scene and the cache key of every level it needs, by level
+        name (:func:`flows.scheduling.point_keys`), computed once by the caller. Scenes that
+        share entries (the spike trains of a window sweep) are best given one after the other.
+        Scenes of one grid share their part objects, and a list of them pickles those once, so
+        sending them costs little.
     after
         Futures this task waits for (the spike trains its scenes share with other tasks); their
         values are not used.
@@ -148,12 +152,12 @@ def ensure_entries(root: str, level: str, scenes: Sequence[Scene], *after: Any) 
         raise ValueError(f"stage {level!r} is not kept in the store")
     task = _Task(SweepStore.open(root))
     keys, failures = [], {}
-    for scene in scenes:
-        key = wanted.key(scene, task.memo)
+    for scene, scene_keys in points:
+        key = scene_keys[wanted.name]
         keys.append(key)
         try:
             if not task.holds(wanted, key):
-                _Point(task, scene).made(wanted)
+                _Point(task, scene, scene_keys).made(wanted)
         except Exception as error:  # reported per point; the others go on
             failures[key] = " ".join(f"{type(error).__name__}: {error}".split())
         task.flush_if_due()
@@ -172,9 +176,6 @@ class _Task:
 
     def __init__(self, store: SweepStore):
         self.store = store
-        # Canonical forms of the scene parts met so far: the scenes of a task share parts,
-        # and each level's key of each scene hashes them.
-        self.memo: CanonicalMemo = {}
         self._stored: dict[str, frozenset[str]] = {}
         self._pending: dict[str, dict[str, Any]] = {}
         self._pending_bytes = 0
@@ -245,9 +246,10 @@ def _entry_bytes(entry: Any) -> int:
 class _Point:
     """The levels of one scene as one task needs them: each read, recalled or computed once."""
 
-    def __init__(self, task: _Task, scene: Scene):
+    def __init__(self, task: _Task, scene: Scene, keys: Mapping[str, str]):
         self.task = task
         self.scene = scene
+        self.keys = keys
         self._made: dict[str, tuple[Any, dict[str, float]]] = {}
 
     def made(self, level: Level) -> tuple[Any, dict[str, float]]:
@@ -259,7 +261,7 @@ class _Point:
     def _make(self, level: Level) -> tuple[Any, dict[str, float]]:
         if not level.stored:
             return self._in_memory(level)
-        key = level.key(self.scene, self.task.memo)
+        key = self.keys[level.name]
         entry = self.task.entry(level, key)
         if entry is None:
             watch = Stopwatch(None)
@@ -274,7 +276,7 @@ class _Point:
         return entry, entry.seconds
 
     def _in_memory(self, level: Level) -> tuple[Any, dict[str, float]]:
-        key = level.key(self.scene, self.task.memo)
+        key = self.keys[level.name]
         with _kept_lock:
             kept = _kept.setdefault(level.name, OrderedDict())
             if key in kept:

@@ -1,5 +1,6 @@
 """End-to-end test helpers: run the real command line and servers in a hermetic environment."""
 
+import math
 import os
 import subprocess
 import sys
@@ -8,9 +9,44 @@ from pathlib import Path
 
 import xarray as xr
 
+from pipeline.metrics import SpikeMetrics
 from storage import open_results
 
 BIN = Path(sys.executable).parent
+
+#: Spike metrics of a hand-made result entry.
+METRICS = SpikeMetrics(
+    ssnr_db=math.inf,
+    ste_s2=0.0,
+    ste_sign_safe_s2=0.0,
+    event_rate_hz=100.0,
+    data_rate_bps=300.0,
+    equivalent_bits=3.0,
+)
+
+
+def count_grid_loads(patch) -> dict[str, int]:
+    """Count the grid loads and dataset checks from now on: calls of
+    :func:`pipeline.grid.load_grid` (as :mod:`flows.planning` calls it) and of
+    :meth:`pipeline.grid.DatasetFacts.describe`, patched with ``patch(owner, name, value)``
+    (``monkeypatch.setattr``, or ``setattr`` in a subprocess). Returns the live counts."""
+    from flows import planning
+    from pipeline.grid import DatasetFacts
+
+    calls = {"load_grid": 0, "describe": 0}
+    load, describe = planning.load_grid, DatasetFacts.describe
+
+    def counted_load(*args):
+        calls["load_grid"] += 1
+        return load(*args)
+
+    def counted_describe(spec):
+        calls["describe"] += 1
+        return describe(spec)
+
+    patch(planning, "load_grid", counted_load)
+    patch(DatasetFacts, "describe", counted_describe)
+    return calls
 
 
 def hermetic_env(base: Path, **extra: str) -> dict[str, str]:

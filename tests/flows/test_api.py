@@ -1,4 +1,4 @@
-"""``flows.api`` and ``flows.orchestrate.run_sweep``: a sweep on a given Dask client, no Prefect."""
+"""``flows.api`` and ``flows.run.run_sweep``: a sweep on a given Dask client, no Prefect."""
 
 import subprocess
 import sys
@@ -7,10 +7,9 @@ import pytest
 import xarray as xr
 
 import flows.api
-from flows import orchestrate
+from flows import planning, scheduling, work
 from flows.api import SweepFailed, open_results, run_sweep
 from flows.cluster import ClusterError
-from flows.work import ensure_entries
 from storage.runlog import RUN_LOG
 
 GRID = """
@@ -70,22 +69,25 @@ def test_a_sweep_on_a_given_client_writes_cubes_and_leaves_the_client_open(
     def no_cluster(*args, **kwargs):
         raise AssertionError("a cluster started with nothing to compute")
 
-    monkeypatch.setattr(orchestrate, "dask_client", no_cluster)
+    monkeypatch.setattr(scheduling, "dask_client", no_cluster)
     again = run_sweep(grid, root)
     assert (again["cache_hits"], again["computed"], again["dashboard"]) == (3, 0, None)
     xr.testing.assert_identical(open_results(root)["threshold"], cubes["threshold"])
 
 
-def failing_at_5_mv(root, level, scenes, *after):
-    if any(scene.readout.threshold_v == 0.05 for scene in scenes):
+ENSURE_ENTRIES = work.ensure_entries
+
+
+def failing_at_5_mv(root, level, points, *after):
+    if any(scene.readout.threshold_v == 0.05 for scene, _ in points):
         raise RuntimeError("broken point")
-    return ensure_entries(root, level, scenes, *after)
+    return ENSURE_ENTRIES(root, level, points, *after)
 
 
 def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     tmp_path, grid, client, monkeypatch
 ):
-    monkeypatch.setattr(orchestrate, "ensure_entries", failing_at_5_mv)
+    monkeypatch.setattr(work, "ensure_entries", failing_at_5_mv)
     with pytest.raises(SweepFailed, match=r"^1 of 3 points failed .*broken point"):
         run_sweep(grid, tmp_path / "run", client=client)
     assert sorted(open_results(tmp_path / "run")) == ["window"]
@@ -101,8 +103,8 @@ def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, clie
     for name in ("a", "b"):
         store = SweepStore.open_or_create(tmp_path / name)
         with store.lock():
-            plans.append(orchestrate.plan_sweep(grid, str(store.root)))
-    held = [orchestrate.submit_missing(plan, client) for plan in plans]  # both held at once
+            plans.append(planning.plan_sweep(planning.load_sweep_grid(grid), store.root))
+    held = [scheduling.submit_missing(plan, client) for plan in plans]  # both held at once
     assert {f.key for f in held[0].values()}.isdisjoint(f.key for f in held[1].values())
     wait([f for futures in held for f in futures.values()])
     for plan in plans:

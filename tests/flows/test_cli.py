@@ -229,7 +229,7 @@ def test_workers_must_be_a_positive_whole_number(capsys, workers):
 def test_a_failed_run_exits_1_with_one_line(capsys, tmp_path, monkeypatch):
     """A sweep whose points failed is a failed run on good input, not bad input."""
     import flows.sweep
-    from flows.orchestrate import SweepFailed
+    from flows.progress import SweepFailed
 
     message = "2 of 7 points failed (the others are kept in ROOT): point-x: boom"
 

@@ -9,7 +9,9 @@ import json
 
 import pytest
 
-from flows.orchestrate import assemble_cubes, plan_sweep
+from flows.assembly import assemble_cubes
+from flows.planning import load_sweep_grid, plan_sweep
+from flows.scheduling import point_keys
 from flows.work import ensure_entries
 from storage import SweepStore
 from tests.flows.helpers import assert_same_cubes, eskin
@@ -34,8 +36,9 @@ def test_reversed_completion_order_gives_the_same_cubes(smoke_sweep, tmp_path):
     """Compute the points in this process, last first, with no Dask and no Prefect."""
     store = SweepStore.open_or_create(tmp_path / "run")
     with store.lock():
-        plan = plan_sweep("smoke", str(store.root))
+        plan = plan_sweep(load_sweep_grid("smoke"), store.root)
         for key in reversed(plan.missing):
-            ensure_entries(plan.root, "results", [plan.scenes[key]])
+            scene = plan.scenes[key]
+            ensure_entries(plan.root, "results", [(scene, point_keys(scene))])
         assemble_cubes(plan)
     assert_same_cubes(smoke_sweep[0], store.root)

@@ -5,7 +5,7 @@ import uuid
 import numpy as np
 import pytest
 
-from flows.orchestrate import plan_sweep
+from flows.planning import plan_sweep
 from pipeline.grid import load_grid
 from pipeline.metrics import SpikeMetrics
 from storage import EntryKind, ResultEntry, SweepStore
@@ -25,7 +25,7 @@ def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
     chunk.write_bytes(chunk.read_bytes()[::-1])
 
     with store.lock(), pytest.warns(RuntimeWarning, match=f"corrupt results batch .*{keys[0]}"):
-        plan = plan_sweep("smoke", str(store.root))
+        plan = plan_sweep(load_grid("smoke"), store.root)
     assert plan.cached == {keys[1]}
     assert keys[0] in plan.missing and not store.has(EntryKind.RESULTS, keys[0])
     assert not partial.exists()

@@ -12,7 +12,7 @@ import pytest
 from flows import server
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
-from flows.orchestrate import default_root
+from flows.planning import default_root
 from pipeline.errors import SceneError
 from pipeline.grid import Grid, load_grid
 from pipeline.scene import Scene

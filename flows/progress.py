@@ -1,0 +1,97 @@
+"""Following a sweep's submitted points: each point as its task finishes, failures, the bar.
+
+:func:`completed_points` yields every point once its task is done, with the reason it failed
+(:func:`point_failures`), and gives up on a cluster left without workers; a sweep whose points
+failed ends with :class:`SweepFailed` (:func:`failure_message`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+from flows.planning import SweepPlan
+from pipeline.errors import EskinError
+
+POLL_S = 2.0
+NO_WORKER_TIMEOUT_S = 120.0
+
+
+class SweepFailed(EskinError):
+    """Some points of a sweep failed; the others are in the store (exit status 1)."""
+
+    exit_status = 1
+
+
+def progress_bar(plan: SweepPlan, show_progress: bool) -> Any:
+    """A tqdm bar over the plan's distinct points, cached ones counted as done."""
+    from tqdm import tqdm
+
+    return tqdm(
+        total=len(plan.scenes),
+        initial=len(plan.cached),
+        unit="point",
+        desc=f"sweep {plan.grid.name}",
+        disable=None if show_progress else True,
+    )
+
+
+def failure_message(failures: list[str], n_points: int, root: str) -> str:
+    """One line: how many of ``n_points`` failed, the first three failures, where the rest are."""
+    shown = "; ".join(failures[:3]) + (
+        f"; and {len(failures) - 3} more" if len(failures) > 3 else ""
+    )
+    return f"{len(failures)} of {n_points} points failed (the others are kept in {root}): {shown}"
+
+
+def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str, str | None]]:
+    """Yield ``(key, failure)`` for every point as its task finishes (``failure`` None for a
+    success).
+
+    A task that stored some of its points and failed others (:class:`flows.work.PointsFailed`)
+    counts only those as failed; a task that failed as a whole fails all its points.
+
+    Raises :class:`SweepFailed` if the cluster has had no worker for ``NO_WORKER_TIMEOUT_S``.
+    """
+    if not futures:
+        return
+    from distributed import wait
+
+    points: dict[Any, list[str]] = {}
+    for key, future in futures.items():
+        points.setdefault(future, []).append(key)
+    pending = set(points)
+    alone_since = None
+    while pending:
+        try:
+            done = wait(pending, timeout=POLL_S, return_when="FIRST_COMPLETED").done
+        except TimeoutError:
+            done = set()
+        for future in done:
+            pending.discard(future)
+            failures = point_failures(future, points[future])
+            for key in points[future]:
+                yield key, failures.get(key)
+        if client.nthreads():
+            alone_since = None
+        elif alone_since is None:
+            alone_since = time.monotonic()
+        elif time.monotonic() - alone_since > NO_WORKER_TIMEOUT_S:
+            n_left = sum(len(points[f]) for f in pending)
+            raise SweepFailed(
+                f"the Dask cluster has had no worker for {NO_WORKER_TIMEOUT_S:.0f} s with "
+                f"{n_left} points left; finished points are kept in the store"
+            )
+
+
+def point_failures(future: Any, keys: list[str]) -> dict[str, str]:
+    """Why each of ``keys`` failed in the finished task ``future``; empty if none failed."""
+    if future.status != "error":
+        return {}
+    from flows.work import PointsFailed
+
+    error = future.exception()
+    if isinstance(error, PointsFailed):
+        return {key: f"point {key}: {why}" for key, why in error.failures.items() if key in keys}
+    return dict.fromkeys(keys, f"{future.key}: {error}")

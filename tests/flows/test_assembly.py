@@ -1,0 +1,74 @@
+"""Tests of flows.assembly: cubes state what their results state, refuse a missing point, and
+are written only when they change."""
+
+import numpy as np
+import pytest
+
+from flows.assembly import assemble_cube
+from flows.planning import SweepPlan
+from pipeline.cube import RecordingsInfo
+from pipeline.grid import Grid
+from storage import StoreError
+from storage.store import ResultEntry, SweepStore
+from tests.flows.helpers import METRICS
+
+
+def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_point(tmp_path):
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
+    )
+    store = SweepStore.open_or_create(tmp_path / "run")
+    scenes = grid.unique_points()
+    first, second = scenes
+    plan = SweepPlan(grid, str(store.root), scenes, {})
+    own = RecordingsInfo("mine", ("bark", "cloth"), 250.0)
+    store.write_result(first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    with pytest.raises(StoreError, match=f"1 point.*no result.*first: {second}"):
+        assemble_cube(plan, "t")
+    assert store.cube_names() == []
+    store.write_result(second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    cube = assemble_cube(plan, "t")
+    stated = {k: cube.attrs.get(k) for k in ("dataset_name", "sampling_rate_hz", "class_names")}
+    assert stated == {
+        "dataset_name": "mine",
+        "sampling_rate_hz": 250.0,
+        "class_names": ["bark", "cloth"],
+    }
+    assert store.read_cube("t").attrs["n_classes"] == 2
+    # Nothing known anywhere: the facts stay unknown, and out of the cube.
+    bare = SweepPlan(grid, str(tmp_path / "other"), scenes, {})
+    empty = SweepStore.open_or_create(bare.root)
+    for key in scenes:
+        empty.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+    cube = assemble_cube(bare, "t")
+    assert not {"dataset_name", "sampling_rate_hz", "class_names", "n_classes"} & set(cube.attrs)
+
+
+def test_a_cube_equal_to_the_stored_one_is_not_written_again(tmp_path, monkeypatch):
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
+    )
+    store = SweepStore.open_or_create(tmp_path / "run")
+    scenes = grid.unique_points()
+    for key in scenes:
+        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {"x": 1.0}, METRICS))
+    plan = SweepPlan(grid, str(store.root), scenes, {})
+    first = assemble_cube(plan, "t")
+    written = []
+    write_cube = SweepStore.write_cube
+    monkeypatch.setattr(
+        SweepStore, "write_cube", lambda self, *a: written.append(a[0]) or write_cube(self, *a)
+    )
+    assert assemble_cube(plan, "t").identical(first)
+    assert written == []
+    # A changed result changes the cube: it is written.
+    changed = {next(iter(scenes)): ResultEntry({"ffnn": np.array([0.75])}, {"x": 1.0}, METRICS)}
+    assert not assemble_cube(SweepPlan(grid, plan.root, scenes, changed), "t").identical(first)
+    assert written == ["t"]
+    # So is a cube whose stored copy fails its checksum.
+    cube = store.path / "cubes" / "t"
+    chunk = next(p for p in (cube / "accuracy").rglob("*") if p.is_file() and p.name != "zarr.json")
+    chunk.write_bytes(chunk.read_bytes()[::-1])
+    assemble_cube(plan, "t")
+    assert written == ["t", "t"]
+    assert store.read_cube("t").identical(assemble_cube(plan, "t"))

@@ -1,0 +1,29 @@
+"""Tests of flows.progress: which points of a finished task failed, and why."""
+
+import pickle
+
+from flows.progress import point_failures
+from flows.work import PointsFailed
+
+
+class _Finished:
+    """A finished Dask future, as far as :func:`point_failures` looks at it."""
+
+    def __init__(self, error=None):
+        self.status = "error" if error else "finished"
+        self.key = "points-abc"
+        self._error = error
+
+    def exception(self):
+        return self._error
+
+
+def test_point_failures_name_only_the_failed_points_of_a_partly_failed_task():
+    assert point_failures(_Finished(), ["a", "b"]) == {}
+    partly = PointsFailed({"b": "ValueError: bad"})
+    assert point_failures(_Finished(partly), ["a", "b"]) == {"b": "point b: ValueError: bad"}
+    whole = point_failures(_Finished(MemoryError("killed")), ["a", "b"])
+    assert whole == {"a": "points-abc: killed", "b": "points-abc: killed"}
+    again = pickle.loads(pickle.dumps(partly))  # Dask ships it back to the coordinator
+    assert isinstance(again, PointsFailed) and again.failures == partly.failures
+    assert "1 point(s) failed: b: ValueError: bad" in str(again)

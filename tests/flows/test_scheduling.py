@@ -1,0 +1,71 @@
+"""Tests of flows.scheduling: the cost model, the order and batches in which points are
+submitted, and the cache keys sent with each point."""
+
+import pytest
+
+from flows import scheduling
+from flows.scheduling import cost_kind, default_points_per_task, point_keys, training_cost
+from pipeline.coding import MAX_AUTO_WINDOWS
+from pipeline.scene import Scene
+from pipeline.stages import LEVELS
+
+
+def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():
+    paper = Scene.paper()  # 3x3 taxels, auto windows, FFNN and CNN
+    assert training_cost(paper) == 9 * MAX_AUTO_WINDOWS * 2
+    assert training_cost(paper.replace(**{"coding.n_windows": 160})) == 9 * 160 * 2
+    assert training_cost(paper.replace(**{"array.rows": 5, "array.cols": 5})) == 25 * 40 * 2
+    assert training_cost(paper.replace(**{"training.models": ["ffnn"]})) == 9 * 40
+
+
+def test_cost_kind_ignores_threshold_effect_values_and_seeds_but_not_effect_names():
+    base = Scene.builtin("smoke")
+    noisy = base.replace(**{"readout.effects.amplifier_noise.sigma_v": 0.01})
+    same = [
+        base.replace(**{"readout.threshold_v": 0.05}),
+        base.replace(**{"seed": 3, "dataset.seed": 4, "training.seed": 5}),
+    ]
+    assert all(cost_kind(s) == cost_kind(base) for s in same)
+    assert cost_kind(noisy) != cost_kind(base)
+    assert cost_kind(noisy.replace(**{"readout.effects.amplifier_noise.sigma_v": 0.5})) == (
+        cost_kind(noisy)
+    )
+    for change in ({"coding.window_s": 0.2}, {"array.rows": 1}, {"training.models": ["ffnn"]}):
+        assert cost_kind(base.replace(**change)) != cost_kind(base)
+
+
+def test_point_keys_are_every_levels_key_whatever_the_memo():
+    scenes = [Scene.paper(), Scene.paper().replace(**{"coding.window_s": 0.2})]
+    memo = {}
+    for scene in scenes:
+        keys = point_keys(scene, memo)
+        assert keys == {level.name: level.key(scene) for level in LEVELS}
+    assert point_keys(scenes[0])["spikes"] == point_keys(scenes[1])["spikes"]
+    assert point_keys(scenes[0])["results"] != point_keys(scenes[1])["results"]
+
+
+@pytest.mark.parametrize(
+    ("n_points", "n_threads", "expected"),
+    [(0, 2, 1), (1, 2, 1), (48, 2, 3), (10_000, 2, 500), (10_000, 64, 20), (7, 0, 1)],
+)
+def test_default_points_per_task_is_about_eight_tasks_per_thread(n_points, n_threads, expected):
+    assert default_points_per_task(n_points, n_threads) == expected
+
+
+def test_batches_keep_a_trains_points_together_where_they_fit_and_spread_big_ones():
+    by_train = {"a": ["a1", "a2"], "b": ["b1", "b2", "b3"], "c": ["c1"], "d": list("dddddddd")}
+    batches = scheduling._batches({t: list(k) for t, k in by_train.items()}, 4)
+    flat = [[(train, tuple(keys)) for train, keys in batch] for batch in batches]
+    assert flat == [
+        [("a", ("a1", "a2"))],  # b does not fit beside a: it starts a batch of its own
+        [("b", ("b1", "b2", "b3")), ("c", ("c1",))],
+        [("d", tuple("dddd"))],  # d has more points than a batch: spread, full batches
+        [("d", tuple("dddd"))],
+    ]
+    # Every point once, in order, and no batch above the size.
+    points = [k for batch in batches for _, keys in batch for k in keys]
+    assert points == [k for keys in by_train.values() for k in keys]
+    assert max(sum(len(keys) for _, keys in batch) for batch in batches) == 4
+    assert scheduling._batches(by_train, 1) == [
+        [(t, [k])] for t, ks in by_train.items() for k in ks
+    ]
