@@ -12,14 +12,25 @@ import sys
 
 from tqdm import tqdm
 
-from benchmarks import coding, encoder, planning, scale, sweep, sweep_scale, training
+from benchmarks import (
+    coding,
+    encoder,
+    planning,
+    scale,
+    sweep,
+    sweep_scale,
+    training,
+    warm_rerun,
+)
 
 
 def main() -> None:
-    # --quick skips the scale runs, the paper-grid sweeps (~25 minutes) and the sweep machinery
-    # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes).
+    # --quick skips the scale runs, the paper-grid sweeps (~25 minutes), the sweep machinery
+    # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes) and the warm
+    # re-run of the paper grid (whose root, runs/bench/paper, the first run computes).
     quick = "--quick" in sys.argv
-    suites = [encoder, coding, training, planning] + ([] if quick else [scale, sweep, sweep_scale])
+    slow = [scale, sweep, sweep_scale, warm_rerun]
+    suites = [encoder, coding, training, planning] + ([] if quick else slow)
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
         rows += suite.run()

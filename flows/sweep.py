@@ -34,6 +34,7 @@ from prefect.artifacts import (
 )
 from prefect.cache_policies import NO_CACHE
 from prefect.task_runners import ThreadPoolTaskRunner
+from prefect.utilities.annotations import quote
 
 from flows.assembly import assemble_cube, best_points, cube_location
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
@@ -168,7 +169,10 @@ def sweep(
                 if show_progress:
                     print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
                 futures = submit_missing(plan, client)
-            runs = [sweep_task.submit(plan, s.name, futures) for s in plan.grid.sweeps]
+            # Quoted: Prefect would walk the plan and the futures for each task's inputs.
+            runs = [
+                sweep_task.submit(quote(plan), s.name, quote(futures)) for s in plan.grid.sweeps
+            ]
             if futures:
                 _follow(plan, client, futures, show_progress)
             for run in runs:
