@@ -23,7 +23,7 @@ from flows.environment import hermetic_environment
 from flows.planning import SweepPlan
 from pipeline.coding import MAX_AUTO_WINDOWS
 from pipeline.scene import CanonicalMemo, Scene
-from pipeline.stages import LEVELS, RESULTS, SPIKES
+from pipeline.stages import LEVELS, RESULTS, SPIKES, Level
 from storage import EntryKind, SweepStore
 
 #: Tasks per worker thread a sweep's missing points are split into (see
@@ -129,34 +129,33 @@ def submit_missing(
     stored = store.complete_keys(EntryKind.SPIKES)
     spread = collections.Counter(train for batch in batches for train in {t for t, _ in batch})
     shared = [train for train, n in spread.items() if n > 1 and train not in stored]
+
+    def submit(level: Level, points: list[str], name: str, priority: int, *after: Any) -> Any:
+        # One task of ensure_entries, keyed by the work it does and the root.
+        return client.submit(
+            work.ensure_entries,
+            plan.root,
+            level.name,
+            [(plan.scenes[key], keys[key]) for key in points],
+            *after,
+            key=f"{name}-{root}",
+            pure=False,
+            priority=priority,
+        )
+
     train_futures: dict[str, Any] = {}
     for start in range(0, len(shared), size):
         trains = shared[start : start + size]
         firsts = [by_train[t][0] for t in trains]
-        future = client.submit(
-            work.ensure_entries,
-            plan.root,
-            SPIKES.name,
-            [(plan.scenes[key], keys[key]) for key in firsts],
-            key=f"spikes-{_digest_keys(trains)}-{root}",
-            pure=False,
-            priority=max(cost.values()) + 1,
-        )
+        name = f"spikes-{_digest_keys(trains)}"
+        future = submit(SPIKES, firsts, name, max(cost.values()) + 1)
         train_futures.update(dict.fromkeys(trains, future))
     futures: dict[str, Any] = {}
     for batch in batches:
         points = [key for _, batch_keys in batch for key in batch_keys]
         after = list({id(f): f for t, _ in batch if (f := train_futures.get(t))}.values())
-        future = client.submit(
-            work.ensure_entries,
-            plan.root,
-            RESULTS.name,
-            [(plan.scenes[key], keys[key]) for key in points],
-            *after,
-            key=f"points-{_digest_keys(points)}-{root}",
-            pure=False,
-            priority=max(cost[key] for key in points),
-        )
+        priority = max(cost[key] for key in points)
+        future = submit(RESULTS, points, f"points-{_digest_keys(points)}", priority, *after)
         futures.update(dict.fromkeys(points, future))
     return futures
 

@@ -14,6 +14,19 @@ from storage import open_results
 
 BIN = Path(sys.executable).parent
 
+#: A grid of two sweeps on ``smoke`` with 3 distinct points (the window sweep's 0.1 s point is the
+#: threshold sweep's 0.09 V one).
+SMALL_GRID = """
+name = "api"
+base = "smoke"
+
+[sweeps.threshold]
+axes = { "readout.threshold_v" = [0.05, 0.09] }
+
+[sweeps.window]
+axes = { "coding.window_s" = [0.1, 0.2] }
+"""
+
 #: Spike metrics of a hand-made result entry.
 METRICS = SpikeMetrics(
     ssnr_db=math.inf,

@@ -11,23 +11,13 @@ from flows import planning, scheduling, work
 from flows.api import SweepFailed, open_results, run_sweep
 from flows.cluster import ClusterError
 from storage.runlog import RUN_LOG
-
-GRID = """
-name = "api"
-base = "smoke"
-
-[sweeps.threshold]
-axes = { "readout.threshold_v" = [0.05, 0.09] }
-
-[sweeps.window]
-axes = { "coding.window_s" = [0.1, 0.2] }
-"""
+from tests.flows.helpers import SMALL_GRID
 
 
 @pytest.fixture
 def grid(tmp_path):
     path = tmp_path / "api.toml"
-    path.write_text(GRID)
+    path.write_text(SMALL_GRID)
     return str(path)
 
 

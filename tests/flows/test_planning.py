@@ -16,7 +16,7 @@ from pipeline.grid import DatasetFacts, Grid, load_grid
 from pipeline.stages import RECORDINGS
 from storage import EntryKind
 from storage.store import ResultEntry, SweepStore
-from tests.flows.helpers import METRICS, count_grid_loads, hermetic_env
+from tests.flows.helpers import METRICS, SMALL_GRID, count_grid_loads, hermetic_env
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -84,17 +84,6 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
     assert not (store.path / "results" / ".partial-batch-0").exists()
 
 
-GRID = """
-name = "once"
-base = "smoke"
-
-[sweeps.threshold]
-axes = { "readout.threshold_v" = [0.05, 0.09] }
-
-[sweeps.window]
-axes = { "coding.window_s" = [0.1, 0.2] }
-"""
-
 #: ``eskin sweep`` with the grid loader and the dataset check counted; the counts go to stderr.
 COUNTED_SWEEP = """
 import json, sys
@@ -110,7 +99,7 @@ sys.exit(status)
 
 def test_a_sweep_loads_and_checks_its_grid_once(tmp_path, client, monkeypatch):
     path = tmp_path / "once.toml"
-    path.write_text(GRID)
+    path.write_text(SMALL_GRID)
     calls = count_grid_loads(monkeypatch.setattr)
     root = tmp_path / "run"
     assert run_sweep(str(path), root, client=client)["computed"] == 3
