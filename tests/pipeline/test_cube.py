@@ -243,6 +243,29 @@ def test_base_and_fixed_fields_are_scalar_coordinates():
     assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].item() == 0.1
 
 
+def test_swept_axes_hold_the_values_the_scenes_read():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "ints": {"axes": {"readout.effects.threshold_mismatch.sigma_rel": [0, 1]}},
+                "tables": {"axes": {"readout.effects": [{}, {"amplifier_noise": {}}]}},
+            },
+        }
+    )
+    ints, tables = (
+        build(grid, sweep, entries(grid, sweep, lambda p: ResultEntry({}, {}, metrics())))
+        for sweep in grid.sweeps
+    )
+    # Whole numbers given for a float field are the floats the scenes hold.
+    assert ints["sigma_rel"].dtype == np.float64
+    assert ints["sigma_rel"].values.tolist() == [0.0, 1.0]
+    # A table is written as the scene reads it, its defaults filled in.
+    assert tables["effects"].values.tolist() == ["{}", '{"amplifier_noise": {"sigma_v": 0.005}}']
+    assert tables["effects"].attrs["field"] == "readout.effects"
+    assert "readout.effects" not in tables.coords
+
+
 def test_equivalent_bits_coordinate_is_derived_from_the_threshold():
     cube = built()["threshold"]
     bits = cube["readout.equivalent_bits"]
