@@ -34,7 +34,7 @@ import functools
 import math
 import types
 import typing
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, NewType
 
@@ -333,6 +333,18 @@ def put(data: dict[str, Any], path: str, value: Any) -> None:
     for name in parents:
         data = data.setdefault(name, {})
     data[leaf] = value
+
+
+def select(data: Mapping[str, Any], paths: Iterable[str]) -> dict[str, Any]:
+    """The dotted ``paths`` of plain nested dict ``data``, nested as in ``data``; a path that is
+    not there (a field left out of a plain form) is left out."""
+    selected: dict[str, Any] = {}
+    for path in paths:
+        try:
+            put(selected, path, get(data, path))
+        except KeyError:
+            continue
+    return selected
 
 
 def flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -432,7 +432,8 @@ class Scene:
                     continue
                 text = _canonical_part(value, memo)
             else:
-                text = _canonical_json(_selected(top, fields.plain(value, canonical=True), paths))
+                data = {top: fields.plain(value, canonical=True)}
+                text = _canonical_json(fields.select(data, paths).get(top, {}))
             items.append(f'"{top}":{text}')
         return "{" + ",".join(items) + "}"
 
@@ -483,20 +484,6 @@ def _canonical_plan(
     return tuple(
         (top, None if top in whole else tuple(dotted[top])) for top in sorted(whole | dotted.keys())
     )
-
-
-def _selected(top: str, data: dict[str, Any], paths: tuple[str, ...]) -> dict[str, Any]:
-    """The dotted ``paths`` (each starting with ``top``) of ``data``, the canonical form of part
-    ``top``, nested as in ``data``; a field the canonical form leaves out is left out."""
-    selected: dict[str, Any] = {}
-    for path in paths:
-        inner = path.split(".", 1)[1]
-        try:
-            value = fields.get(data, inner)
-        except KeyError:  # None or a neutral default: the field keeps its default
-            continue
-        fields.put(selected, inner, value)
-    return selected
 
 
 def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:

@@ -332,18 +332,6 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
 # Expansion: the shared-parts path gives what a plain ``Scene.replace`` per point gives
 
 
-def selected(data: dict, parts: tuple[str, ...]) -> dict:
-    """The ``parts`` (top-level or dotted fields) of plain scene dict ``data``, nested as in
-    ``data``; a dotted field left unset is left out."""
-    found: dict = {}
-    for part in parts:
-        try:
-            fields.put(found, part, fields.get(data, part))
-        except KeyError:
-            continue
-    return found
-
-
 def reference_key(scene: Scene, level) -> str:
     """A level's key as it was first written: its parts found level by level, the canonical
     form of the whole scene as one dict."""
@@ -357,7 +345,7 @@ def reference_key(scene: Scene, level) -> str:
     data = scene.to_dict()
     data.pop("name")
     canonical = json.dumps(
-        selected(data, parts),
+        fields.select(data, parts),
         sort_keys=True,
         separators=(",", ":"),
         allow_nan=False,
@@ -458,7 +446,7 @@ def test_canonical_form_is_that_of_the_whole_selection_with_or_without_a_memo():
         ("readout", "readout.full_scale_v", "seed"),
         ("readout.effects", "array.rows", "training"),
     ):
-        chosen = data if parts is None else selected(data, parts)
+        chosen = data if parts is None else fields.select(data, parts)
         expected = json.dumps(chosen, sort_keys=True, separators=(",", ":"), allow_nan=False)
         assert scene.canonical(parts) == expected
         assert scene.canonical(parts, memo) == scene.canonical(parts, memo) == expected
