@@ -40,18 +40,21 @@ deterministic function of the grid and its seeds; ``seconds`` are measurements.
 Coordinates
 
 * One per swept axis, named by its dimension (``threshold_v``), attribute ``field`` its dotted
-  scene field; the other axes of a zipped sweep lie along the first one's dimension.
+  scene field, its values as the points' scenes read them (``[0, 1]`` given for a float field
+  are the floats 0.0 and 1.0; a table has its defaults filled in); the other axes of a zipped
+  sweep lie along the first one's dimension.
 * ``result_key`` (axes...): each point's result cache key (a point two sweeps share has one key).
-* Every scene field by its dotted name (``array.rows``, ``readout.effects.amplifier_noise.sigma_v``,
-  the base scene's fields and the sweep's fixed ``set`` ones alike), and ``readout.equivalent_bits``
-  derived from threshold and full scale: a scalar where every point has the same value, otherwise
-  along the dimensions it varies with (a swept field along its own). Lists and tables are
-  canonical JSON strings (an ideal readout's ``readout.effects`` is ``"{}"``); a field left unset
-  (its default applies, e.g. ``dataset.path`` of the built-in data) has none, and neither has
-  ``name``.
+* Every other scene field by its dotted name (``array.rows``,
+  ``readout.effects.amplifier_noise.sigma_v``, the base scene's fields and the sweep's fixed
+  ``set`` ones alike), and ``readout.equivalent_bits`` derived from threshold and full scale: a
+  scalar where every point has the same value, otherwise along the dimensions it varies with. A
+  swept field is its axis's coordinate alone (:func:`field_coordinate` finds a field's
+  coordinate either way). Lists and tables are canonical JSON strings (an ideal readout's
+  ``readout.effects`` is ``"{}"``); a field left unset (its default applies, e.g.
+  ``dataset.path`` of the built-in data) has none, and neither has ``name``.
 
 Every variable and coordinate has CF ``units`` ("1" for dimensionless numbers and labels) and a
-prose ``long_name``, declared once: on the scene's spec dataclasses (:mod:`pipeline.scene`), on
+prose ``long_name``, declared once: on the scene's fields (:func:`pipeline.fields.param`), on
 :class:`~pipeline.metrics.SpikeMetrics`, and here (:data:`CUBE_VARIABLES`) for the cube's own.
 
 Attributes: ``grid``, ``sweep``, ``title``, ``mode``, ``seed``, ``training_seed`` (the base

@@ -173,21 +173,10 @@ def part(cls: type) -> Any:
 
 @dataclass(frozen=True)
 class Slot:
-    """One field of a declared class.
-
-    Attributes
-    ----------
-    name : str
-        The field's name.
-    kind : Any
-        Its resolved annotation (``float``, ``int | Literal["auto"]``, an enum, ...).
-    default : Any
-        Its default value (made by the default factory, if it has one).
-    field : dataclasses.Field
-        The dataclass field, whose metadata holds the declaration.
-    part : type or None
-        The nested class of a :func:`part`.
-    """
+    """One field of a declared class: its ``name``, its resolved annotation ``kind``
+    (``float``, ``int | Literal["auto"]``, an enum, ...), its ``default`` (made by the default
+    factory, if it has one), the dataclass ``field`` whose metadata holds its declaration, and
+    for a :func:`part` the nested class ``part``."""
 
     name: str
     kind: Any
