@@ -575,12 +575,9 @@ def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
         first: dict[int, GridPoint] = {}
         for point in points:
             first.setdefault(point.index[along], point)
-        values = []
-        for i, raw in enumerate(axis.values):
-            try:
-                values.append(fields.plain(fields.get(first[i].scene, axis.field)))
-            except (KeyError, AttributeError):  # None: the field's default applies
-                values.append(raw)
+        values = [
+            fields.plain(fields.get(first[i].scene, axis.field)) for i in range(len(axis.values))
+        ]
         coords[axis.dim] = (dims[along], _coordinate(values), {"field": axis.field})
     return coords
 

@@ -16,9 +16,10 @@ From that one declaration:
   out every field at a neutral default: a field added with a default that reproduces what was
   done before it existed is not in the canonical form of any existing scene, and so changes no
   cache key;
-* :func:`resolve`, :func:`get`, :func:`put` and :func:`flatten` walk dotted paths
-  (``"readout.effects.amplifier_noise.sigma_v"``) through the declaration, a value object or a
-  plain dict;
+* :func:`resolve`, :func:`get`, :func:`put`, :func:`select` and :func:`flatten` walk dotted
+  paths (``"readout.effects.amplifier_noise.sigma_v"``) through the declaration, a value object
+  or a plain dict;
+* :func:`cost_parts` tells what the cost of computing a value depends on;
 * :func:`listing` lists every field (entries' parameters included) with its type, default,
   units, range and description, for ``--help`` and the documentation.
 
@@ -268,18 +269,18 @@ def resolve(root: type, path: str) -> Resolved:
         fields here.
     """
     names = path.split(".")
+    unknown = f"{path!r} is not a {_noun(root)} field"
     cls, i = root, 0
     while True:
         known = slot_named(cls)
         slot = known.get(names[i])
         if slot is None or (slot.declared is not None and slot.declared.label):
             if i != 1:
-                raise UnknownField(f"{path!r} is not a scene field")
-            listed = ", ".join(sorted(known))
-            raise UnknownField(f"{path!r} is not a scene field (known in {names[0]}: {listed})")
+                raise UnknownField(unknown)
+            raise UnknownField(f"{unknown} (known in {names[0]}: {', '.join(sorted(known))})")
         if slot.part is not None and i == len(names) - 1:
             listed = ", ".join(sorted(slot_named(slot.part)))
-            raise UnknownField(f"{path!r} is not a scene field (known in {path}: {listed})")
+            raise UnknownField(f"{unknown} (known in {path}: {listed})")
         if i == len(names) - 1:
             return Resolved(path, slot)
         if slot.part is not None:
@@ -287,7 +288,7 @@ def resolve(root: type, path: str) -> Resolved:
             continue
         entries = slot.declared.entries if slot.declared is not None else None
         if entries is None:
-            raise UnknownField(f"{path!r} is not a scene field")
+            raise UnknownField(unknown)
         key_type = type(next(iter(entries)))
         try:
             key = key_type(names[i + 1])
@@ -370,9 +371,7 @@ def listing(root: type) -> list[FieldInfo]:
     any value of the type is accepted.
     """
     found: list[FieldInfo] = []
-    for path, slot in _leaves(root, ""):
-        d = slot.declared
-        assert d is not None  # _leaves yields leaves only
+    for path, slot, d in _leaves(root, ""):
         found.append(
             FieldInfo(
                 path=path,
@@ -388,15 +387,15 @@ def listing(root: type) -> list[FieldInfo]:
     return found
 
 
-def _leaves(cls: type, prefix: str) -> Iterator[tuple[str, Slot]]:
+def _leaves(cls: type, prefix: str) -> Iterator[tuple[str, Slot, Declared]]:
     for slot in slots(cls):
-        path = f"{prefix}{slot.name}"
+        path, declared = f"{prefix}{slot.name}", slot.declared
         if slot.part is not None:
             yield from _leaves(slot.part, f"{path}.")
-        elif slot.declared is not None and not slot.declared.label:
-            if slot.declared.entries is None:
-                yield path, slot
-            for key, entry in (slot.declared.entries or {}).items():
+        elif declared is not None and not declared.label:
+            if declared.entries is None:
+                yield path, slot, declared
+            for key, entry in (declared.entries or {}).items():
                 yield from _leaves(entry, f"{path}.{key.value}.")
 
 
@@ -499,21 +498,19 @@ def read_order(cls: type) -> tuple[Slot, ...]:
 def read_slot(slot: Slot, raw: Any, where: str, problems: list[str]) -> Any:
     """Field ``slot`` read from ``raw`` at ``where``: its value, or its default with the
     problems appended to ``problems``."""
-    if slot.part is not None:
+    declared = slot.declared
+    if declared is None:  # a part
         return read(slot.part, raw, where, problems)
-    assert slot.declared is not None
-    if slot.declared.entries is not None:
-        return _read_entries(slot.declared.entries, raw, where, problems)
+    if declared.entries is not None:
+        return _read_entries(declared.entries, raw, where, problems)
     try:
         value = slot.convert(raw)
     except (TypeError, ValueError) as exc:
         problems.append(f"{where}: {exc or f'invalid value {raw!r}'}")
         return slot.default
-    within = slot.declared.within
+    within = declared.within
     if within is not None and value is not None and not within.holds(value):
-        problems.append(
-            f"{where}: {raw!r} is out of range: must be {within.text(slot.declared.units)}"
-        )
+        problems.append(f"{where}: {raw!r} is out of range: must be {within.text(declared.units)}")
         return slot.default
     return value
 
