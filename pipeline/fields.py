@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import functools
+import json
 import math
 import types
 import typing
@@ -362,6 +363,14 @@ class FieldInfo:
     neutral: bool
     cost: Cost
 
+    def text(self) -> str:
+        """One line for ``--help`` and the docs, e.g. ``readout.threshold_v: float = 0.09 V
+        (> 0 V), comparator threshold (level-crossing step)``."""
+        default = "" if self.default is None else f" = {json.dumps(self.default)}"
+        unit = "" if self.units == "1" or self.default is None else f" {self.units}"
+        within = f" ({self.range})" if self.range else ""
+        return f"{self.path}: {self.type}{default}{unit}{within}, {self.description}"
+
 
 def listing(root: type) -> list[FieldInfo]:
     """Every leaf field of declared class ``root``, entries' parameters included (as
@@ -588,7 +597,7 @@ def _converter(kind: Any) -> Callable[[Any], Any]:
 def _type_text(kind: Any) -> str:
     """The type of a field in words, for :func:`listing`."""
     if kind is Seed:
-        return "int"
+        return "int in [0, 2**63)"
     if isinstance(kind, type) and issubclass(kind, enum.StrEnum):
         return " | ".join(repr(m.value) for m in kind)
     if isinstance(kind, type):

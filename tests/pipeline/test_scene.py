@@ -182,6 +182,14 @@ def test_every_field_is_listed_once_with_its_declaration():
     assert listed["training.models"].default == ["ffnn", "cnn"]
     assert listed["dataset.path"].type == "str (optional)"
     assert "name" not in listed and "readout.effects" not in listed
+    assert threshold.text() == (
+        "readout.threshold_v: float = 0.09 V (> 0 V), comparator threshold (level-crossing step)"
+    )
+    assert (
+        listed["coding.polarity"]
+        .text()
+        .startswith("coding.polarity: 'merged' | 'split' = \"merged\", how")
+    )
     # Each listed field is one a scene reads, at its listed default.
     for path, info in listed.items():
         if info.default is not None and not path.startswith("readout.effects."):
