@@ -414,7 +414,9 @@ class Scene:
         self, parts: tuple[str, ...] | None = None, memo: CanonicalMemo | None = None
     ) -> str:
         """Stable JSON of the scene (or of ``parts``: top-level parts such as ``"readout"``, or
-        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names.
+        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names; a
+        field that is ``None`` or at a neutral default (:func:`pipeline.fields.param`) is left
+        out, so that a field added with such a default changes no existing key.
 
         ``memo`` holds the canonical form of part objects already written: give the same dict
         for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
