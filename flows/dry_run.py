@@ -2,7 +2,7 @@
 
 :func:`dry_run` counts a grid's cached and missing points in a root (which need not exist) and
 estimates the missing points' cost from the measured seconds of cached points of the same kind
-(:func:`flows.scheduling.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
+(:func:`pipeline.grid.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
 --dry-run`` prints.
 """
 
@@ -13,8 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flows.scheduling import cost_kind
-from pipeline.grid import Grid
+from pipeline.grid import Grid, cost_kind
 from storage import SweepStore
 
 

@@ -1,10 +1,9 @@
 """Scheduling a plan's missing points on Dask: the cost model, batches of points, their tasks.
 
-Points are ordered by their estimated cost (:func:`training_cost`), largest first, batched into
-tasks of :func:`flows.work.ensure_entries` (:func:`submit_missing`), and each point goes with
-its cache keys, computed here once, so that workers never hash a scene. :func:`cost_kind`
-groups points that cost about the same, for the dry run's estimate. No cluster starts for a
-plan with nothing missing (:func:`sweep_client`).
+Points are ordered by their estimated cost (:func:`pipeline.grid.training_cost`), largest
+first, batched into tasks of :func:`flows.work.ensure_entries` (:func:`submit_missing`), and
+each point goes with its cache keys, computed here once, so that workers never hash a scene.
+No cluster starts for a plan with nothing missing (:func:`sweep_client`).
 """
 
 from __future__ import annotations
@@ -12,7 +11,6 @@ from __future__ import annotations
 import collections
 import contextlib
 import hashlib
-import json
 import math
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,7 +19,7 @@ from typing import Any
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import SweepPlan
-from pipeline.coding import MAX_AUTO_WINDOWS
+from pipeline.grid import training_cost
 from pipeline.scene import CanonicalMemo, Scene
 from pipeline.stages import LEVELS, RESULTS, SPIKES, Level
 from storage import EntryKind, SweepStore
@@ -30,35 +28,6 @@ from storage import EntryKind, SweepStore
 #: :func:`default_points_per_task`), and the most points one task takes.
 TASKS_PER_THREAD = 8
 MAX_POINTS_PER_TASK = 500
-
-
-def training_cost(scene: Scene) -> int:
-    """A point's relative cost: the size of its frames (taxels x windows) per model trained.
-
-    Training dominates a point, and its cost grows with the frame size; ``auto`` windows count
-    as the most they can be. Only the order of points depends on it, never a result.
-    """
-    n_windows = scene.coding.n_windows
-    windows = MAX_AUTO_WINDOWS if n_windows == "auto" else n_windows
-    return scene.array.n_taxels * windows * len(scene.training.models)
-
-
-def cost_kind(scene: Scene) -> str:
-    """What a point's cost depends on: its canonical form without the values that do not count.
-
-    The readout threshold, the effects' parameter values and every seed (scene, dataset,
-    training) are dropped; the names of the effects that run stay. What is left (dataset,
-    taxels, windows, models, epochs, folds, hidden units, batch size, ...) decides how long
-    encoding and training take.
-    """
-    data = scene.to_dict()
-    for part in (data, data["dataset"], data["training"]):
-        part.pop("seed", None)
-    data.pop("name")
-    readout = data["readout"]
-    readout.pop("threshold_v")
-    readout["effects"] = sorted(readout["effects"])
-    return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 
 def point_keys(scene: Scene, memo: CanonicalMemo | None = None) -> dict[str, str]:

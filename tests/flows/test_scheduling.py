@@ -1,11 +1,12 @@
-"""Tests of flows.scheduling: the cost model, the order and batches in which points are
-submitted, and the cache keys sent with each point."""
+"""Tests of flows.scheduling: the cost model it orders points by, the batches in which points
+are submitted, and the cache keys sent with each point."""
 
 import pytest
 
 from flows import scheduling
-from flows.scheduling import cost_kind, default_points_per_task, point_keys, training_cost
+from flows.scheduling import default_points_per_task, point_keys
 from pipeline.coding import MAX_AUTO_WINDOWS
+from pipeline.grid import cost_kind, training_cost
 from pipeline.scene import Scene
 from pipeline.stages import LEVELS
 
