@@ -36,10 +36,10 @@ from pipeline.cube import build_cube
 from pipeline.errors import EskinError
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import resolve_dataset_argument
-from pipeline.scene import CanonicalMemo, DatasetSpec, Scene, cache_key
-from pipeline.stages import RESULTS, SPIKES
-from storage import EntryKind, ResultEntry, StoreError, SweepStore
-from storage.cubes import SPIKE_STAGES
+from pipeline.records import ResultEntry
+from pipeline.scene import CanonicalMemo, DatasetSpec, Scene
+from pipeline.stages import RESULTS, SPIKES, cache_key
+from storage import StoreError, SweepStore
 
 DEFAULT_RUNS_DIR = Path("runs")
 POLL_S = 2.0
@@ -190,7 +190,7 @@ def plan_sweep(grid_ref: str, root: str, dataset: str | None = None) -> SweepPla
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    found = store.read_many(EntryKind.RESULTS, scenes, discard_corrupt=True)
+    found = store.read_many(RESULTS.record, scenes, discard_corrupt=True)
     records = {key: found[key] for key in scenes if key in found}
     return SweepPlan(grid, str(store.root), scenes, records)
 
@@ -225,7 +225,7 @@ def submit_missing(
     for key in sorted(cost, key=cost.__getitem__, reverse=True):
         by_train.setdefault(SPIKES.key(plan.scenes[key], memo), []).append(key)
     batches = _batches(by_train, size)
-    stored = store.complete_keys(EntryKind.SPIKES)
+    stored = store.complete_keys(SPIKES.name)
     spread = collections.Counter(train for batch in batches for train in {t for t, _ in batch})
     shared = [train for train, n in spread.items() if n > 1 and train not in stored]
     train_futures: dict[str, Any] = {}
@@ -396,7 +396,7 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
     spec = next(s for s in plan.grid.sweeps if s.name == name)
     keys = plan.sweep_keys[name]
     computed = [key for key in keys if key not in plan.records]
-    read = store.read_many(EntryKind.RESULTS, computed, discard_corrupt=False)
+    read = store.read_many(RESULTS.record, computed, discard_corrupt=False)
     missing = [key for key in computed if key not in read]
     if missing:
         raise StoreError(
@@ -404,7 +404,7 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
             f"(first: {missing[0]})"
         )
     records = {key: plan.records[key] if key in plan.records else read[key] for key in keys}
-    cube = build_cube(plan.grid, spec, records, spike_stages=SPIKE_STAGES)
+    cube = build_cube(plan.grid, spec, records)
     store.write_cube(name, cube)
     return cube
 
@@ -682,7 +682,7 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
 
     The estimate: points of the same *kind* (:func:`cost_kind`) cost about the same. A missing
     point is estimated at the median, over the cached points of this grid of its kind, of the
-    total of their measured stage seconds (:attr:`storage.ResultEntry.seconds`); a missing
+    total of their measured stage seconds (:attr:`pipeline.records.ResultEntry.seconds`); a missing
     point whose kind has no cached point is counted in ``unknown`` and left out. Stage seconds
     are as measured when each stage ran, so a spike train or a dataset that several points
     share counts in each of them: the estimate leans high for points that will share work with
@@ -710,7 +710,7 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     scenes = grid.unique_points()
     totals: dict[str, float] = {}
     if store is not None:
-        for key, entry in store.peek_results(scenes).items():
+        for key, entry in store.peek_many(RESULTS.record, scenes).items():
             totals[key] = sum(entry.seconds.values())
     by_kind: dict[str, list[float]] = {}
     for key, seconds in totals.items():

@@ -78,9 +78,9 @@ from pipeline.scene import (
     Effect,
     Scene,
     SceneVariants,
-    cache_key,
     with_dataset_path_from,
 )
+from pipeline.stages import cache_key
 from pipeline.taxels import cut_samples, taxel_delays_s
 
 if TYPE_CHECKING:

@@ -29,13 +29,15 @@ from flows.orchestrate import (
 )
 from flows.work import PointsFailed
 from pipeline.coding import MAX_AUTO_WINDOWS
-from pipeline.cube import RecordingsInfo
 from pipeline.errors import DatasetError
 from pipeline.grid import DatasetFacts, Grid, load_grid
 from pipeline.metrics import SpikeMetrics
-from pipeline.scene import Scene, cache_key
-from storage import EntryKind, StoreError
-from storage.store import ResultEntry, SweepStore
+from pipeline.records import RecordingsInfo, ResultEntry
+from pipeline.scene import Scene
+from pipeline.stages import RESULTS, cache_key
+from storage import StoreError
+from storage.store import SweepStore
+from tests.store_helpers import write_result
 
 
 def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():
@@ -142,11 +144,11 @@ def test_dry_run_counts_cached_points_and_estimates_the_rest_writing_nothing(tmp
     }
     for (sweep, i), seconds in measured.items():
         entry = ResultEntry({"ffnn": np.array([0.5, 0.75])}, seconds, METRICS)
-        store.write_result(point_key(grid, sweep, i), entry)
+        write_result(store, point_key(grid, sweep, i), entry)
     # A corrupt result (its attributes edited) counts as missing, and the dry run leaves it.
     corrupt = point_key(grid, "window", 1)
-    store.write_result(corrupt, ResultEntry({"ffnn": np.array([0.5])}, {"a": 1.0}, METRICS))
-    meta = store.entry_location(EntryKind.RESULTS, corrupt) / "zarr.json"
+    write_result(store, corrupt, ResultEntry({"ffnn": np.array([0.5])}, {"a": 1.0}, METRICS))
+    meta = store.entry_location(RESULTS.record, corrupt) / "zarr.json"
     data = json.loads(meta.read_text())
     data["attributes"]["entries"][0]["attrs"]["seconds"] = {"a": 100.0}
     meta.write_text(json.dumps(data))
@@ -200,11 +202,11 @@ def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_poi
     first, second = scenes
     plan = SweepPlan(grid, str(store.root), scenes, {})
     own = RecordingsInfo("mine", ("bark", "cloth"), 250.0)
-    store.write_result(first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    write_result(store, first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
     with pytest.raises(StoreError, match=f"1 point.*no result.*first: {second}"):
         assemble_cube(plan, "t")
     assert store.cube_names() == []
-    store.write_result(second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    write_result(store, second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
     cube = assemble_cube(plan, "t")
     stated = {k: cube.attrs.get(k) for k in ("dataset_name", "sampling_rate_hz", "class_names")}
     assert stated == {
@@ -217,7 +219,7 @@ def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_poi
     bare = SweepPlan(grid, str(tmp_path / "other"), scenes, {})
     empty = SweepStore.open_or_create(bare.root)
     for key in scenes:
-        empty.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+        write_result(empty, key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
     cube = assemble_cube(bare, "t")
     assert not {"dataset_name", "sampling_rate_hz", "class_names", "n_classes"} & set(cube.attrs)
 
@@ -255,13 +257,13 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
     grid = load_grid("smoke")
     store = SweepStore.open_or_create(tmp_path / "run")
     keys = list(grid.unique_points())
-    assert not store.complete_keys(EntryKind.RESULTS) & set(keys)
-    assert SweepStore(tmp_path / "absent").complete_keys(EntryKind.RESULTS) == frozenset()
+    assert not store.complete_keys(RESULTS.record) & set(keys)
+    assert SweepStore(tmp_path / "absent").complete_keys(RESULTS.record) == frozenset()
     for key in (keys[2], keys[0]):
-        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+        write_result(store, key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
     (store.path / "results" / ".partial-batch-0").mkdir()
     (store.path / "results" / f"batch-{keys[3]}").mkdir()  # no metadata: not a complete batch
-    assert store.complete_keys(EntryKind.RESULTS) == {keys[0], keys[2]}
+    assert store.complete_keys(RESULTS.record) == {keys[0], keys[2]}
     plan = plan_sweep("smoke", str(store.root))
     assert list(plan.scenes) == keys
     assert list(plan.records) == [keys[0], keys[2]]

@@ -13,8 +13,6 @@ from scipy import stats
 
 from pipeline.cube import (
     CUBE_VARIABLES,
-    OutOfFold,
-    RecordingsInfo,
     build_cube,
     field_attrs,
     metric_attrs,
@@ -22,9 +20,9 @@ from pipeline.cube import (
 from pipeline.cube import _flatten as flatten
 from pipeline.grid import Grid, sweep_points
 from pipeline.metrics import SpikeMetrics
+from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.scene import ReadoutSpec, ThresholdMismatch
-from storage.cubes import SPIKE_STAGES
-from storage.store import ResultEntry
+from pipeline.stages import RESULTS, interval_generator
 from tests import golden_cubes as golden
 
 
@@ -44,7 +42,7 @@ def entries(grid, sweep, make):
 
 
 def build(grid, sweep, records):
-    return build_cube(grid, sweep, records, spike_stages=SPIKE_STAGES)
+    return build_cube(grid, sweep, records)
 
 
 def built() -> dict[str, xr.Dataset]:
@@ -156,10 +154,6 @@ def test_product_cube_layout_and_units():
     # Each swept field also under its dotted name, along its own dimension only.
     assert cube["readout.threshold_v"].dims == ("threshold_v",)
     assert cube["coding.window_s"].values.tolist() == [0.1, 0.2, 0.3]
-    assert cube["readout.equivalent_bits"].dims == ("threshold_v",)
-    np.testing.assert_array_equal(
-        cube["readout.equivalent_bits"].values, [math.log2(1 / 0.05), math.log2(1 / 0.1)]
-    )
     assert "correlation_r" not in cube
 
 
@@ -272,13 +266,12 @@ def test_base_and_fixed_fields_are_scalar_coordinates():
     assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].item() == 0.1
 
 
-def test_equivalent_bits_coordinate_is_derived_from_the_threshold():
+def test_equivalent_bits_are_stored_once_as_the_metric_variable():
     cube = built()["threshold"]
-    bits = cube["readout.equivalent_bits"]
-    assert bits.dims == ("threshold_v",)
+    assert "readout.equivalent_bits" not in cube.variables
+    bits = cube["equivalent_bits"]
+    assert bits.dims == ("threshold_v",) and bits.attrs == metric_attrs("equivalent_bits")
     np.testing.assert_array_equal(bits.values, np.log2(1.0 / cube["threshold_v"].values))
-    np.testing.assert_array_equal(bits.values, cube["equivalent_bits"].values)  # the variable
-    assert built()["window"]["readout.equivalent_bits"].ndim == 0
 
 
 def test_models_and_folds_a_point_did_not_train_are_nan():
@@ -366,8 +359,8 @@ def test_units_are_those_of_the_one_declaration():
                 assert described == field_attrs(variable.attrs["field"])
             elif var in CUBE_VARIABLES:
                 assert described == CUBE_VARIABLES[var]
-            elif var == "readout.equivalent_bits":
-                assert described == metric_attrs("equivalent_bits")
+            elif var == "n_windows_used":
+                assert described == RESULTS.record.variable(var).attrs()
             elif var in {f.name for f in dataclasses.fields(SpikeMetrics)}:
                 assert described == metric_attrs(str(var))
             else:
@@ -532,7 +525,7 @@ def test_the_cube_is_what_a_point_by_point_assembly_gives():
                 interval = accuracy_interval(
                     correct[ran][:, held] == 1,
                     np.array(LABELS)[held],
-                    rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
+                    rng=interval_generator(point.key, model),
                 )
                 methods.add(interval.method)
                 assert one["accuracy_mean"].item() == interval.estimate
@@ -554,7 +547,6 @@ def test_the_cube_is_what_a_point_by_point_assembly_gives():
     assert len(methods) == 2  # a Wilson interval and a bootstrap both met
     assert cube["accuracy_low"].attrs["interval"] == "; ".join(sorted(methods))
     assert cube["correct"].dtype == np.int8 and cube["test_fold"].dtype == np.int16
-    assert cube["readout.equivalent_bits"].dims == ("threshold_v",)
     assert cube["training.repeats"].dims == ("repeats",)
     assert cube["array.rows"].dims == ()
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from pipeline.scene import Scene, cache_key
+from pipeline.scene import Scene
 from pipeline.simulate import run_scene, stage_names
 from pipeline.stages import (
     FRONT_END,
@@ -18,6 +18,7 @@ from pipeline.stages import (
     Read,
     Stopwatch,
     _checked,
+    cache_key,
     level_named,
     steps_through,
 )
@@ -186,7 +187,7 @@ def test_a_level_that_times_an_undeclared_step_fails():
         with watch.stage("elsewhere"):
             return dataset
 
-    level = Level("odd", (Read("dataset"),), (), compute, ("load",), stored=False)
+    level = Level("odd", (Read("dataset"),), (), compute, ("load",))
     with pytest.raises(RuntimeError, match="elsewhere"):
         level.run(SMOKE, {}, Stopwatch(None))
 
