@@ -54,7 +54,9 @@ Coordinates
 
 Every variable and coordinate has CF ``units`` ("1" for dimensionless numbers and labels) and a
 prose ``long_name``, declared once: on the scene's spec dataclasses (:mod:`pipeline.scene`), on
-:class:`~pipeline.metrics.SpikeMetrics`, and here (:data:`CUBE_VARIABLES`) for the cube's own.
+:class:`~pipeline.metrics.SpikeMetrics`, on the results record (:data:`pipeline.stages.RESULTS`)
+for :data:`RESULT_VALUES`, and here (:data:`CUBE_VARIABLES`) for the cube's own. The ``stage``
+coordinate is every step of the stage registry (:func:`pipeline.stages.steps_of`).
 
 Attributes: ``grid``, ``sweep``, ``title``, ``mode``, ``seed``, ``training_seed`` (the base
 scene's), ``package_version`` and the versions of Python and of the libraries that shape the

@@ -43,11 +43,11 @@ covers: a result entry holds every step of its point, which is all a cube reads.
 
 Adding a stage: write its compute function (keyword-only arguments as above; it times each of
 its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
-levels it needs; to keep its output in the sweep store, give it a
-:class:`~pipeline.records.Record` (its variables with dims, dtypes and units, its entry type, and
-how its output becomes that entry and back; the levels after it get its output in a run and
-its entry in a sweep, so they read only what both hold). :func:`pipeline.simulate.run_scene`, its stage
-names, the cache keys, the store's batches, the sweep's work on Dask workers and the stages of a
+levels it needs. To keep its output in the sweep store, give it a
+:class:`~pipeline.records.Record`: its variables (dims, dtypes, units), its entry type, and how
+its output becomes that entry and back. The levels after a stored level get its output in a run
+and its entry in a sweep, so they read only what both hold. :func:`pipeline.simulate.run_scene`,
+the cache keys, the store's batches, the sweep's work on Dask workers and the stages of a
 cube's ``seconds`` follow from the registry.
 """
 

@@ -60,26 +60,13 @@ FOLD_OFFSETS = np.array([-0.03, 0.01, 0.02, 0.0])
 GRIDS_GOLDEN = DATA / "golden_grids"
 # The built-in grids' sweeps as they were (inlined from pipeline/grids/*.toml: a later change of
 # those files must not move the golden file).
-_NOISE = {
-    "mode": "zip",
-    "set": {"array.rows": 1, "array.cols": 1},
-    "correlate": True,
-}
+_PAPER_NOISE_V = [0.0025, 0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15]
 GRIDS = {
     "smoke": {
         "name": "smoke",
         "base": "smoke",
-        "sweeps": {
-            "threshold": {"axes": {"readout.threshold_v": [0.05, 0.09]}},
-            "window": {"axes": {"coding.window_s": [0.1, 0.2]}},
-            "noise": {
-                **_NOISE,
-                "axes": {
-                    "readout.effects.amplifier_noise.sigma_v": [0.005, 0.01, 0.02, 0.04],
-                    "readout.effects.comparator_noise.sigma_v": [0.005, 0.01, 0.02, 0.04],
-                },
-            },
-        },
+        # The smoke grid's sweeps are the first three of GRID's.
+        "sweeps": {name: GRID["sweeps"][name] for name in ("threshold", "window", "noise")},
     },
     "paper": {
         "name": "paper",
@@ -123,32 +110,12 @@ GRIDS = {
                 "axes": {"array.rows": [1, 2, 3, 4, 5]},
             },
             "noise": {
-                **_NOISE,
+                **{k: GRID["sweeps"]["noise"][k] for k in ("mode", "set", "correlate")},
                 "title": "Fig. 9: SSNR and STE against accuracy (one taxel, constant threshold, "
                 "rising noise)",
                 "axes": {
-                    "readout.effects.amplifier_noise.sigma_v": [
-                        0.0025,
-                        0.005,
-                        0.01,
-                        0.02,
-                        0.03,
-                        0.05,
-                        0.075,
-                        0.1,
-                        0.15,
-                    ],
-                    "readout.effects.comparator_noise.sigma_v": [
-                        0.0025,
-                        0.005,
-                        0.01,
-                        0.02,
-                        0.03,
-                        0.05,
-                        0.075,
-                        0.1,
-                        0.15,
-                    ],
+                    "readout.effects.amplifier_noise.sigma_v": _PAPER_NOISE_V,
+                    "readout.effects.comparator_noise.sigma_v": _PAPER_NOISE_V,
                 },
             },
             "mismatch": {

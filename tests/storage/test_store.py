@@ -1,5 +1,6 @@
 """Sweep store: layout, exact round trips, batches complete by rename, checksums, root refusal."""
 
+import dataclasses
 import errno
 import json
 import os
@@ -113,6 +114,7 @@ def assert_results_identical(actual: ResultEntry, expected: ResultEntry) -> None
     assert actual.seconds == {k: float(v) for k, v in expected.seconds.items()}
     assert_metrics_identical(actual.metrics, expected.metrics)
     assert actual.recordings == expected.recordings
+    assert actual.n_windows_used == expected.n_windows_used
     if expected.out_of_fold is None:
         assert actual.out_of_fold is None
         return
@@ -400,6 +402,18 @@ def test_results_round_trip_keeps_model_order(store):
     assert batch_meta(batch)["entries"][0]["shapes"]["accuracy"] == [2, 1, 4]
     assert read.recordings is None  # stated nothing: read as unknown, never as empty
     assert read.out_of_fold is None
+    assert read.n_windows_used is None
+
+
+def test_results_round_trip_the_resolved_window_count(store):
+    entry = dataclasses.replace(result_entry(), n_windows_used=40)
+    write_result(store, KEY, entry)
+    assert read_result(store, KEY).n_windows_used == 40
+    with xr.open_zarr(batch_of(store, "results", KEY), consolidated=False) as ds:
+        assert ds["n_windows_used"].dtype == np.int64
+        assert ds["n_windows_used"].attrs["units"] == "1"
+    with pytest.raises(ValueError, match="cannot store float64"):
+        write_result(store, OTHER_KEY, dataclasses.replace(entry, n_windows_used=40.5))
 
 
 OUT_OF_FOLD = OutOfFold(
