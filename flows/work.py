@@ -6,7 +6,7 @@ what their inputs need from the store and computing only the entries that are mi
 first. A batch of cheap points costs one Dask task instead of one each, and its entries are
 written together: one batch per kind in the store (:mod:`storage.batches`) each time the task
 flushes, which it does at its end and every :data:`FLUSH_S` seconds or :data:`FLUSH_BYTES`
-bytes of pending trains, so that a killed worker loses at most that much work. Each batch is
+bytes of pending entries, so that a killed worker loses at most that much work. Each batch is
 written complete or not at all. Work is keyed by the levels' cache keys, so two points that
 share a spike train (a window sweep at one threshold) reuse it. The levels the store does not
 keep (the recordings, their front end, the rate matrices) stay in memory, a few per worker.
@@ -30,8 +30,9 @@ from typing import Any
 import numpy as np
 
 from flows.environment import tune_allocator
+from pipeline import stages
 from pipeline.scene import CanonicalMemo, Scene
-from pipeline.stages import Level, Stopwatch, level_named, stored_levels
+from pipeline.stages import Level, Stopwatch
 from storage import SweepStore
 
 # pipeline.training (torch, scikit-learn) is imported by the results level when it runs: the
@@ -46,7 +47,7 @@ _kept_lock = threading.Lock()
 #: A task writes its pending entries at least this often (s), so a killed worker loses at most
 #: this much work: a batch per minute keeps the files few even when points take seconds.
 FLUSH_S = 60.0
-#: ... and once its pending spike trains hold this many bytes, to bound a worker's memory.
+#: ... and once its pending entries hold this many bytes (mostly spike trains), to bound memory.
 FLUSH_BYTES = 128 * 2**20
 
 
@@ -104,7 +105,7 @@ def ensure_entries(root: str, level: str, scenes: Sequence[Scene], *after: Any) 
 
     torch.set_num_threads(1)
     tune_allocator()
-    wanted = level_named(level)
+    wanted = stages.level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
     task = _Task(SweepStore.open(root))
@@ -177,7 +178,7 @@ class _Task:
 
     def flush(self) -> None:
         """Write the pending entries, one batch per level, inputs before the levels after."""
-        for level in stored_levels():
+        for level in stages.stored_levels():
             entries = self._pending.pop(level.name, None)
             if entries:
                 self.store.write_entries(level.record, entries)
@@ -191,7 +192,7 @@ class _Task:
 
     def _remember(self, kind: str, key: str, entry: Any) -> None:
         self._recent[kind, key] = entry
-        while len(self._recent) > _KEPT_PER_LEVEL * len(stored_levels()):
+        while len(self._recent) > _KEPT_PER_LEVEL * len(stages.LEVELS):
             self._recent.popitem(last=False)
 
 
