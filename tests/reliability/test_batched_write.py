@@ -31,6 +31,7 @@ N_ENTRIES = 400
 WRITER = textwrap.dedent(
     """
     import os, sys, time
+    from pipeline.stages import RESULTS
     from storage import SweepStore
     from tests.reliability.test_batched_write import batch_entries
 
@@ -47,7 +48,7 @@ WRITER = textwrap.dedent(
     import dask.array  # what xarray imports on its first write, so the kill hits the write
     entries = batch_entries()
     print("writing", flush=True)
-    SweepStore.open(root).write_entries("results", entries)
+    SweepStore.open(root).write_entries(RESULTS.record, entries)
     print("renamed", flush=True)
     """
 )
