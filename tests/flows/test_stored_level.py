@@ -50,15 +50,14 @@ COUNTS = stages.Level(
     after=(stages.SPIKES,),
     compute=count_spikes,
     steps=("count",),
+    # What it stores: one variable, and how its output becomes an entry and back.
     record=Record(
-        name="counts",
-        entry_type=CountEntry,
-        variables=(
-            Variable("per_recording", ("recording",), "int64", "1", "REAL spikes per recording"),
-        ),
-        make=lambda output, seconds, made: CountEntry(output.per_recording, seconds),
-        encode=encode_counts,
-        decode=decode_counts,
+        "counts",
+        CountEntry,
+        (Variable("per_recording", ("recording",), "int64", "1", "REAL spikes per recording"),),
+        lambda output, seconds, made: CountEntry(output.per_recording, seconds),
+        encode_counts,
+        decode_counts,
     ),
 )
 

@@ -212,6 +212,17 @@ def test_public_names_are_reexported():
     assert issubclass(StoreLayoutError, StoreError)
 
 
+def test_storage_knows_no_stage():
+    """Storage imports neither the stage registry nor the records it declares: a stored level
+    hands its record declaration to the store (:mod:`storage.codec`)."""
+    from tests.test_import_cycles import graph, project_modules
+
+    edges = graph(project_modules())
+    for module, targets in edges.items():
+        if module.split(".")[0] == "storage":
+            assert not targets & {"pipeline.stages", "pipeline.records", "pipeline.cube"}, module
+
+
 def test_layout_is_a_marked_zarr_v3_group_without_consolidated_metadata(tmp_path):
     root = tmp_path / "a" / "b" / "run"  # parents are created too
     store = SweepStore.open_or_create(root)
