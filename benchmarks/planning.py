@@ -31,8 +31,9 @@ from pathlib import Path
 
 from benchmarks.timing import median_seconds
 from flows.orchestrate import check_grid, load_sweep_grid, open_root, plan_sweep
+from pipeline import fields
 from pipeline.grid import DatasetFacts, Grid, check_scene_fits, load_grid
-from pipeline.scene import MODEL_REVISION, Scene, _selected
+from pipeline.scene import MODEL_REVISION, Scene
 from pipeline.stages import RECORDINGS, RESULTS, Level
 
 SIZES = (1_000, 10_000, 100_000)
@@ -78,7 +79,7 @@ def reference_key(scene: Scene, level: Level) -> str:
     data = scene.to_dict()
     data.pop("name")
     canonical = json.dumps(
-        _selected(data, level.key_parts(scene)),
+        fields.select(data, level.key_parts(scene)),
         sort_keys=True,
         separators=(",", ":"),
         allow_nan=False,

@@ -12,7 +12,6 @@ import collections
 import contextlib
 import functools
 import hashlib
-import json
 import logging
 import math
 import re
@@ -31,10 +30,9 @@ import xarray as xr
 from flows.cluster import ClusterError, check_workers, dask_client
 from flows.environment import hermetic_environment
 from flows.work import PointsFailed, ensure_entries
-from pipeline.coding import MAX_AUTO_WINDOWS
 from pipeline.cube import build_cube
 from pipeline.errors import EskinError
-from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
+from pipeline.grid import DatasetFacts, Grid, check_fits, cost_kind, load_grid, training_cost
 from pipeline.recordings import resolve_dataset_argument
 from pipeline.records import ResultEntry
 from pipeline.scene import CanonicalMemo, DatasetSpec, Scene
@@ -318,17 +316,6 @@ def failure_message(failures: list[str], n_points: int, root: str) -> str:
         f"; and {len(failures) - 3} more" if len(failures) > 3 else ""
     )
     return f"{len(failures)} of {n_points} points failed (the others are kept in {root}): {shown}"
-
-
-def training_cost(scene: Scene) -> int:
-    """A point's relative cost: the size of its frames (taxels x windows) per model trained.
-
-    Training dominates a point, and its cost grows with the frame size; ``auto`` windows count
-    as the most they can be. Only the order of points depends on it, never a result.
-    """
-    n_windows = scene.coding.n_windows
-    windows = MAX_AUTO_WINDOWS if n_windows == "auto" else n_windows
-    return scene.array.n_taxels * windows * len(scene.training.models)
 
 
 def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str, str | None]]:
@@ -653,24 +640,6 @@ class DryRun:
             "workers": self.workers,
             "wall_seconds": self.wall_seconds,
         }
-
-
-def cost_kind(scene: Scene) -> str:
-    """What a point's cost depends on: its canonical form without the values that do not count.
-
-    The readout threshold, the effects' parameter values and every seed (scene, dataset,
-    training) are dropped; the names of the effects that run stay. What is left (dataset,
-    taxels, windows, models, epochs, folds, hidden units, batch size, ...) decides how long
-    encoding and training take.
-    """
-    data = scene.to_dict()
-    for part in (data, data["dataset"], data["training"]):
-        part.pop("seed", None)
-    data.pop("name")
-    readout = data["readout"]
-    readout.pop("threshold_v")
-    readout["effects"] = sorted(readout["effects"])
-    return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 
 def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:

@@ -42,18 +42,21 @@ deterministic function of the grid and its seeds; ``seconds`` are measurements.
 Coordinates
 
 * One per swept axis, named by its dimension (``threshold_v``), attribute ``field`` its dotted
-  scene field; the other axes of a zipped sweep lie along the first one's dimension.
+  scene field, its values as the points' scenes read them (``[0, 1]`` given for a float field
+  are the floats 0.0 and 1.0; a table has its defaults filled in); the other axes of a zipped
+  sweep lie along the first one's dimension.
 * ``result_key`` (axes...): each point's result cache key (a point two sweeps share has one key).
-* Every scene field by its dotted name (``array.rows``, ``readout.effects.amplifier_noise.sigma_v``,
-  the base scene's fields and the sweep's fixed ``set`` ones alike): a scalar where every point
-  has the same value, otherwise
-  along the dimensions it varies with (a swept field along its own). Lists and tables are
+* Every other scene field by its dotted name (``array.rows``,
+  ``readout.effects.amplifier_noise.sigma_v``, the base scene's fields and the sweep's fixed
+  ``set`` ones alike): a scalar where every point has the same value, otherwise along the
+  dimensions it varies with. A swept field is its axis's coordinate alone
+  (:func:`field_coordinate` finds a field's coordinate either way). Lists and tables are
   canonical JSON strings (an ideal readout's ``readout.effects`` is ``"{}"``); a field left unset
   (its default applies, e.g. ``dataset.path`` of the built-in data) has none, and neither has
   ``name``.
 
 Every variable and coordinate has CF ``units`` ("1" for dimensionless numbers and labels) and a
-prose ``long_name``, declared once: on the scene's spec dataclasses (:mod:`pipeline.scene`), on
+prose ``long_name``, declared once: on the scene's fields (:func:`pipeline.fields.param`), on
 :class:`~pipeline.metrics.SpikeMetrics`, on the results record (:data:`pipeline.stages.RESULTS`)
 for :data:`RESULT_VALUES`, and here (:data:`CUBE_VARIABLES`) for the cube's own. The ``stage``
 coordinate is every step of the stage registry (:func:`pipeline.stages.steps_of`).
@@ -79,10 +82,11 @@ from typing import Any, Protocol
 import numpy as np
 import xarray as xr
 
+from pipeline import fields
 from pipeline.grid import Grid, GridPoint, Sweep
 from pipeline.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_with_accuracy
 from pipeline.records import OutOfFold, RecordingsInfo
-from pipeline.scene import EFFECT_TYPES, Effect, Model, Scene
+from pipeline.scene import Model, Scene, canonical_parts
 from pipeline.stages import RESULTS, interval_generator, steps_of
 
 METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
@@ -221,9 +225,7 @@ def build_cube(
         coords.update(recording_coords)
         correct, label = predictions["correct"][1], recording_coords["label"][1]
     data_vars.update(_accuracy_summary(accuracy, correct, label, dims, points, models))
-    for position, axis in enumerate(sweep.axes):
-        dim = dims[0] if sweep.mode == "zip" else dims[position]
-        coords[axis.dim] = (dim, _coordinate(axis.values), {"field": axis.field})
+    coords.update(_axis_coordinates(sweep, points))
     cube = xr.Dataset(data_vars, coords=coords)
     if sweep.correlate:
         correlations = _correlations(cube, models)
@@ -232,14 +234,16 @@ def build_cube(
     keys = np.empty(size, dtype=object)
     keys[flat] = [point.key for point in points]
     keys = keys.reshape(shape)
-    # A top-level field's name has no dot: a swept ``seed`` is already its dimension's coordinate,
-    # and a dimension named after another ``*.seed`` leaves the scene seed to the attributes.
-    fields = {
+    # A swept field is its axis's coordinate, not a second one by its dotted name. A top-level
+    # field's name has no dot: a dimension named after another ``*.seed`` leaves the scene seed
+    # to the attributes.
+    swept = {axis.field for axis in sweep.axes}
+    scene_fields = {
         name: variable
         for name, variable in _scene_coordinates(points, flat, sweep).items()
-        if name not in cube.variables and name not in cube.dims
+        if name not in swept and name not in cube.variables and name not in cube.dims
     }
-    cube = cube.assign_coords(result_key=(dims, keys.astype(str)), **fields)
+    cube = cube.assign_coords(result_key=(dims, keys.astype(str)), **scene_fields)
     for name, variable in cube.variables.items():
         variable.attrs.update(describe(str(name), variable.attrs.get("field")))
     cube.attrs.update(_provenance(grid, sweep))
@@ -307,35 +311,29 @@ def metric_attrs(name: str) -> dict[str, str]:
 
 
 def field_attrs(field: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a dotted scene field, as its dataclass field declares them.
+    """``units`` and ``long_name`` of a dotted scene field, as its declaration states them.
 
     A whole effect table (``readout.effects.saturation``) is a dimensionless JSON label.
 
     Raises
     ------
     KeyError
-        ``field`` names no scene field.
+        ``field`` names no scene field (:class:`pipeline.fields.UnknownField`).
     """
-    parts = field.split(".")
-    owner: Any = Scene
-    i = 0
-    while True:
-        found = {f.name: f for f in dataclasses.fields(owner)}
-        if parts[i] not in found or parts[i] == "name":
-            raise KeyError(f"{field!r} is not a scene field")
-        if i == len(parts) - 1:
-            return _declared(found[parts[i]], field)
-        if parts[i] == "effects":
-            try:
-                owner = EFFECT_TYPES[Effect(parts[i + 1])]
-            except ValueError:
-                raise KeyError(f"{field!r} names no effect") from None
-            if i + 1 == len(parts) - 1:
-                return {"units": "1", "long_name": f"parameters of the {parts[i + 1]} effect"}
-            i += 2
-        else:
-            owner = type(getattr(owner(), parts[i]))
-            i += 1
+    found = fields.resolve(Scene, field)
+    return {"units": found.units, "long_name": found.long_name}
+
+
+def field_coordinate(cube: xr.Dataset, field: str) -> str | None:
+    """The name of the coordinate of ``cube`` that holds dotted scene ``field``: the field's
+    own name, or the swept axis's coordinate whose ``field`` attribute it is; None if the cube
+    has none (a field left unset)."""
+    if field in cube.coords:
+        return field
+    for name, coordinate in cube.coords.items():
+        if coordinate.attrs.get("field") == field:
+            return str(name)
+    return None
 
 
 def _declared(found: dataclasses.Field, name: str) -> dict[str, str]:
@@ -518,6 +516,25 @@ def _coordinate(values: Sequence[Any]) -> np.ndarray:
     return np.asarray([json.dumps(v, sort_keys=True) for v in values])
 
 
+def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
+    """The coordinate of each swept axis, named by its dimension (attribute ``field``), along
+    the first dimension of a zipped sweep: each value as the points' parsed scenes hold it (as
+    :meth:`pipeline.scene.Scene.to_dict` writes it), read once per value."""
+    dims = sweep.dims
+    coords: dict[str, Any] = {}
+    for position, axis in enumerate(sweep.axes):
+        along = 0 if sweep.mode == "zip" else position
+        # The first point (C order) at each index along the axis's dimension.
+        first: dict[int, GridPoint] = {}
+        for point in points:
+            first.setdefault(point.index[along], point)
+        values = [
+            fields.plain(fields.get(first[i].scene, axis.field)) for i in range(len(axis.values))
+        ]
+        coords[axis.dim] = (dims[along], _coordinate(values), {"field": axis.field})
+    return coords
+
+
 def _scene_coordinates(
     points: list[GridPoint], flat: np.ndarray, sweep: Sweep
 ) -> dict[str, xr.Variable]:
@@ -528,7 +545,7 @@ def _scene_coordinates(
     their parts).
     """
     size = int(np.prod(sweep.shape))
-    tops = [f.name for f in dataclasses.fields(Scene) if f.name != "name"]
+    tops = list(canonical_parts(type(points[0].scene)))
     # Per top-level field: each point's part as an index into that part's distinct objects,
     # and each distinct object's flattened fields.
     owner = {top: np.empty(size, dtype=np.int64) for top in tops}
@@ -541,17 +558,17 @@ def _scene_coordinates(
             data = scene.to_dict()
             for top in new:
                 distinct[top][id(getattr(scene, top))] = len(flattened[top])
-                flattened[top].append(_flatten({top: data[top]} if top in data else {}))
+                flattened[top].append(fields.flatten({top: data[top]} if top in data else {}))
         for top in tops:
             owner[top][i] = distinct[top][id(getattr(scene, top))]
     # A field with its owners, as above.
-    fields: dict[str, tuple[np.ndarray, list[dict[str, Any]]]] = {}
+    columns: dict[str, tuple[np.ndarray, list[dict[str, Any]]]] = {}
     first = points[0].scene
     for top in tops:
         for field in flattened[top][distinct[top][id(getattr(first, top))]]:
-            fields[field] = (owner[top], flattened[top])
+            columns[field] = (owner[top], flattened[top])
     coords = {}
-    for field, (owners, values) in fields.items():
+    for field, (owners, values) in columns.items():
         if not all(field in found for found in values):
             continue  # some points do not have it: a swept table's coordinate describes them
         coords[field] = _along_varied_owned(
@@ -583,17 +600,6 @@ def _along_varied_owned(
     kept = owners[tuple(slice(None) if k in varied else 0 for k in range(owners.ndim))]
     data = _coordinate([values[i] for i in kept.ravel().tolist()]).reshape(kept.shape)
     return xr.Variable(tuple(dims[k] for k in varied), data)
-
-
-def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
-    """``{"array": {"rows": 3}}`` as ``{"array.rows": 3}``; an empty table is a leaf."""
-    flat: dict[str, Any] = {}
-    for key, value in data.items():
-        if isinstance(value, Mapping) and value:
-            flat |= _flatten(value, f"{prefix}{key}.")
-        else:
-            flat[f"{prefix}{key}"] = value
-    return flat
 
 
 def _along_varied(values: np.ndarray, dims: tuple[str, ...]) -> xr.Variable:

@@ -66,16 +66,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pipeline.coding import whole_windows
+from pipeline import fields
+from pipeline.coding import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.errors import SceneError
 from pipeline.scene import (
-    EFFECT_TYPES,
     ArraySpec,
     CanonicalMemo,
     CodingSpec,
     DatasetKind,
     DatasetSpec,
-    Effect,
     Scene,
     SceneVariants,
     with_dataset_path_from,
@@ -310,6 +309,34 @@ def _positions(sweep: Sweep) -> Iterator[tuple[tuple[int, ...], tuple[int, ...]]
         return
     for index in itertools.product(*(range(len(axis.values)) for axis in sweep.axes)):
         yield index, index
+
+
+def training_cost(scene: Scene) -> int:
+    """A point's relative cost: the product of the fields declared to scale it
+    (:attr:`pipeline.fields.Cost.SIZE`: taxel rows and columns, windows, models trained).
+
+    Training dominates a point, and its cost grows with the frame size (taxels x windows) per
+    model; ``auto`` windows count as the most they can be, a list as its length. Only the order
+    in which points run depends on it, never a result.
+    """
+    _, sizes = fields.cost_parts(scene)
+    return math.prod(_size(value) for value in sizes)
+
+
+def _size(value: Any) -> int:
+    if value == "auto":
+        return MAX_AUTO_WINDOWS
+    return len(value) if isinstance(value, tuple | list) else int(value)
+
+
+def cost_kind(scene: Scene) -> str:
+    """What a point's cost depends on: its plain form without the fields declared free of cost
+    (:attr:`pipeline.fields.Cost.FREE`: the threshold, the effects' parameter values, every
+    seed) and without its name, as canonical JSON. The names of the effects that run stay; what
+    is left (dataset, taxels, windows, models, epochs, folds, ...) decides how long encoding and
+    training take, so points of one kind cost about the same."""
+    form, _ = fields.cost_parts(scene)
+    return json.dumps(form, sort_keys=True, separators=(",", ":"))
 
 
 def builtin_grid_names() -> tuple[str, ...]:
@@ -644,41 +671,11 @@ def _name_dims(axes: Sequence[tuple[str, tuple[Any, ...]]]) -> tuple[SweepAxis, 
 
 
 def _check_field(field: str, where: str, problems: list[str]) -> None:
-    """A dotted path must name a scene field (or an effect parameter)."""
-    parts = field.split(".")
-    scene_fields = {f.name: f for f in dataclasses.fields(Scene)}
-    head = parts[0]
-    if head not in scene_fields or head == "name":
-        problems.append(f"{where}: {field!r} is not a scene field")
-        return
-    if head == "seed":
-        if len(parts) != 1:
-            problems.append(f"{where}: {field!r} is not a scene field")
-        return
-    part_type = type(getattr(Scene(), head))
-    names = {f.name for f in dataclasses.fields(part_type)}
-    if len(parts) < 2 or parts[1] not in names:
-        problems.append(
-            f"{where}: {field!r} is not a scene field (known in {head}: {', '.join(sorted(names))})"
-        )
-        return
-    if parts[1] != "effects":
-        if len(parts) != 2:
-            problems.append(f"{where}: {field!r} is not a scene field")
-        return
-    if len(parts) == 2:
-        return
+    """A dotted path must name a scene field (or an effect, or an effect's parameter)."""
     try:
-        effect = Effect(parts[2])
-    except ValueError:
-        problems.append(f"{where}: {field!r} names an unknown effect")
-        return
-    params = {f.name for f in dataclasses.fields(EFFECT_TYPES[effect])}
-    if len(parts) != 4 or parts[3] not in params:
-        problems.append(
-            f"{where}: {field!r} is not a parameter of {effect.value} "
-            f"(known: {', '.join(sorted(params))})"
-        )
+        fields.resolve(Scene, field)
+    except fields.UnknownField as exc:
+        problems.append(f"{where}: {exc.text}")
 
 
 def _valid_name(name: Any) -> bool:

@@ -5,6 +5,13 @@ A scene has five parts (``dataset``, ``array``, ``readout``, ``coding``, ``train
 message naming every offending field at once, and has a canonical form (sorted keys, units in the
 field names) from which cache keys are hashed.
 
+Every field is declared once, on its dataclass (:func:`pipeline.fields.param`): type, default,
+units, accepted range, description, whether its default is neutral and what it does to a point's
+cost. Reading and validation, the canonical form, dotted paths, result cubes' coordinate labels
+and the listing of fields (:func:`scene_fields`) follow from those declarations. The canonical
+form leaves out a field at a neutral default, so a field added with a neutral default that
+reproduces what was simulated before it existed changes no existing cache key.
+
 Readout *effects* are a mapping from effect name to parameters. An effect that is not named is not
 simulated and is not part of any cache key; an ideal scene names none. The scene seed enters the
 spike-train key only when a named effect draws random numbers.
@@ -25,30 +32,26 @@ keys is its items' JSON in key order), so a memo writes a shared part once for a
 
 from __future__ import annotations
 
-import dataclasses
 import enum
 import functools
 import json
 import math
 import operator
 import tomllib
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+from pipeline import fields
 from pipeline.errors import SceneError
+from pipeline.fields import Cost, NonEmpty, Range, Seed, param, part
 
 MAX_TAXELS_PER_SIDE = 256
 
-
-def _about(units: str, long_name: str) -> dict[str, str]:
-    """Field metadata: CF ``units`` ("1" when dimensionless or a label) and a prose name.
-
-    Declared here once; result cubes write them on every coordinate a scene field becomes.
-    """
-    return {"units": units, "long_name": long_name}
+_POSITIVE = Range(0, low_open=True)
+_NONNEGATIVE = Range(0)
 
 
 class DatasetKind(enum.StrEnum):
@@ -108,15 +111,19 @@ class Effect(enum.StrEnum):
 
 
 # ---------------------------------------------------------------------------------------------
-# Effect parameters
+# Effect parameters: their values do not change what a point costs, only which effects run.
 
 
 @dataclass(frozen=True)
 class AmplifierOffset:
     """Static input offset per taxel, ``N(0, sigma_v)`` V; matters through saturation."""
 
-    sigma_v: float = field(
-        default=0.01, metadata=_about("V", "standard deviation of the amplifier offset per taxel")
+    sigma_v: float = param(
+        0.01,
+        "V",
+        "standard deviation of the amplifier offset per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
     )
 
 
@@ -124,15 +131,17 @@ class AmplifierOffset:
 class AmplifierNoise:
     """White Gaussian noise on every sample, ``sigma_v`` V rms."""
 
-    sigma_v: float = field(default=0.005, metadata=_about("V", "rms amplifier noise per sample"))
+    sigma_v: float = param(
+        0.005, "V", "rms amplifier noise per sample", within=_NONNEGATIVE, cost=Cost.FREE
+    )
 
 
 @dataclass(frozen=True)
 class Saturation:
     """Clip the amplified signal at the rails ``+-rail_v``; ``None`` means half the full scale."""
 
-    rail_v: float | None = field(
-        default=None, metadata=_about("V", "saturation rail of the amplified signal")
+    rail_v: float | None = param(
+        None, "V", "saturation rail of the amplified signal", within=_POSITIVE, cost=Cost.FREE
     )
 
 
@@ -140,9 +149,12 @@ class Saturation:
 class ComparatorOffset:
     """Static offsets of the UP and DOWN comparators per taxel, each ``N(0, sigma_v)`` V."""
 
-    sigma_v: float = field(
-        default=0.005,
-        metadata=_about("V", "standard deviation of the comparator offsets per taxel"),
+    sigma_v: float = param(
+        0.005,
+        "V",
+        "standard deviation of the comparator offsets per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
     )
 
 
@@ -150,7 +162,9 @@ class ComparatorOffset:
 class ComparatorNoise:
     """Gaussian noise on each comparator decision (per sample), ``sigma_v`` V rms."""
 
-    sigma_v: float = field(default=0.005, metadata=_about("V", "rms comparator noise per decision"))
+    sigma_v: float = param(
+        0.005, "V", "rms comparator noise per decision", within=_NONNEGATIVE, cost=Cost.FREE
+    )
 
 
 @dataclass(frozen=True)
@@ -161,11 +175,19 @@ class ThresholdMismatch:
     included) is clipped to that floor: a comparator cannot resolve a smaller step.
     """
 
-    sigma_rel: float = field(
-        default=0.05, metadata=_about("1", "relative standard deviation of the threshold per taxel")
+    sigma_rel: float = param(
+        0.05,
+        "1",
+        "relative standard deviation of the threshold per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
     )
-    floor_rel: float = field(
-        default=0.1, metadata=_about("1", "lowest threshold per taxel, relative to threshold_v")
+    floor_rel: float = param(
+        0.1,
+        "1",
+        "lowest threshold per taxel, relative to threshold_v",
+        within=Range(0, 1, low_open=True),
+        cost=Cost.FREE,
     )
 
 
@@ -193,41 +215,41 @@ class DatasetSpec:
     ``sampling_rate_hz``, default 200 Hz); ``folder`` reads ``path/dataset.toml``.
     """
 
-    kind: DatasetKind = field(
-        default=DatasetKind.SYNTHETIC, metadata=_about("1", "source of the recordings")
+    kind: DatasetKind = param(DatasetKind.SYNTHETIC, "1", "source of the recordings")
+    path: str | None = param(None, "1", "folder of the recordings")
+    sampling_rate_hz: float | None = param(
+        None, "Hz", "sampling rate of the VibTac-12 recordings", within=_POSITIVE
     )
-    path: str | None = field(default=None, metadata=_about("1", "folder of the recordings"))
-    sampling_rate_hz: float | None = field(
-        default=None, metadata=_about("Hz", "sampling rate of the VibTac-12 recordings")
+    axis: Axis = param(Axis.Z, "1", "accelerometer axis of the VibTac-12 recordings")
+    segments: int = param(
+        10, "1", "segments cut from each VibTac-12 recording", within=Range(1, 1000)
     )
-    axis: Axis = field(
-        default=Axis.Z, metadata=_about("1", "accelerometer axis of the VibTac-12 recordings")
+    seed: Seed = param(0, "1", "seed of the built-in recordings", cost=Cost.FREE)
+    recordings_per_class: int = param(
+        10, "1", "built-in recordings per class", within=Range(1, 10_000)
     )
-    segments: int = field(
-        default=10, metadata=_about("1", "segments cut from each VibTac-12 recording")
+    duration_s: float = param(
+        5.0, "s", "duration of each built-in recording", within=Range(0.1, 36_000)
     )
-    seed: int = field(default=0, metadata=_about("1", "seed of the built-in recordings"))
-    recordings_per_class: int = field(
-        default=10, metadata=_about("1", "built-in recordings per class")
-    )
-    duration_s: float = field(
-        default=5.0, metadata=_about("s", "duration of each built-in recording")
-    )
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the fields refuse together: a dataset read from files needs its path."""
+        if self.kind in (DatasetKind.VIBTAC12, DatasetKind.FOLDER) and not self.path:
+            yield "path", f"required for kind {self.kind.value!r}"
+
+
+_SIDE = Range(1, MAX_TAXELS_PER_SIDE)
 
 
 @dataclass(frozen=True)
 class ArraySpec:
     """Taxel grid ``rows x cols`` at ``pitch_mm``, scanned at ``speed_mm_s`` along ``direction``."""
 
-    rows: int = field(default=3, metadata=_about("1", "taxel rows of the array"))
-    cols: int = field(default=3, metadata=_about("1", "taxel columns of the array"))
-    pitch_mm: float = field(
-        default=1.0, metadata=_about("mm", "distance between neighbouring taxels")
-    )
-    speed_mm_s: float = field(default=20.0, metadata=_about("mm/s", "scan speed across the array"))
-    direction: ScanDirection = field(
-        default=ScanDirection.Y, metadata=_about("1", "scan direction across the taxel grid")
-    )
+    rows: int = param(3, "1", "taxel rows of the array", within=_SIDE, cost=Cost.SIZE)
+    cols: int = param(3, "1", "taxel columns of the array", within=_SIDE, cost=Cost.SIZE)
+    pitch_mm: float = param(1.0, "mm", "distance between neighbouring taxels", within=_POSITIVE)
+    speed_mm_s: float = param(20.0, "mm/s", "scan speed across the array", within=_POSITIVE)
+    direction: ScanDirection = param(ScanDirection.Y, "1", "scan direction across the taxel grid")
 
     @property
     def n_taxels(self) -> int:
@@ -238,15 +260,28 @@ class ArraySpec:
 class ReadoutSpec:
     """Level-crossing readout: ``threshold_v`` of a ``full_scale_v`` range, and effects."""
 
-    threshold_v: float = field(
-        default=0.09, metadata=_about("V", "comparator threshold (level-crossing step)")
+    threshold_v: float = param(
+        0.09,
+        "V",
+        "comparator threshold (level-crossing step)",
+        within=_POSITIVE,
+        cost=Cost.FREE,
     )
-    full_scale_v: float = field(
-        default=1.0, metadata=_about("V", "full-scale input range of the readout")
+    full_scale_v: float = param(1.0, "V", "full-scale input range of the readout", within=_POSITIVE)
+    effects: Mapping[Effect, Any] = param(
+        units="1",
+        long_name="non-ideal readout effects and their parameters",
+        default_factory=dict,
+        entries=EFFECT_TYPES,
     )
-    effects: Mapping[Effect, Any] = field(
-        default_factory=dict, metadata=_about("1", "non-ideal readout effects and their parameters")
-    )
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the fields refuse together: the threshold must be below the full scale."""
+        if self.threshold_v >= self.full_scale_v:
+            yield (
+                "threshold_v",
+                f"{self.threshold_v!r} V is not below full_scale_v = {self.full_scale_v!r} V",
+            )
 
     @property
     def is_ideal(self) -> bool:
@@ -265,53 +300,61 @@ class ReadoutSpec:
 class CodingSpec:
     """Rate coding: ``n_windows`` windows of ``window_s``; ``"auto"`` fits the recordings."""
 
-    window_s: float = field(default=0.1, metadata=_about("s", "rate-coding window length"))
-    n_windows: int | Literal["auto"] = field(
-        default="auto", metadata=_about("1", "rate-coding windows per recording")
+    window_s: float = param(0.1, "s", "rate-coding window length", within=Range(1e-6, 3600))
+    n_windows: int | Literal["auto"] = param(
+        "auto",
+        "1",
+        "rate-coding windows per recording",
+        within=Range(1, 100_000, also=("auto",)),
+        cost=Cost.SIZE,
     )
-    polarity: Polarity = field(
-        default=Polarity.MERGED, metadata=_about("1", "how ON and OFF spikes enter the rate code")
-    )
+    polarity: Polarity = param(Polarity.MERGED, "1", "how ON and OFF spikes enter the rate code")
 
 
 @dataclass(frozen=True)
 class TrainingSpec:
     """Classifiers and stratified k-fold cross-validation."""
 
-    models: tuple[Model, ...] = field(
-        default=(Model.FFNN, Model.CNN), metadata=_about("1", "classifiers trained")
+    models: tuple[Model, ...] = param(
+        (Model.FFNN, Model.CNN), "1", "classifiers trained", within=NonEmpty(), cost=Cost.SIZE
     )
-    epochs: int = field(default=100, metadata=_about("1", "training epochs"))
-    learning_rate: float = field(default=1e-3, metadata=_about("1", "Adam learning rate"))
-    hidden_units: int = field(default=100, metadata=_about("1", "hidden units of the FFNN"))
-    batch_size: int = field(default=16, metadata=_about("1", "training batch size"))
-    folds: int = field(default=10, metadata=_about("1", "cross-validation folds"))
-    repeats: int = field(
-        default=1, metadata=_about("1", "cross-validation repeats, each a fresh stratified split")
+    epochs: int = param(100, "1", "training epochs", within=Range(1, 100_000))
+    learning_rate: float = param(
+        1e-3, "1", "Adam learning rate", within=Range(0, 10, low_open=True)
     )
-    seed: int = field(default=0, metadata=_about("1", "training seed"))
+    hidden_units: int = param(100, "1", "hidden units of the FFNN", within=Range(1, 100_000))
+    batch_size: int = param(16, "1", "training batch size", within=Range(1, 1_000_000))
+    folds: int = param(10, "1", "cross-validation folds", within=Range(2, 1000))
+    repeats: int = param(
+        1,
+        "1",
+        "cross-validation repeats, each a fresh stratified split",
+        within=Range(1, 100),
+    )
+    seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
 
 
 @dataclass(frozen=True)
 class Scene:
     """One simulated situation. Build with :meth:`from_dict`, :meth:`from_toml` or :meth:`paper`."""
 
-    name: str = "scene"
-    seed: int = field(default=0, metadata=_about("1", "scene seed (random readout effects)"))
-    dataset: DatasetSpec = field(default_factory=DatasetSpec)
-    array: ArraySpec = field(default_factory=ArraySpec)
-    readout: ReadoutSpec = field(default_factory=ReadoutSpec)
-    coding: CodingSpec = field(default_factory=CodingSpec)
-    training: TrainingSpec = field(default_factory=TrainingSpec)
+    name: str = param("scene", "1", "scene name", label=True)
+    seed: Seed = param(0, "1", "scene seed (random readout effects)", cost=Cost.FREE)
+    dataset: DatasetSpec = part(DatasetSpec)
+    array: ArraySpec = part(ArraySpec)
+    readout: ReadoutSpec = part(ReadoutSpec)
+    coding: CodingSpec = part(CodingSpec)
+    training: TrainingSpec = part(TrainingSpec)
 
     # -- construction ---------------------------------------------------------------------------
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>") -> Scene:
         """Validate ``data`` (the TOML layout) and build a scene; raise :class:`SceneError`."""
-        reader = _Reader(source)
-        scene = reader.scene(data)
-        reader.raise_if_problems()
+        problems: list[str] = []
+        scene = fields.read(cls, data, "", problems)
+        if problems:
+            raise SceneError(problems, source)
         return scene
 
     @classmethod
@@ -358,24 +401,22 @@ class Scene:
         """A copy with dotted fields replaced (``{"readout.threshold_v": 0.05}``), re-validated."""
         data = self.to_dict()
         for dotted, value in changes.items():
-            node = data
-            *parents, leaf = dotted.split(".")
-            for part in parents:
-                node = node.setdefault(part, {})
-            node[leaf] = value
-        return Scene.from_dict(data, source=f"scene {self.name!r} with {sorted(changes)}")
+            fields.put(data, dotted, value)
+        return type(self).from_dict(data, source=f"scene {self.name!r} with {sorted(changes)}")
 
     # -- canonical form -------------------------------------------------------------------------
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict in the TOML layout (enums as strings, tuples as lists)."""
-        return _plain(self)
+        return fields.plain(self)
 
     def canonical(
         self, parts: tuple[str, ...] | None = None, memo: CanonicalMemo | None = None
     ) -> str:
         """Stable JSON of the scene (or of ``parts``: top-level parts such as ``"readout"``, or
-        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names.
+        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names; a
+        field that is ``None`` or at a neutral default (:func:`pipeline.fields.param`) is left
+        out, so that a field added with such a default changes no existing key.
 
         ``memo`` holds the canonical form of part objects already written: give the same dict
         for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
@@ -384,12 +425,17 @@ class Scene:
         # The JSON of a dict with sorted keys is its items' JSON in key order, so each part can
         # be written (and remembered) on its own: the text is that of the whole selection.
         items = []
-        for top, fields in _canonical_plan(_CANONICAL_PARTS if parts is None else tuple(parts)):
+        plan = _canonical_plan(type(self), None if parts is None else tuple(parts))
+        for top, paths in plan:
             value = getattr(self, top)
-            if fields is None:
+            if paths is None:
+                slot = fields.slot_named(type(self))[top]
+                if slot.part is None and fields.left_out(slot, value, canonical=True):
+                    continue
                 text = _canonical_part(value, memo)
             else:
-                text = _canonical_json(_selected({top: _plain(value)}, fields)[top])
+                data = {top: fields.plain(value, canonical=True)}
+                text = _canonical_json(fields.select(data, paths).get(top, {}))
             items.append(f'"{top}":{text}')
         return "{" + ",".join(items) + "}"
 
@@ -397,9 +443,6 @@ class Scene:
 #: Canonical memo: the canonical JSON of a part object by its ``id``, with the object itself,
 #: which keeps it alive so that its ``id`` is not reused while the memo holds it.
 CanonicalMemo = dict[int, tuple[Any, str]]
-
-#: The top-level fields a canonical form holds (every field but the name).
-_CANONICAL_PARTS = ("array", "coding", "dataset", "readout", "seed", "training")
 
 
 def _canonical_json(data: Any) -> str:
@@ -409,45 +452,40 @@ def _canonical_json(data: Any) -> str:
 def _canonical_part(value: Any, memo: CanonicalMemo | None) -> str:
     """The canonical JSON of one top-level part, from ``memo`` if it was written before."""
     if memo is None:
-        return _canonical_json(_plain(value))
+        return _canonical_json(fields.plain(value, canonical=True))
     found = memo.get(id(value))
     if found is None:
-        found = memo[id(value)] = (value, _canonical_json(_plain(value)))
+        found = memo[id(value)] = (value, _canonical_json(fields.plain(value, canonical=True)))
     return found[1]
 
 
-@functools.lru_cache(maxsize=64)
-def _canonical_plan(parts: tuple[str, ...]) -> tuple[tuple[str, tuple[str, ...] | None], ...]:
-    """The top-level parts ``parts`` selects, sorted, each whole (None) or with its dotted
-    fields; raises ``KeyError`` for a part that is not in the canonical form."""
-    whole: set[str] = set()
-    dotted: dict[str, list[str]] = {}
-    for part in parts:
-        top = part.split(".", 1)[0]
-        if top not in _CANONICAL_PARTS:
-            raise KeyError(top)
-        if top == part:
-            whole.add(top)
-        else:
-            dotted.setdefault(top, []).append(part)
+def canonical_parts(cls: type[Scene]) -> tuple[str, ...]:
+    """The top-level fields a canonical form of a ``cls`` holds: every field but labels."""
     return tuple(
-        (top, None if top in whole else tuple(dotted[top])) for top in sorted(whole | dotted.keys())
+        slot.name for slot in fields.slots(cls) if slot.declared is None or not slot.declared.label
     )
 
 
-def _selected(data: dict[str, Any], parts: tuple[str, ...]) -> dict[str, Any]:
-    """The ``parts`` of ``data``, nested as in ``data``; a dotted field left unset is left out."""
-    selected: dict[str, Any] = {}
-    for part in parts:
-        *parents, leaf = part.split(".")
-        source, target = data, selected
-        for name in parents:
-            source = source[name]
-            target = target.setdefault(name, {})
-        if parents and leaf not in source:  # None: the field keeps its default
-            continue
-        target[leaf] = source[leaf]
-    return selected
+@functools.lru_cache(maxsize=64)
+def _canonical_plan(
+    cls: type[Scene], parts: tuple[str, ...] | None
+) -> tuple[tuple[str, tuple[str, ...] | None], ...]:
+    """The top-level parts ``parts`` (all if None) selects, sorted, each whole (None) or with
+    its dotted fields; raises ``KeyError`` for a part that is not in the canonical form."""
+    known = canonical_parts(cls)
+    whole: set[str] = set()
+    dotted: dict[str, list[str]] = {}
+    for path in known if parts is None else parts:
+        top = path.split(".", 1)[0]
+        if top not in known:
+            raise KeyError(top)
+        if top == path:
+            whole.add(top)
+        else:
+            dotted.setdefault(top, []).append(path)
+    return tuple(
+        (top, None if top in whole else tuple(dotted[top])) for top in sorted(whole | dotted.keys())
+    )
 
 
 #: Revision of what the stages compute for a given scene. Bump it with any change that alters a
@@ -477,6 +515,25 @@ def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str
     return {**data, "dataset": {**dataset, "path": str(path)}}
 
 
+def scene_field(path: str) -> str:
+    """Dotted ``path`` (``"readout.threshold_v"``) once checked against the declarations, so that
+    code naming a field by its path fails when it loads, not when a cube lacks the field.
+
+    Raises
+    ------
+    pipeline.fields.UnknownField
+        ``path`` names no scene field.
+    """
+    fields.resolve(Scene, path)
+    return path
+
+
+def scene_fields() -> list[fields.FieldInfo]:
+    """Every scene field with its type, default, units, range and description, effects'
+    parameters included (:func:`pipeline.fields.listing`), for ``--help`` and the docs."""
+    return fields.listing(Scene)
+
+
 def builtin_scene_names() -> tuple[str, ...]:
     files = resources.files("pipeline.scenes").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
@@ -484,9 +541,6 @@ def builtin_scene_names() -> tuple[str, ...]:
 
 # ---------------------------------------------------------------------------------------------
 # Many variants of one scene
-
-#: The scene's top-level fields in the order the reader reads (and reports) them.
-_READ_ORDER = ("dataset", "array", "readout", "coding", "training", "name", "seed")
 
 
 class SceneVariants:
@@ -515,17 +569,17 @@ class SceneVariants:
     """
 
     def __init__(self, scene: Scene, axes: Sequence[tuple[str, Sequence[Any]]]):
+        self._cls = type(scene)
         self._data = scene.to_dict()
         self._fields = [name for name, _ in axes]
         self._values = [values for _, values in axes]
         self.source = f"scene {scene.name!r} with {sorted(self._fields)}"
         tops = [name.split(".")[0] for name in self._fields]
-        unknown = sorted(set(tops) - set(_READ_ORDER))
+        order = [slot.name for slot in fields.read_order(self._cls)]
+        unknown = sorted(set(tops) - set(order))
         if unknown:
             raise ValueError(f"not top-level scene fields: {', '.join(unknown)}")
-        self._positions = {
-            top: tuple(i for i, t in enumerate(tops) if t == top) for top in _READ_ORDER
-        }
+        self._positions = {top: tuple(i for i, t in enumerate(tops) if t == top) for top in order}
         # The memo key of a part: the indices of the values in it (none for an untouched part).
         self._part_indices = [
             (top, operator.itemgetter(*positions) if positions else lambda _: ())
@@ -556,7 +610,7 @@ class SceneVariants:
             problems += found
         if problems:
             raise SceneError(problems, self.source)
-        return Scene(**parts)
+        return self._cls(**parts)
 
     def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
         found = self._parts.get((top, part_indices))
@@ -569,21 +623,12 @@ class SceneVariants:
     def _read(self, top: str, changes: list[tuple[str, Any]]) -> tuple[Any, list[str]]:
         """Part ``top`` with ``changes`` made as :meth:`Scene.replace` makes them, and what the
         reader found wrong with it."""
-        data = {top: _copy_plain(self._data[top])}
+        data = {top: _copy_plain(self._data.get(top))}
         for dotted, value in changes:
-            node = data
-            *parents, leaf = dotted.split(".")
-            for part in parents:
-                node = node.setdefault(part, {})
-            node[leaf] = value
-        reader = _Reader(self.source)
-        if top == "name":
-            part = reader.convert(data[top], "name", _string)
-        elif top == "seed":
-            part = reader.convert(data[top], "seed", _seed)
-        else:
-            part = getattr(reader, top)(data[top], top)
-        return part, reader.problems
+            fields.put(data, dotted, value)
+        problems: list[str] = []
+        part = fields.read_slot(fields.slot_named(self._cls)[top], data[top], top, problems)
+        return part, problems
 
 
 def _copy_plain(value: Any) -> Any:
@@ -593,276 +638,3 @@ def _copy_plain(value: Any) -> Any:
     if isinstance(value, list):
         return [_copy_plain(v) for v in value]
     return value
-
-
-# ---------------------------------------------------------------------------------------------
-# Validation
-
-
-def _plain(value: Any) -> Any:
-    if dataclasses.is_dataclass(value):  # None means "default": TOML has no null
-        fields = ((f.name, getattr(value, f.name)) for f in dataclasses.fields(value))
-        return {name: _plain(v) for name, v in fields if v is not None}
-    if isinstance(value, enum.Enum):
-        return value.value
-    if isinstance(value, Mapping):
-        return {str(_plain(k)): _plain(v) for k, v in value.items()}
-    if isinstance(value, tuple | list):
-        return [_plain(v) for v in value]
-    return value
-
-
-class _Reader:
-    """Reads a nested dict into scene parts, collecting every problem before raising."""
-
-    def __init__(self, source: str):
-        self.source = source
-        self.problems: list[str] = []
-
-    def raise_if_problems(self) -> None:
-        if self.problems:
-            raise SceneError(self.problems, self.source)
-
-    def problem(self, where: str, what: str) -> None:
-        self.problems.append(f"{where}: {what}")
-
-    def table(self, data: Any, where: str) -> Mapping[str, Any]:
-        if data is None:
-            return {}
-        if not isinstance(data, Mapping):
-            self.problem(where, f"must be a table, got {type(data).__name__}")
-            return {}
-        return data
-
-    def build(self, cls: type, data: Any, where: str, **checks: Any) -> Any:
-        """Build dataclass ``cls`` from table ``data``: unknown keys, types and ranges checked.
-
-        ``checks`` maps a field name to ``(converter, predicate, requirement)``; the converter
-        turns the raw value into the field's type (raising ``TypeError``/``ValueError``), the
-        predicate says whether the converted value is in range.
-        """
-        data = self.table(data, where)
-        known = {f.name: f for f in dataclasses.fields(cls)}
-        for key in data:
-            if key not in known:
-                self.problem(_join(where, key), f"unknown key (known: {', '.join(known)})")
-        values = {}
-        for name, (convert, ok, requirement) in checks.items():
-            if name not in data:
-                continue
-            here = _join(where, name)
-            try:
-                value = convert(data[name])
-            except (TypeError, ValueError) as exc:
-                self.problem(here, str(exc) or f"invalid value {data[name]!r}")
-                continue
-            if ok is not None and not ok(value):
-                self.problem(here, f"{data[name]!r} is out of range: must be {requirement}")
-                continue
-            values[name] = value
-        try:
-            return cls(**values)
-        except (TypeError, ValueError) as exc:  # pragma: no cover - checks cover every field
-            self.problem(where, str(exc))
-            return cls()
-
-    def scene(self, data: Any) -> Scene:
-        data = self.table(data, "scene")
-        parts = {
-            "dataset": self.dataset,
-            "array": self.array,
-            "readout": self.readout,
-            "coding": self.coding,
-            "training": self.training,
-        }
-        for key in data:
-            if key not in (*parts, "name", "seed"):
-                self.problem(key, f"unknown key (known: name, seed, {', '.join(parts)})")
-        values: dict[str, Any] = {k: read(data.get(k), k) for k, read in parts.items()}
-        if "name" in data:
-            values["name"] = self.convert(data["name"], "name", _string)
-        if "seed" in data:
-            values["seed"] = self.convert(data["seed"], "seed", _seed)
-        return Scene(**{k: v for k, v in values.items() if v is not None})
-
-    def convert(self, value: Any, where: str, convert: Any) -> Any:
-        try:
-            return convert(value)
-        except (TypeError, ValueError) as exc:
-            self.problem(where, str(exc))
-            return None
-
-    def dataset(self, data: Any, where: str) -> DatasetSpec:
-        spec = self.build(
-            DatasetSpec,
-            data,
-            where,
-            kind=(_enum(DatasetKind), None, ""),
-            path=(_string, None, ""),
-            sampling_rate_hz=(_optional(_float), _none_or(_positive), "> 0 Hz"),
-            axis=(_enum(Axis), None, ""),
-            segments=(_int, lambda v: 1 <= v <= 1000, "between 1 and 1000"),
-            seed=(_seed, None, ""),
-            recordings_per_class=(_int, lambda v: 1 <= v <= 10_000, "between 1 and 10000"),
-            duration_s=(_float, lambda v: 0.1 <= v <= 36_000, "between 0.1 and 36000 s"),
-        )
-        if spec.kind in (DatasetKind.VIBTAC12, DatasetKind.FOLDER) and not spec.path:
-            self.problem(_join(where, "path"), f"required for kind {spec.kind.value!r}")
-        return spec
-
-    def array(self, data: Any, where: str) -> ArraySpec:
-        side = (
-            _int,
-            lambda v: 1 <= v <= MAX_TAXELS_PER_SIDE,
-            f"between 1 and {MAX_TAXELS_PER_SIDE}",
-        )
-        return self.build(
-            ArraySpec,
-            data,
-            where,
-            rows=side,
-            cols=side,
-            pitch_mm=(_float, _positive, "> 0 mm"),
-            speed_mm_s=(_float, _positive, "> 0 mm/s"),
-            direction=(_enum(ScanDirection), None, ""),
-        )
-
-    def readout(self, data: Any, where: str) -> ReadoutSpec:
-        data = self.table(data, where)
-        spec = self.build(
-            ReadoutSpec,
-            {k: v for k, v in data.items() if k != "effects"},
-            where,
-            threshold_v=(_float, _positive, "> 0 V"),
-            full_scale_v=(_float, _positive, "> 0 V"),
-        )
-        effects = {}
-        raw = self.table(data.get("effects"), _join(where, "effects"))
-        for name, params in raw.items():
-            here = _join(where, "effects", name)
-            try:
-                effect = Effect(name)
-            except ValueError:
-                self.problem(here, f"unknown effect (known: {', '.join(e.value for e in Effect)})")
-                continue
-            effects[effect] = self.effect(effect, params, here)
-        if spec.threshold_v >= spec.full_scale_v:
-            self.problem(
-                _join(where, "threshold_v"),
-                f"{spec.threshold_v!r} V is not below full_scale_v = {spec.full_scale_v!r} V",
-            )
-        return dataclasses.replace(spec, effects=dict(sorted(effects.items())))
-
-    def effect(self, effect: Effect, params: Any, where: str) -> Any:
-        nonneg = (_float, _nonnegative, ">= 0")
-        checks = {
-            Effect.AMPLIFIER_OFFSET: {"sigma_v": nonneg},
-            Effect.AMPLIFIER_NOISE: {"sigma_v": nonneg},
-            Effect.COMPARATOR_OFFSET: {"sigma_v": nonneg},
-            Effect.COMPARATOR_NOISE: {"sigma_v": nonneg},
-            Effect.SATURATION: {"rail_v": (_optional(_float), _none_or(_positive), "> 0 V")},
-            Effect.THRESHOLD_MISMATCH: {
-                "sigma_rel": nonneg,
-                "floor_rel": (_float, lambda v: 0 < v <= 1, "in (0, 1]"),
-            },
-        }[effect]
-        return self.build(EFFECT_TYPES[effect], params, where, **checks)
-
-    def coding(self, data: Any, where: str) -> CodingSpec:
-        return self.build(
-            CodingSpec,
-            data,
-            where,
-            window_s=(_float, lambda v: 1e-6 <= v <= 3600, "between 1e-6 and 3600 s"),
-            n_windows=(_auto_or_int, lambda v: v == "auto" or 1 <= v <= 100_000, "'auto' or >= 1"),
-            polarity=(_enum(Polarity), None, ""),
-        )
-
-    def training(self, data: Any, where: str) -> TrainingSpec:
-        return self.build(
-            TrainingSpec,
-            data,
-            where,
-            models=(_models, lambda v: len(v) > 0, "a non-empty list of 'ffnn', 'cnn'"),
-            epochs=(_int, lambda v: 1 <= v <= 100_000, "between 1 and 100000"),
-            learning_rate=(_float, lambda v: 0 < v <= 10, "in (0, 10]"),
-            hidden_units=(_int, lambda v: 1 <= v <= 100_000, "between 1 and 100000"),
-            batch_size=(_int, lambda v: 1 <= v <= 1_000_000, ">= 1"),
-            folds=(_int, lambda v: 2 <= v <= 1000, "between 2 and 1000"),
-            repeats=(_int, lambda v: 1 <= v <= 100, "between 1 and 100"),
-            seed=(_seed, None, ""),
-        )
-
-
-def _join(*parts: str) -> str:
-    return ".".join(p for p in parts if p)
-
-
-def _float(value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise TypeError(f"expected a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"expected a finite number, got {value!r}")
-    return value
-
-
-def _int(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"expected an integer, got {value!r}")
-    return value
-
-
-def _seed(value: Any) -> int:
-    value = _int(value)
-    if not 0 <= value < 2**63:
-        raise ValueError(f"seed must be in [0, 2**63), got {value!r}")
-    return value
-
-
-def _string(value: Any) -> str:
-    if not isinstance(value, str):
-        raise TypeError(f"expected a string, got {value!r}")
-    return value
-
-
-def _optional(convert: Any) -> Any:
-    return lambda v: None if v is None else convert(v)
-
-
-def _none_or(ok: Any) -> Any:
-    return lambda v: v is None or ok(v)
-
-
-def _positive(v: float) -> bool:
-    return v > 0
-
-
-def _nonnegative(v: float) -> bool:
-    return v >= 0
-
-
-def _enum(kind: type[enum.StrEnum]) -> Any:
-    def convert(value: Any) -> Any:
-        try:
-            return kind(value)
-        except ValueError:
-            options = ", ".join(repr(m.value) for m in kind)
-            raise ValueError(f"{value!r} is not one of {options}") from None
-
-    return convert
-
-
-def _auto_or_int(value: Any) -> int | str:
-    if value == "auto":
-        return "auto"
-    return _int(value)
-
-
-def _models(value: Any) -> tuple[Model, ...]:
-    if isinstance(value, str) or not isinstance(value, list | tuple):
-        raise TypeError(f"expected a list of model names, got {value!r}")
-    models = tuple(_enum(Model)(v) for v in value)
-    if len(set(models)) != len(models):
-        raise ValueError(f"duplicate model in {list(value)!r}")
-    return models

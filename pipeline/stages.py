@@ -63,6 +63,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pipeline import fields
 from pipeline import scene as scene_module
 from pipeline.coding import frames, resolve_n_windows
 from pipeline.frontend import FrontEnd, fit_front_end
@@ -346,12 +347,7 @@ class Read:
         return self.when is None or self.when(scene)
 
     def value(self, scene: Scene) -> Any:
-        if not self.applies(scene):
-            return None
-        value: Any = scene
-        for name in self.path.split("."):
-            value = getattr(value, name)
-        return value
+        return fields.get(scene, self.path) if self.applies(scene) else None
 
 
 @dataclass(frozen=True, eq=False)

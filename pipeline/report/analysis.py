@@ -33,7 +33,7 @@ from pipeline.report.curves import Curve, MetricFit, metric_fits, sweep_curves
 from pipeline.report.designs import Design, FrameReadout, gather_designs
 from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
-from pipeline.report.panels import PANEL_FIELDS, Panel, absent
+from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
@@ -152,7 +152,7 @@ def build_report(
     threshold = sweeps_for(Panel.THRESHOLD, cubes)
     full_scale = 1.0
     if threshold:
-        full_scale = float(base_value(cubes[threshold[0]], "readout.full_scale_v"))
+        full_scale = float(base_value(cubes[threshold[0]], FULL_SCALE_V))
     answers = design_answers(designs, evidence, energy, frame)
     dataset = dataset_kind(cubes)
     classes = n_classes(cubes)

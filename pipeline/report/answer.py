@@ -30,6 +30,7 @@ from pipeline.hardware import EnergyModel
 from pipeline.report import paper
 from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost
 from pipeline.report.evidence import ALPHA, Evidence
+from pipeline.report.panels import REPEATS
 from pipeline.report.text import (
     NO_INTERVAL_WHY,
     comparison,
@@ -249,7 +250,7 @@ def _caution(versus_best: PairedComparison | None) -> str:
     return (
         f"not significantly below is not the same as as accurate: {hint}this run cannot rule "
         f"out a loss of up to {-100 * versus_best.low:.1f} points against the best (more "
-        "recordings per class, or training.repeats, narrow that bound)."
+        f"recordings per class, or {REPEATS}, narrow that bound)."
     )
 
 

@@ -14,7 +14,18 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.report.panels import PANEL_FIELDS, Panel
+from pipeline.cube import field_coordinate
+from pipeline.report.panels import (
+    COLS,
+    DATASET_KIND,
+    MISMATCH_SIGMA_REL,
+    N_WINDOWS,
+    PANEL_FIELDS,
+    ROWS,
+    THRESHOLD_V,
+    WINDOW_S,
+    Panel,
+)
 
 
 def swept_fields(cube: xr.Dataset) -> frozenset[str]:
@@ -53,13 +64,19 @@ def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
     ]
 
 
-def field_values(cube: xr.Dataset, field: str) -> np.ndarray:
-    """The value of scene ``field`` at every point of a cube, shape (sweep shape).
+def field_values(cube: xr.Dataset, field: str) -> np.ndarray | None:
+    """The value of scene ``field`` at every point of a cube, shape (sweep shape); None if the
+    cube has no coordinate of it (a field left unset).
 
-    The cube's coordinate ``field`` (a dotted scene field) holds it: along the dimension where
-    the field varies, a scalar where every point has the same value.
+    The cube's coordinate of ``field`` (:func:`pipeline.cube.field_coordinate`: a swept axis's,
+    or the one named by the dotted field) holds it: along the dimensions where the field
+    varies, a scalar where every point has the same value.
     """
-    return cube[field].broadcast_like(cube["result_key"]).values
+    name = field_coordinate(cube, field)
+    if name is None:
+        return None
+    keys = cube["result_key"]
+    return cube[name].broadcast_like(keys).transpose(*keys.dims).values
 
 
 def base_value(cube: xr.Dataset, field: str) -> Any:
@@ -72,7 +89,10 @@ def base_value(cube: xr.Dataset, field: str) -> Any:
     ValueError
         The field varies along the cube.
     """
-    value = cube[field]
+    name = field_coordinate(cube, field)
+    if name is None:
+        raise KeyError(f"the cube has no coordinate of {field}")
+    value = cube[name]
     if value.ndim:
         raise ValueError(f"{field} varies along the cube")
     return value.item()
@@ -80,18 +100,20 @@ def base_value(cube: xr.Dataset, field: str) -> Any:
 
 def panel_x(panel: Panel, cube: xr.Dataset) -> np.ndarray:
     """The abscissa of ``panel`` at every point of a one-dimensional cube, float64 (n,)."""
+
+    def number(field: str) -> np.ndarray:
+        return np.asarray(field_values(cube, field), dtype=np.float64)
+
     if panel is Panel.THRESHOLD:
-        return field_values(cube, "readout.threshold_v").astype(np.float64)
+        return number(THRESHOLD_V)
     if panel is Panel.WINDOW:
-        return field_values(cube, "coding.window_s").astype(np.float64)
+        return number(WINDOW_S)
     if panel is Panel.TAXELS:
-        rows = field_values(cube, "array.rows").astype(np.float64)
-        return rows * field_values(cube, "array.cols").astype(np.float64)
+        return number(ROWS) * number(COLS)
     if panel is Panel.MISMATCH:
-        return field_values(cube, "readout.effects.threshold_mismatch.sigma_rel").astype(np.float64)
+        return number(MISMATCH_SIGMA_REL)
     if panel is Panel.OBSERVATION:
-        windows = field_values(cube, "coding.n_windows").astype(np.float64)
-        return windows * field_values(cube, "coding.window_s").astype(np.float64)
+        return number(N_WINDOWS) * number(WINDOW_S)
     raise ValueError(f"panel {panel} has no single abscissa")
 
 
@@ -103,12 +125,11 @@ def point_keys(cube: xr.Dataset) -> list[str]:
 
 def dataset_kind(cubes: Mapping[str, xr.Dataset]) -> str:
     """The recordings' kinds (``dataset.kind``) of all cubes, sorted and comma-separated."""
-    kinds = {
-        str(kind)
-        for cube in cubes.values()
-        if "dataset.kind" in cube.coords
-        for kind in np.ravel(cube["dataset.kind"].values)
-    }
+    kinds: set[str] = set()
+    for cube in cubes.values():
+        values = field_values(cube, DATASET_KIND)
+        if values is not None:
+            kinds.update(str(kind) for kind in np.ravel(values))
     return ", ".join(sorted(kinds)) or "unknown"
 
 

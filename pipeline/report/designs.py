@@ -32,7 +32,14 @@ import numpy as np
 import xarray as xr
 
 from pipeline.hardware import EnergyModel, event_power_w, frame_data_rate_bps, frame_power_w
-from pipeline.report.cubes import axis_coordinates, describe_coordinate, point_keys, sweep_dims
+from pipeline.report.cubes import (
+    axis_coordinates,
+    describe_coordinate,
+    field_values,
+    point_keys,
+    sweep_dims,
+)
+from pipeline.report.panels import COLS, N_WINDOWS, ROWS, WINDOW_S
 from pipeline.report.text import label
 
 
@@ -167,12 +174,8 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
             v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
             for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
         }
-        fields = {
-            f: cube[f].broadcast_like(cube["result_key"]).transpose(*dims).values.ravel()
-            if f in cube.coords
-            else None
-            for f in ("array.rows", "array.cols", "coding.window_s", "coding.n_windows")
-        }
+        fields = {f: field_values(cube, f) for f in (ROWS, COLS, WINDOW_S, N_WINDOWS)}
+        fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
         for p, key in enumerate(point_keys(cube)):
             entry = found.get(key)
             if entry is not None:
@@ -195,15 +198,11 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 "key": key,
                 "sweeps": [name],
                 "settings": list(settings[p]),
-                "rows": _int(fields["array.rows"], p),
-                "cols": _int(fields["array.cols"], p),
+                "rows": _int(fields[ROWS], p),
+                "cols": _int(fields[COLS], p),
                 **{v: float(values[p]) for v, values in scalars.items()},
-                "window_s": math.nan
-                if fields["coding.window_s"] is None
-                else float(fields["coding.window_s"][p]),
-                "n_windows": "?"
-                if fields["coding.n_windows"] is None
-                else label(fields["coding.n_windows"][p]),
+                "window_s": math.nan if fields[WINDOW_S] is None else float(fields[WINDOW_S][p]),
+                "n_windows": "?" if fields[N_WINDOWS] is None else label(fields[N_WINDOWS][p]),
                 "seconds": {}
                 if seconds is None
                 else {m: _model_seconds(seconds[p], stages, m) for m in accuracy},

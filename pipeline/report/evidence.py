@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from pipeline.report.cubes import point_keys, sweep_dims
+from pipeline.report.cubes import field_values, point_keys, sweep_dims
+from pipeline.report.panels import DATASET_KIND, DATASET_PATH
 from pipeline.stats import PairedComparison, Trend, compare_paired, trend
 
 REPORT_SEED = 20_240_531
@@ -154,11 +155,8 @@ def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
 
 def _dataset_ids(cube: xr.Dataset) -> list[str]:
     """Which recordings each point saw (``dataset.kind`` and ``dataset.path``), in point order."""
-    parts = [
-        cube[name].broadcast_like(cube["result_key"]).transpose(*sweep_dims(cube)).values.ravel()
-        for name in ("dataset.kind", "dataset.path")
-        if name in cube.coords
-    ]
+    found = (field_values(cube, name) for name in (DATASET_KIND, DATASET_PATH))
+    parts = [values.ravel() for values in found if values is not None]
     size = cube["result_key"].size
     return ["|".join(str(p[i]) for p in parts) for i in range(size)]
 

@@ -28,12 +28,13 @@ from matplotlib.ticker import (
     NullFormatter,
 )
 
+from pipeline.cube import field_attrs
 from pipeline.report import paper
 from pipeline.report.analysis import Report
 from pipeline.report.curves import Curve, MetricFit
 from pipeline.report.designs import Cost
 from pipeline.report.fronts import Front
-from pipeline.report.panels import PANEL_TITLES, Panel
+from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si
 
@@ -58,7 +59,7 @@ def draw_report(report: Report) -> dict[str, Figure]:
         Panel.WINDOW.value: lambda: curve_figure(
             PANEL_TITLES[Panel.WINDOW],
             curves[Panel.WINDOW],
-            "window length (coding.window_s, s)",
+            f"window length ({WINDOW_S}, {field_attrs(WINDOW_S)['units']})",
             chance,
             paper_x=paper.WINDOW_S,
         ),
@@ -107,7 +108,7 @@ def threshold_figure(curves: Sequence[Curve], full_scale_v: float, chance: float
     figure = curve_figure(
         PANEL_TITLES[Panel.THRESHOLD],
         curves,
-        "readout threshold theta (readout.threshold_v, V)",
+        f"readout threshold theta ({THRESHOLD_V}, {field_attrs(THRESHOLD_V)['units']})",
         chance,
         paper_x=paper.THRESHOLD_V,
     )

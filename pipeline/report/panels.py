@@ -9,6 +9,20 @@ from __future__ import annotations
 
 import enum
 
+from pipeline.scene import scene_field
+
+# The scene fields the report reads, by their dotted names (checked against the declarations).
+THRESHOLD_V = scene_field("readout.threshold_v")
+FULL_SCALE_V = scene_field("readout.full_scale_v")
+MISMATCH_SIGMA_REL = scene_field("readout.effects.threshold_mismatch.sigma_rel")
+WINDOW_S = scene_field("coding.window_s")
+N_WINDOWS = scene_field("coding.n_windows")
+ROWS = scene_field("array.rows")
+COLS = scene_field("array.cols")
+DATASET_KIND = scene_field("dataset.kind")
+DATASET_PATH = scene_field("dataset.path")
+REPEATS = scene_field("training.repeats")
+
 
 class Panel(enum.StrEnum):
     """One figure of the report; the value is its file stem."""
@@ -32,22 +46,22 @@ PANEL_TITLES = {
 
 # The swept fields (as sets) that make a one-dimensional cube feed a panel.
 PANEL_FIELDS = {
-    Panel.THRESHOLD: ({"readout.threshold_v"},),
-    Panel.WINDOW: ({"coding.window_s"}, {"coding.window_s", "coding.n_windows"}),
-    Panel.TAXELS: ({"array.rows"}, {"array.cols"}, {"array.rows", "array.cols"}),
-    Panel.MISMATCH: ({"readout.effects.threshold_mismatch.sigma_rel"},),
-    Panel.OBSERVATION: ({"coding.n_windows"},),
+    Panel.THRESHOLD: ({THRESHOLD_V},),
+    Panel.WINDOW: ({WINDOW_S}, {WINDOW_S, N_WINDOWS}),
+    Panel.TAXELS: ({ROWS}, {COLS}, {ROWS, COLS}),
+    Panel.MISMATCH: ({MISMATCH_SIGMA_REL},),
+    Panel.OBSERVATION: ({N_WINDOWS},),
 }
 
 
 def absent(panel: Panel) -> str:
     """Why ``panel`` has no data: the sweep it needs."""
     needs = {
-        Panel.THRESHOLD: "a sweep of readout.threshold_v",
-        Panel.WINDOW: "a sweep of coding.window_s",
-        Panel.TAXELS: "a sweep of array.rows / array.cols",
+        Panel.THRESHOLD: f"a sweep of {THRESHOLD_V}",
+        Panel.WINDOW: f"a sweep of {WINDOW_S}",
+        Panel.TAXELS: f"a sweep of {ROWS} / {COLS}",
         Panel.SPIKE_METRICS: "a sweep with correlate = true",
-        Panel.MISMATCH: "a sweep of readout.effects.threshold_mismatch.sigma_rel",
-        Panel.OBSERVATION: "a sweep of coding.n_windows alone",
+        Panel.MISMATCH: f"a sweep of {MISMATCH_SIGMA_REL}",
+        Panel.OBSERVATION: f"a sweep of {N_WINDOWS} alone",
     }
     return f"not in this run: it needs {needs[panel]}"

@@ -15,9 +15,10 @@ from pipeline.cube import (
     CUBE_VARIABLES,
     build_cube,
     field_attrs,
+    field_coordinate,
     metric_attrs,
 )
-from pipeline.cube import _flatten as flatten
+from pipeline.fields import flatten
 from pipeline.grid import Grid, sweep_points
 from pipeline.metrics import SpikeMetrics
 from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
@@ -151,9 +152,12 @@ def test_product_cube_layout_and_units():
     assert np.all(np.isinf(cube["ssnr_db"].values))
     assert cube["seconds"].sel(stage="train_ffnn").values.tolist() == [[1.0] * 3] * 2
     assert np.all(np.isnan(cube["seconds"].sel(stage="coding").values))  # not measured
-    # Each swept field also under its dotted name, along its own dimension only.
-    assert cube["readout.threshold_v"].dims == ("threshold_v",)
-    assert cube["coding.window_s"].values.tolist() == [0.1, 0.2, 0.3]
+    # A swept field is its axis's coordinate, not a second one under its dotted name.
+    assert "readout.threshold_v" not in cube.coords and "coding.window_s" not in cube.coords
+    assert field_coordinate(cube, "coding.window_s") == "window_s"
+    assert cube["window_s"].values.tolist() == [0.1, 0.2, 0.3]
+    assert field_coordinate(cube, "array.rows") == "array.rows"
+    assert field_coordinate(cube, "dataset.path") is None  # unset: the built-in data
     assert "correlation_r" not in cube
 
 
@@ -256,7 +260,8 @@ def test_base_and_fixed_fields_are_scalar_coordinates():
     assert noise["training.folds"].item() == grid.base.training.folds  # the base scene's
     assert noise["coding.n_windows"].item() == "auto"
     assert noise["dataset.kind"].item() == "synthetic"
-    assert noise["readout.effects.comparator_noise.sigma_v"].dims == ("amplifier_noise_sigma_v",)
+    assert noise["comparator_noise_sigma_v"].dims == ("amplifier_noise_sigma_v",)
+    assert "readout.effects.comparator_noise.sigma_v" not in noise.coords  # the axis holds it
     assert "dataset.path" not in noise.coords  # unset: the built-in data
     assert "name" not in noise.coords
     threshold = cubes["threshold"]
@@ -264,6 +269,29 @@ def test_base_and_fixed_fields_are_scalar_coordinates():
     assert threshold["readout.effects"].item() == "{}"  # ideal readout
     # A point's implied effect parameter is described although no one wrote it down.
     assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].item() == 0.1
+
+
+def test_swept_axes_hold_the_values_the_scenes_read():
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "ints": {"axes": {"readout.effects.threshold_mismatch.sigma_rel": [0, 1]}},
+                "tables": {"axes": {"readout.effects": [{}, {"amplifier_noise": {}}]}},
+            },
+        }
+    )
+    ints, tables = (
+        build(grid, sweep, entries(grid, sweep, lambda p: ResultEntry({}, {}, metrics())))
+        for sweep in grid.sweeps
+    )
+    # Whole numbers given for a float field are the floats the scenes hold.
+    assert ints["sigma_rel"].dtype == np.float64
+    assert ints["sigma_rel"].values.tolist() == [0.0, 1.0]
+    # A table is written as the scene reads it, its defaults filled in.
+    assert tables["effects"].values.tolist() == ["{}", '{"amplifier_noise": {"sigma_v": 0.005}}']
+    assert tables["effects"].attrs["field"] == "readout.effects"
+    assert "readout.effects" not in tables.coords
 
 
 def test_equivalent_bits_are_stored_once_as_the_metric_variable():
@@ -286,7 +314,6 @@ def test_models_and_folds_a_point_did_not_train_are_nan():
 
     cube = build(grid, sweep, entries(grid, sweep, make))
     assert list(cube["models"].values) == ['["ffnn"]', '["cnn"]']  # tables become JSON labels
-    assert list(cube["training.models"].values) == ['["ffnn"]', '["cnn"]']
     accuracy = cube["accuracy"]
     assert np.all(np.isnan(accuracy.isel(models=0).sel(model="cnn")))
     assert np.all(accuracy.isel(models=1).sel(model="cnn") == 0.5)
@@ -371,6 +398,8 @@ def test_units_are_those_of_the_one_declaration():
 
 def redeclare(monkeypatch, cls, name, **metadata):
     field = next(f for f in dataclasses.fields(cls) if f.name == name)
+    if "declared" in field.metadata:  # a scene field: its declaration (pipeline.fields.param)
+        metadata = {"declared": dataclasses.replace(field.metadata["declared"], **metadata)}
     monkeypatch.setattr(field, "metadata", types.MappingProxyType({**field.metadata, **metadata}))
 
 
@@ -382,7 +411,7 @@ def test_a_changed_declaration_changes_the_cube(monkeypatch):
     cubes = built()
     threshold = cubes["threshold"]
     assert threshold["threshold_v"].attrs["units"] == "mV"
-    assert threshold["readout.threshold_v"].attrs["long_name"] == "the threshold"
+    assert threshold["threshold_v"].attrs["long_name"] == "the threshold"
     assert threshold["readout.full_scale_v"].attrs["units"] == "kV"
     assert threshold["event_rate_hz"].attrs["units"] == "events/s"
     assert cubes["mismatch"]["readout.effects.threshold_mismatch.floor_rel"].attrs == {
@@ -538,16 +567,18 @@ def test_the_cube_is_what_a_point_by_point_assembly_gives():
                         one["accuracy_mean"].item(), np.nanmean(accuracy), equal_nan=True
                     )
                 assert np.isnan(one["accuracy_low"].item()) and np.isnan(one["accuracy_high"])
-        # Every scene field, by its dotted name, has the point's value there.
+        # Every scene field, by its dotted name or its axis, has the point's value there.
         for field, value in flatten(point.scene.to_dict()).items():
-            if field in cube.coords and field != "name":
+            name = field_coordinate(cube, field)
+            if name is not None and field != "name":
                 table = isinstance(value, list | dict)
                 expected = json.dumps(value, sort_keys=True) if table else value
-                assert here[field].item() == expected, field
+                assert here[name].item() == expected, field
     assert len(methods) == 2  # a Wilson interval and a bootstrap both met
     assert cube["accuracy_low"].attrs["interval"] == "; ".join(sorted(methods))
     assert cube["correct"].dtype == np.int8 and cube["test_fold"].dtype == np.int16
-    assert cube["training.repeats"].dims == ("repeats",)
+    assert cube["repeats"].attrs["field"] == "training.repeats"
+    assert "training.repeats" not in cube.coords
     assert cube["array.rows"].dims == ()
 
 

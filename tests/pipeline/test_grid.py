@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from pipeline import fields
 from pipeline.errors import SceneError
 from pipeline.grid import (
     DatasetFacts,
@@ -20,7 +21,7 @@ from pipeline.grid import (
     sweep_points,
 )
 from pipeline.recordings import Recordings
-from pipeline.scene import MODEL_REVISION, Effect, Scene, SceneVariants, _selected
+from pipeline.scene import MODEL_REVISION, Effect, Scene, SceneVariants
 from pipeline.stages import LEVELS, cache_key
 from pipeline.taxels import cut_samples, taxel_delays_s, taxel_signals
 
@@ -344,7 +345,7 @@ def reference_key(scene: Scene, level) -> str:
     data = scene.to_dict()
     data.pop("name")
     canonical = json.dumps(
-        _selected(data, parts),
+        fields.select(data, parts),
         sort_keys=True,
         separators=(",", ":"),
         allow_nan=False,
@@ -445,8 +446,8 @@ def test_canonical_form_is_that_of_the_whole_selection_with_or_without_a_memo():
         ("readout", "readout.full_scale_v", "seed"),
         ("readout.effects", "array.rows", "training"),
     ):
-        selected = data if parts is None else _selected(data, parts)
-        expected = json.dumps(selected, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        chosen = data if parts is None else fields.select(data, parts)
+        expected = json.dumps(chosen, sort_keys=True, separators=(",", ":"), allow_nan=False)
         assert scene.canonical(parts) == expected
         assert scene.canonical(parts, memo) == scene.canonical(parts, memo) == expected
     assert memo  # parts were remembered

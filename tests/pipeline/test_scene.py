@@ -13,6 +13,7 @@ from pipeline.scene import (
     Scene,
     ThresholdMismatch,
     builtin_scene_names,
+    scene_fields,
 )
 from pipeline.stages import cache_key, stage_fields
 
@@ -165,3 +166,40 @@ def test_a_new_model_revision_changes_every_key(monkeypatch):
     before = {stage: cache_key(scene, stage) for stage in stages}
     monkeypatch.setattr(scene_module, "MODEL_REVISION", scene_module.MODEL_REVISION + 1)
     assert all(cache_key(scene, stage) != before[stage] for stage in stages)
+
+
+def test_every_field_is_listed_once_with_its_declaration():
+    listed = {info.path: info for info in scene_fields()}
+    assert len(listed) == len(scene_fields())
+    threshold = listed["readout.threshold_v"]
+    assert (threshold.type, threshold.default, threshold.units) == ("float", 0.09, "V")
+    assert threshold.range == "> 0 V" and threshold.description
+    noise = listed["readout.effects.amplifier_noise.sigma_v"]
+    assert (noise.default, noise.units, noise.range) == (0.005, "V", ">= 0 V")
+    assert listed["coding.n_windows"].type == "int | 'auto'"
+    assert listed["coding.n_windows"].range == "'auto' or between 1 and 100000"
+    assert listed["training.models"].default == ["ffnn", "cnn"]
+    assert listed["dataset.path"].type == "str (optional)"
+    assert "name" not in listed and "readout.effects" not in listed
+    assert threshold.text() == (
+        "readout.threshold_v: float = 0.09 V (> 0 V), comparator threshold (level-crossing step)"
+    )
+    assert (
+        listed["coding.polarity"]
+        .text()
+        .startswith("coding.polarity: 'merged' | 'split' = \"merged\", how")
+    )
+    # Each listed field is one a scene reads, at its listed default.
+    for path, info in listed.items():
+        if info.default is not None and not path.startswith("readout.effects."):
+            assert Scene().replace(**{path: info.default}) == Scene(), path
+
+
+def test_a_value_out_of_its_declared_range_is_refused_with_the_range():
+    for info in scene_fields():
+        if info.range.startswith("between"):
+            low = float(info.range.split()[1])
+            value = int(low) - 1 if info.type == "int" else low / 2 - 1
+            path = info.path
+            with pytest.raises(SceneError, match=f"{path}: .* is out of range: must be between"):
+                Scene().replace(**{path: value})

@@ -1,13 +1,17 @@
 """The stage registry: keys of earlier stores stay valid, a key follows exactly what its level
 reads, and a scene run reports exactly the registry's steps."""
 
+import enum
 import inspect
+from dataclasses import dataclass
 
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from pipeline.scene import Scene
+from pipeline import fields
+from pipeline.fields import param, part
+from pipeline.scene import ReadoutSpec, Scene
 from pipeline.simulate import run_scene, stage_names
 from pipeline.stages import (
     FRONT_END,
@@ -81,6 +85,63 @@ def test_keys_of_earlier_stores_stay_valid(name):
     assert {stage: cache_key(scene, stage) for stage in keys} == keys
 
 
+class Encoder(enum.StrEnum):
+    """A test-only option: today's level-crossing encoder and another one."""
+
+    LCS = "lcs"
+    DECAYING = "decaying"
+
+
+@dataclass(frozen=True)
+class ReadoutWithEncoder(ReadoutSpec):
+    """The readout with a field added in this test alone, whose default is what the readout
+    does today, declared neutral."""
+
+    encoder: Encoder = param(Encoder.LCS, "1", "encoder architecture", neutral=True)
+
+
+@dataclass(frozen=True)
+class SceneWithEncoder(Scene):
+    readout: ReadoutWithEncoder = part(ReadoutWithEncoder)
+
+
+@dataclass(frozen=True)
+class ReadoutWithKeyedEncoder(ReadoutSpec):
+    """The same field, its default not declared neutral."""
+
+    encoder: Encoder = param(Encoder.LCS, "1", "encoder architecture")
+
+
+@dataclass(frozen=True)
+class SceneWithKeyedEncoder(Scene):
+    readout: ReadoutWithKeyedEncoder = part(ReadoutWithKeyedEncoder)
+
+
+@pytest.mark.parametrize("name", EARLIER_KEYS)
+def test_a_new_field_at_its_neutral_default_leaves_every_key_unchanged(name):
+    scene, keys = EARLIER_KEYS[name]
+    extended = SceneWithEncoder.from_dict(scene.to_dict())
+    assert extended.readout.encoder is Encoder.LCS
+    assert extended.to_dict()["readout"]["encoder"] == "lcs"  # a field like any other
+    assert {stage: level_named(stage).key(extended) for stage in keys} == keys
+    assert {stage: cache_key(extended, stage) for stage in keys} == keys
+    # Another value is part of the key of every level that reads the readout.
+    other = extended.replace(**{"readout.encoder": "decaying"})
+    assert isinstance(other, SceneWithEncoder) and other.readout.encoder is Encoder.DECAYING
+    changed = {stage for stage in keys if level_named(stage).key(other) != keys[stage]}
+    assert changed == {"spikes", "rates", "results"}
+    # Named at its default, the field is still left out: the key is that of the scene.
+    named = other.replace(**{"readout.encoder": "lcs"})
+    assert {stage: level_named(stage).key(named) for stage in keys} == keys
+
+
+def test_a_new_field_not_declared_neutral_changes_the_keys_that_read_it():
+    scene, keys = EARLIER_KEYS["paper"]
+    extended = SceneWithKeyedEncoder.from_dict(scene.to_dict())
+    changed = {stage for stage in keys if level_named(stage).key(extended) != keys[stage]}
+    assert changed == {"spikes", "rates", "results"}
+
+
 # Which levels read each scene part, stated independently of the registry.
 READ_BY = {
     "dataset": {"recordings", "front_end", "spikes", "rates", "results"},
@@ -124,10 +185,7 @@ def _readers(scene: Scene, field: str) -> set[str]:
 )
 def test_a_key_changes_exactly_when_a_field_its_level_reads_changes(base, field_and_value):
     field, value = field_and_value
-    old = base.to_dict()
-    for part in field.split("."):
-        old = old[part]
-    assume(old != value)
+    assume(fields.get(base.to_dict(), field) != value)
     changed = base.replace(**{field: value})
     differs = {level.name for level in LEVELS if level.key(changed) != level.key(base)}
     assert differs == _readers(base, field)
