@@ -35,7 +35,8 @@ import psutil
 
 from flows.server import IDLE_ENV, MARKER, SERVER_DIR_ENV
 from flows.server import stop as stop_server
-from storage import EntryKind, SweepStore
+from pipeline.stages import RESULTS, SPIKES
+from storage import SweepStore
 
 GRID_ENV = "ESKIN_BENCH_SWEEP_GRID"
 DEFAULT_GRID = "paper"
@@ -204,11 +205,9 @@ def stage_seconds(root: Path) -> float:
     training once per result (coding a rate matrix, which the store does not keep, is timed
     by each result that needed it)."""
     store = SweepStore.open(root)
-    spikes = store.read_many(
-        EntryKind.SPIKES, store.complete_keys(EntryKind.SPIKES), discard_corrupt=False
-    )
+    spikes = store.read_many(SPIKES.record, store.complete_keys(SPIKES.name), discard_corrupt=False)
     results = store.read_many(
-        EntryKind.RESULTS, store.complete_keys(EntryKind.RESULTS), discard_corrupt=False
+        RESULTS.record, store.complete_keys(RESULTS.name), discard_corrupt=False
     )
     total = sum(sum(entry.seconds.values()) for entry in spikes.values())
     for entry in results.values():

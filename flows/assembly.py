@@ -13,8 +13,8 @@ import numpy as np
 import xarray as xr
 
 from flows.planning import SweepPlan
-from storage import EntryKind, StoreError, SweepStore
-from storage.cubes import SPIKE_STAGES
+from pipeline.stages import RESULTS
+from storage import StoreError, SweepStore
 
 
 def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
@@ -37,7 +37,7 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
     spec = next(s for s in plan.grid.sweeps if s.name == name)
     keys = plan.sweep_keys[name]
     computed = [key for key in keys if key not in plan.records]
-    read = store.read_many(EntryKind.RESULTS, computed, discard_corrupt=False)
+    read = store.read_many(RESULTS.record, computed, discard_corrupt=False)
     missing = [key for key in computed if key not in read]
     if missing:
         raise StoreError(
@@ -45,7 +45,7 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
             f"(first: {missing[0]})"
         )
     records = {key: plan.records[key] if key in plan.records else read[key] for key in keys}
-    cube = build_cube(plan.grid, spec, records, spike_stages=SPIKE_STAGES)
+    cube = build_cube(plan.grid, spec, records)
     if not _stored_as(store, name, cube):
         store.write_cube(name, cube)
     return cube

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.grid import Grid, cost_kind
+from pipeline.stages import RESULTS
 from storage import SweepStore
 
 
@@ -93,7 +94,7 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
 
     The estimate: points of the same *kind* (:func:`cost_kind`) cost about the same. A missing
     point is estimated at the median, over the cached points of this grid of its kind, of the
-    total of their measured stage seconds (:attr:`storage.ResultEntry.seconds`); a missing
+    total of their measured stage seconds (:attr:`pipeline.records.ResultEntry.seconds`); a missing
     point whose kind has no cached point is counted in ``unknown`` and left out. Stage seconds
     are as measured when each stage ran, so a spike train or a dataset that several points
     share counts in each of them: the estimate leans high for points that will share work with
@@ -121,7 +122,7 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     scenes = grid.unique_points()
     totals: dict[str, float] = {}
     if store is not None:
-        for key, entry in store.peek_results(scenes).items():
+        for key, entry in store.peek_many(RESULTS.record, scenes).items():
             totals[key] = sum(entry.seconds.values())
     by_kind: dict[str, list[float]] = {}
     for key, seconds in totals.items():

@@ -15,9 +15,10 @@ from pathlib import Path
 
 from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
 from pipeline.recordings import resolve_dataset_argument
+from pipeline.records import ResultEntry
 from pipeline.scene import DatasetSpec, Scene
-from pipeline.stages import RECORDINGS
-from storage import EntryKind, ResultEntry, SweepStore
+from pipeline.stages import RECORDINGS, RESULTS
+from storage import SweepStore
 
 DEFAULT_RUNS_DIR = Path("runs")
 
@@ -146,6 +147,6 @@ def plan_sweep(grid: Grid, root: str | Path) -> SweepPlan:
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    found = store.read_many(EntryKind.RESULTS, scenes, discard_corrupt=True)
+    found = store.read_many(RESULTS.record, scenes, discard_corrupt=True)
     records = {key: found[key] for key in scenes if key in found}
     return SweepPlan(grid, str(store.root), scenes, records)

@@ -19,10 +19,11 @@ from typing import Any
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import SweepPlan
+from pipeline import stages
 from pipeline.grid import training_cost
 from pipeline.scene import CanonicalMemo, Scene
-from pipeline.stages import LEVELS, RESULTS, SPIKES, Level
-from storage import EntryKind, SweepStore
+from pipeline.stages import RESULTS, SPIKES, Level
+from storage import SweepStore
 
 #: Tasks per worker thread a sweep's missing points are split into (see
 #: :func:`default_points_per_task`), and the most points one task takes.
@@ -31,12 +32,13 @@ MAX_POINTS_PER_TASK = 500
 
 
 def point_keys(scene: Scene, memo: CanonicalMemo | None = None) -> dict[str, str]:
-    """The cache key of every level of the registry for ``scene``, by level name.
+    """The cache key of every level of the registry (:data:`pipeline.stages.LEVELS`, as it is at
+    the call) for ``scene``, by level name.
 
     ``memo`` as for :meth:`pipeline.scene.Scene.canonical`: the points of a grid share scene
     parts, each written once for all their keys.
     """
-    return {level.name: level.key(scene, memo) for level in LEVELS}
+    return {level.name: level.key(scene, memo) for level in stages.LEVELS}
 
 
 @contextlib.contextmanager
@@ -95,7 +97,7 @@ def submit_missing(
     for key in sorted(cost, key=cost.__getitem__, reverse=True):
         by_train.setdefault(keys[key][SPIKES.name], []).append(key)
     batches = _batches(by_train, size)
-    stored = store.complete_keys(EntryKind.SPIKES)
+    stored = store.complete_keys(SPIKES.name)
     spread = collections.Counter(train for batch in batches for train in {t for t, _ in batch})
     shared = [train for train, n in spread.items() if n > 1 and train not in stored]
 

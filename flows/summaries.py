@@ -54,7 +54,7 @@ def result_summary(result: Any) -> dict[str, Any]:
                 "std": cv.std,
                 "folds": [float(a) for a in np.ravel(cv.fold_accuracy)],
                 "repeats": int(np.atleast_2d(cv.fold_accuracy).shape[0]),
-                **_interval(cv, result.labels),
+                **_interval(cv, result.labels, scene, model.value),
             }
             for model, cv in result.accuracy.items()
         },
@@ -68,14 +68,18 @@ def result_summary(result: Any) -> dict[str, Any]:
     }
 
 
-def _interval(cv: Any, labels: np.ndarray | None) -> dict[str, Any]:
-    """The 95 % interval of a model's accuracy over recordings, where its predictions are known."""
+def _interval(cv: Any, labels: np.ndarray | None, scene: Any, model: str) -> dict[str, Any]:
+    """The 95 % interval of a model's accuracy over recordings, where its predictions are known:
+    the interval a sweep's cube gives the same design (a bootstrap seeded from the scene's result
+    key and the model)."""
     predicted = getattr(cv, "predicted", None)
     if predicted is None or labels is None:
         return {}
+    from pipeline.stages import RESULTS, interval_generator
     from pipeline.stats import accuracy_interval
 
-    interval = accuracy_interval(predicted == labels, labels, rng=np.random.default_rng(0))
+    rng = interval_generator(RESULTS.key(scene), model)
+    interval = accuracy_interval(predicted == labels, labels, rng=rng)
     return {"low": interval.low, "high": interval.high, "interval": interval.method}
 
 

@@ -6,7 +6,7 @@ what their inputs need from the store and computing only the entries that are mi
 first. A batch of cheap points costs one Dask task instead of one each, and its entries are
 written together: one batch per kind in the store (:mod:`storage.batches`) each time the task
 flushes, which it does at its end and every :data:`FLUSH_S` seconds or :data:`FLUSH_BYTES`
-bytes of pending trains, so that a killed worker loses at most that much work. Each batch is
+bytes of pending entries, so that a killed worker loses at most that much work. Each batch is
 written complete or not at all. Work is keyed by the levels' cache keys, so two points that
 share a spike train (a window sweep at one threshold) reuse it. The levels the store does not
 keep (the recordings, their front end, the rate matrices) stay in memory, a few per worker.
@@ -24,23 +24,16 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from flows.environment import tune_allocator
-from pipeline.cube import OutOfFold, RecordingsInfo
+from pipeline import stages
 from pipeline.scene import Scene
-from pipeline.stages import (
-    LEVELS,
-    RATES,
-    RECORDINGS,
-    RESULTS,
-    SPIKES,
-    Level,
-    Stopwatch,
-    level_named,
-)
-from storage import ResultEntry, SpikeEntry, SweepStore
+from pipeline.stages import Level, Stopwatch
+from storage import SweepStore
 
 # pipeline.training (torch, scikit-learn) is imported by the results level when it runs: the
 # coordinator imports this module only to name the function it submits, and never trains.
@@ -54,39 +47,8 @@ _kept_lock = threading.Lock()
 #: A task writes its pending entries at least this often (s), so a killed worker loses at most
 #: this much work: a batch per minute keeps the files few even when points take seconds.
 FLUSH_S = 60.0
-#: ... and once its pending spike trains hold this many bytes, to bound a worker's memory.
+#: ... and once its pending entries hold this many bytes (mostly spike trains), to bound memory.
 FLUSH_BYTES = 128 * 2**20
-
-# A level of the same point, made once: its output (or entry) and the seconds that holds.
-_Made = Callable[[Level], tuple[Any, dict[str, float]]]
-
-
-def _result_entry(accuracy: Any, seconds: dict[str, float], made: _Made) -> ResultEntry:
-    spikes, spike_seconds = made(SPIKES)
-    _, rate_seconds = made(RATES)
-    recordings, _ = made(RECORDINGS)
-    return ResultEntry(
-        fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
-        seconds={**spike_seconds, **rate_seconds, **seconds},
-        metrics=spikes.metrics,
-        # The cube states what the point was computed on, without reloading the dataset.
-        recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
-        out_of_fold=OutOfFold(
-            recording_names=tuple(recordings.names),
-            labels=recordings.labels,
-            predicted={model.value: cv.predicted for model, cv in accuracy.items()},
-            test_fold=next(iter(accuracy.values())).test_fold,
-        ),
-    )
-
-
-# How each stored level's output becomes its store entry (the layouts are in storage.store), given
-# the seconds the entry accounts for. A result is all a cube reads of a point, so it also carries
-# the spike metrics and the seconds of the entries it was made from.
-_ENTRIES: dict[str, Callable[[Any, dict[str, float], _Made], Any]] = {
-    SPIKES.name: lambda out, seconds, made: SpikeEntry(out.encoded, out.metrics, seconds),
-    RESULTS.name: _result_entry,
-}
 
 
 class PointsFailed(RuntimeError):
@@ -147,7 +109,7 @@ def ensure_entries(
 
     torch.set_num_threads(1)
     tune_allocator()
-    wanted = level_named(level)
+    wanted = stages.level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
     task = _Task(SweepStore.open(root))
@@ -197,7 +159,7 @@ class _Task:
             return self._recent[level.name, key]
         if key not in self._listed(level):
             return None
-        found = self.store.read_valid(level.name, key)
+        found = self.store.read_valid(level.record, key)
         if found is not None:
             self._remember(level.name, key, found)
         return found
@@ -205,7 +167,7 @@ class _Task:
     def add(self, level: Level, key: str, entry: Any) -> None:
         """Keep a new entry to write at the next flush."""
         self._pending.setdefault(level.name, {})[key] = entry
-        self._pending_bytes += _entry_bytes(entry)
+        self._pending_bytes += _entry_bytes(level, entry)
         self._remember(level.name, key, entry)
 
     def flush_if_due(self) -> None:
@@ -217,10 +179,10 @@ class _Task:
 
     def flush(self) -> None:
         """Write the pending entries, one batch per level, inputs before the levels after."""
-        for level in LEVELS:
+        for level in stages.stored_levels():
             entries = self._pending.pop(level.name, None)
             if entries:
-                self.store.write_entries(level.name, entries)
+                self.store.write_entries(level.record, entries)
         self._pending_bytes = 0
         self._flushed = time.monotonic()
 
@@ -231,16 +193,14 @@ class _Task:
 
     def _remember(self, kind: str, key: str, entry: Any) -> None:
         self._recent[kind, key] = entry
-        while len(self._recent) > _KEPT_PER_LEVEL * len(LEVELS):
+        while len(self._recent) > _KEPT_PER_LEVEL * len(stages.LEVELS):
             self._recent.popitem(last=False)
 
 
-def _entry_bytes(entry: Any) -> int:
-    """Bytes of a pending entry's arrays that matter for memory: its spike trains."""
-    if not isinstance(entry, SpikeEntry):
-        return 0
-    trains = {id(t): t for t in (entry.encoded.true, entry.encoded.real)}.values()
-    return sum(a.nbytes for t in trains for a in (t.times_s, t.polarity, t.count))
+def _entry_bytes(level: Level, entry: Any) -> int:
+    """Bytes of a pending entry's arrays, as its record stores them."""
+    values, _ = level.record.encode(entry)
+    return sum(np.asarray(value).nbytes for value in values.values())
 
 
 class _Point:
@@ -268,10 +228,15 @@ class _Point:
             output = level.run(self.scene, self._inputs(level), watch)
             seconds = {
                 step: value
-                for upstream in _accounted(level)
-                for step, value in self.made(upstream)[1].items()
+                for before in _accounted(level)
+                for step, value in self.made(before)[1].items()
             }
-            entry = _ENTRIES[level.name](output, {**seconds, **watch.seconds}, self.made)
+            upstream = {each.name: each for each in level.upstream()}
+            entry = level.record.make(
+                output,
+                {**seconds, **watch.seconds},
+                lambda name: self.made(upstream[name])[0],
+            )
             self.task.add(level, key, entry)
         return entry, entry.seconds
 
@@ -295,11 +260,12 @@ class _Point:
 
 
 def _accounted(level: Level) -> tuple[Level, ...]:
-    """The in-memory levels whose seconds ``level``'s entry holds besides its own steps.
+    """The levels upstream of ``level`` whose seconds its entry holds besides its own steps.
 
-    Those upstream of it that no stored level upstream of it needs as well: the seconds of the
-    recordings and front end go into the spike entry, not again into the rate entry.
+    Those that no stored level upstream of it needs: a stored one's entry already holds the
+    seconds of everything it needs (the recordings' and front end's are in the spike entry,
+    and a result entry holds them through it).
     """
     upstream = level.upstream()
-    covered = {each.name for s in upstream if s.stored for each in (*s.upstream(), s)}
-    return tuple(each for each in upstream if not each.stored and each.name not in covered)
+    covered = {each.name for s in upstream if s.stored for each in s.upstream()}
+    return tuple(each for each in upstream if each.name not in covered)

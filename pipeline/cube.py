@@ -26,6 +26,8 @@ Data variables
 ``data_rate_bps``     (axes...)               address-event bits per second
 ``equivalent_bits``   (axes...)               ``log2(full_scale_v / threshold_v)``
 ``seconds``           (axes..., stage)        wall seconds each stage took when it was computed
+``n_windows_used``    (axes...)               int64 rate-coding windows the point used
+                      (``coding.n_windows`` resolved; -1 where its result does not say)
 
 A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
 metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of
@@ -46,16 +48,18 @@ Coordinates
 * ``result_key`` (axes...): each point's result cache key (a point two sweeps share has one key).
 * Every other scene field by its dotted name (``array.rows``,
   ``readout.effects.amplifier_noise.sigma_v``, the base scene's fields and the sweep's fixed
-  ``set`` ones alike), and ``readout.equivalent_bits`` derived from threshold and full scale: a
-  scalar where every point has the same value, otherwise along the dimensions it varies with. A
-  swept field is its axis's coordinate alone (:func:`field_coordinate` finds a field's
-  coordinate either way). Lists and tables are canonical JSON strings (an ideal readout's
-  ``readout.effects`` is ``"{}"``); a field left unset (its default applies, e.g.
-  ``dataset.path`` of the built-in data) has none, and neither has ``name``.
+  ``set`` ones alike): a scalar where every point has the same value, otherwise along the
+  dimensions it varies with. A swept field is its axis's coordinate alone
+  (:func:`field_coordinate` finds a field's coordinate either way). Lists and tables are
+  canonical JSON strings (an ideal readout's ``readout.effects`` is ``"{}"``); a field left unset
+  (its default applies, e.g. ``dataset.path`` of the built-in data) has none, and neither has
+  ``name``.
 
 Every variable and coordinate has CF ``units`` ("1" for dimensionless numbers and labels) and a
 prose ``long_name``, declared once: on the scene's fields (:func:`pipeline.fields.param`), on
-:class:`~pipeline.metrics.SpikeMetrics`, and here (:data:`CUBE_VARIABLES`) for the cube's own.
+:class:`~pipeline.metrics.SpikeMetrics`, on the results record (:data:`pipeline.stages.RESULTS`)
+for :data:`RESULT_VALUES`, and here (:data:`CUBE_VARIABLES`) for the cube's own. The ``stage``
+coordinate is every step of the stage registry (:func:`pipeline.stages.steps_of`).
 
 Attributes: ``grid``, ``sweep``, ``title``, ``mode``, ``seed``, ``training_seed`` (the base
 scene's), ``package_version`` and the versions of Python and of the libraries that shape the
@@ -71,8 +75,7 @@ import json
 import operator
 import platform
 import warnings
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from importlib import metadata
 from typing import Any, Protocol
 
@@ -82,7 +85,9 @@ import xarray as xr
 from pipeline import fields
 from pipeline.grid import Grid, GridPoint, Sweep
 from pipeline.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_with_accuracy
+from pipeline.records import OutOfFold, RecordingsInfo
 from pipeline.scene import Model, Scene, canonical_parts
+from pipeline.stages import RESULTS, interval_generator, steps_of
 
 METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
 CORRELATED_METRICS = ("ssnr_db", "ste_s2")
@@ -109,10 +114,10 @@ CUBE_VARIABLES: dict[str, dict[str, str]] = {
     "coefficient": {"units": "1", "long_name": "correlation coefficient"},
     "result_key": {"units": "1", "long_name": "result cache key of the point"},
 }
-#: Coordinates derived from scene fields: dotted name -> (value of a scene, metric declaring it).
-DERIVED: dict[str, tuple[Callable[[Scene], Any], str]] = {
-    "readout.equivalent_bits": (lambda scene: scene.readout.equivalent_bits, "equivalent_bits"),
-}
+#: Per-point values the results store beside accuracy and metrics, as cube variables (axes...):
+#: name -> the value where a point's result does not state it. Units and long names are those
+#: of the results record's declaration (:data:`pipeline.stages.RESULTS`).
+RESULT_VALUES: dict[str, int] = {"n_windows_used": -1}
 # One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and
 # plain strings keep cubes comparable with xarray.testing.assert_identical. Read once, at import:
 # the process runs one set of libraries.
@@ -125,66 +130,8 @@ DEPENDENCY_VERSIONS: dict[str, str] = {
 }
 
 
-@dataclass(frozen=True)
-class RecordingsInfo:
-    """What a point's result says of the recordings it was computed on; None where unknown.
-
-    Attributes
-    ----------
-    dataset_name : str or None
-        :attr:`pipeline.recordings.Recordings.name`.
-    class_names : tuple[str, ...] or None
-        Class names, in label order.
-    sampling_rate_hz : float or None
-        Sampling rate of the recordings (Hz).
-    """
-
-    dataset_name: str | None = None
-    class_names: tuple[str, ...] | None = None
-    sampling_rate_hz: float | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class OutOfFold:
-    """Every recording's out-of-fold prediction of one point, per model and repeat.
-
-    Attributes
-    ----------
-    recording_names : tuple[str, ...]
-        ``n`` distinct recording names (:attr:`pipeline.recordings.Recordings.names`).
-    labels : int64 (n,)
-        Class index of each recording.
-    predicted : dict[str, int64 (repeats, n)]
-        Model name -> the class index each recording got from the fold that tested it.
-    test_fold : int64 (repeats, n)
-        The fold that tested each recording, per repeat (the same for every model).
-    """
-
-    recording_names: tuple[str, ...]
-    labels: np.ndarray
-    predicted: Mapping[str, np.ndarray]
-    test_fold: np.ndarray
-
-    def __post_init__(self) -> None:
-        n = len(self.recording_names)
-        labels = np.asarray(self.labels)
-        test_fold = np.asarray(self.test_fold)
-        problems = []
-        if len(set(self.recording_names)) != n:
-            problems.append("recording names repeat")
-        if labels.shape != (n,):
-            problems.append(f"labels {labels.shape} do not match {n} recordings")
-        if test_fold.ndim != 2 or test_fold.shape[1] != n:
-            problems.append(f"test_fold {test_fold.shape} is not (repeats, {n})")
-        for model, values in self.predicted.items():
-            if np.shape(values) != test_fold.shape:
-                problems.append(f"predicted[{model!r}] {np.shape(values)} != {test_fold.shape}")
-        if problems:
-            raise ValueError("out-of-fold predictions: " + "; ".join(problems))
-
-
 class PointResult(Protocol):
-    """What the cube needs of one point (:class:`storage.ResultEntry` is one)."""
+    """What the cube needs of one point (:class:`pipeline.records.ResultEntry` is one)."""
 
     @property
     def fold_accuracy(self) -> Mapping[str, np.ndarray]: ...
@@ -201,13 +148,14 @@ class PointResult(Protocol):
     @property
     def out_of_fold(self) -> OutOfFold | None: ...
 
+    @property
+    def n_windows_used(self) -> int | None: ...
+
 
 def build_cube(
     grid: Grid,
     sweep: Sweep,
     records: Mapping[str, PointResult],
-    *,
-    spike_stages: Sequence[str],
 ) -> xr.Dataset:
     """Assemble the cube of one sweep from its points' results.
 
@@ -216,10 +164,8 @@ def build_cube(
     grid, sweep
         The grid and one of its sweeps.
     records
-        Result of every point of the sweep, by result key.
-    spike_stages
-        Names of the stages before coding, in order; the ``stage`` coordinate is these, then
-        ``coding`` and ``train_<model>`` per model.
+        Result of every point of the sweep, by result key. The ``stage`` coordinate is every
+        step of the stage registry, in order (:func:`pipeline.stages.steps_of`).
 
     Raises
     ------
@@ -243,7 +189,7 @@ def build_cube(
     models = [m.value for m in Model if any(m in t.models for t in trainings)]
     n_folds = max(t.folds for t in trainings)
     n_repeats = max(t.repeats for t in trainings)
-    stages = [*spike_stages, "coding", *(f"train_{m}" for m in models)]
+    stages = list(steps_of(models))
     size = int(np.prod(shape))
     accuracy = _fold_accuracy(results, flat, size, models, n_repeats, n_folds)
     accuracy = accuracy.reshape(*shape, *accuracy.shape[1:])
@@ -259,6 +205,11 @@ def build_cube(
         **{name: (dims, values) for name, values in metrics.items()},
         "seconds": ((*dims, "stage"), seconds),
     }
+    for name, unknown in RESULT_VALUES.items():
+        values = np.full(size, unknown, dtype=np.int64)
+        stated = [getattr(result, name) for result in results]
+        values[flat] = [unknown if value is None else value for value in stated]
+        data_vars[name] = (dims, values.reshape(shape))
     coords: dict[str, Any] = {
         "model": ("model", models),
         "repeat": ("repeat", np.arange(n_repeats)),
@@ -273,7 +224,7 @@ def build_cube(
         data_vars.update(predictions)
         coords.update(recording_coords)
         correct, label = predictions["correct"][1], recording_coords["label"][1]
-    data_vars.update(_accuracy_summary(accuracy, correct, label, dims, points))
+    data_vars.update(_accuracy_summary(accuracy, correct, label, dims, points, models))
     coords.update(_axis_coordinates(sweep, points))
     cube = xr.Dataset(data_vars, coords=coords)
     if sweep.correlate:
@@ -332,8 +283,8 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
     Parameters
     ----------
     name
-        A name of :data:`CUBE_VARIABLES`, a spike metric, a dotted scene field or one of
-        :data:`DERIVED`.
+        A name of :data:`CUBE_VARIABLES`, a spike metric, one of :data:`RESULT_VALUES` or a
+        dotted scene field.
     field
         The dotted scene field of a swept axis's coordinate (its name is a dimension name).
 
@@ -348,8 +299,8 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
         return dict(CUBE_VARIABLES[name])
     if name in METRICS:
         return metric_attrs(name)
-    if name in DERIVED:
-        return metric_attrs(DERIVED[name][1])
+    if name in RESULT_VALUES:
+        return RESULTS.record.variable(name).attrs()
     return field_attrs(name)
 
 
@@ -489,14 +440,16 @@ def _accuracy_summary(
     label: np.ndarray | None,
     dims: tuple[str, ...],
     points: list[GridPoint],
+    models: list[str],
 ) -> dict[str, Any]:
     """``accuracy_mean``, ``accuracy_low``, ``accuracy_high`` (axes..., model) of every point.
 
     With out-of-fold predictions: the fraction of (recording, repeat) pairs classified correctly
     and its 95 % interval (as :func:`pipeline.stats.accuracy_interval` gives it: Wilson score for
     one repeat, all at once by :func:`pipeline.stats.wilson_interval`; a class-stratified
-    bootstrap over recordings for several, its generator seeded from the point's training seed
-    and index). Without: the mean over folds, and no interval (NaN).
+    bootstrap over recordings for several, its generator seeded from the point's result key and
+    the model, :func:`pipeline.stages.interval_generator`). Without: the mean over folds, and no
+    interval (NaN).
     """
     from pipeline.stats import WILSON_METHOD, accuracy_interval, wilson_interval
 
@@ -542,7 +495,7 @@ def _accuracy_summary(
             interval = accuracy_interval(
                 cell[:, held[c]] == 1,
                 label[held[c]],
-                rng=np.random.default_rng([point.scene.training.seed, *point.index, m]),
+                rng=interval_generator(point.key, models[m]),
             )
             mean[c], low[c], high[c] = interval.estimate, interval.low, interval.high
             methods.add(interval.method)
@@ -585,11 +538,11 @@ def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
 def _scene_coordinates(
     points: list[GridPoint], flat: np.ndarray, sweep: Sweep
 ) -> dict[str, xr.Variable]:
-    """Every scene field (and derived one) that every point has, along the dims it varies with.
+    """Every scene field that every point has, along the dims it varies with.
 
     ``flat`` gives each point's position in the flattened sweep dimensions. A field's values are
     read once per distinct object of the scene part holding it (the points of a sweep share
-    their parts), and derived ones once per point.
+    their parts).
     """
     size = int(np.prod(sweep.shape))
     tops = list(canonical_parts(type(points[0].scene)))
@@ -608,17 +561,12 @@ def _scene_coordinates(
                 flattened[top].append(fields.flatten({top: data[top]} if top in data else {}))
         for top in tops:
             owner[top][i] = distinct[top][id(getattr(scene, top))]
-    # A field with its owners, as above; a derived field is owned by each point.
+    # A field with its owners, as above.
     columns: dict[str, tuple[np.ndarray, list[dict[str, Any]]]] = {}
     first = points[0].scene
     for top in tops:
         for field in flattened[top][distinct[top][id(getattr(first, top))]]:
             columns[field] = (owner[top], flattened[top])
-    for name, (value, _) in DERIVED.items():
-        derived = [{}] * size
-        for i, point in zip(flat.tolist(), points, strict=True):
-            derived[i] = {name: value(point.scene)}
-        columns[name] = (np.arange(size), derived)
     coords = {}
     for field, (owners, values) in columns.items():
         if not all(field in found for found in values):

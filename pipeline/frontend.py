@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import DatasetError
-from pipeline.recordings import Recordings
+from pipeline.recording_set import Recordings
 
 __all__ = ["PERCENTILE", "FrontEnd", "fit_front_end", "streaming_percentile"]
 

@@ -77,9 +77,9 @@ from pipeline.scene import (
     DatasetSpec,
     Scene,
     SceneVariants,
-    cache_key,
     with_dataset_path_from,
 )
+from pipeline.stages import cache_key
 from pipeline.taxels import cut_samples, taxel_delays_s
 
 if TYPE_CHECKING:

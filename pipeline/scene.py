@@ -16,8 +16,8 @@ Readout *effects* are a mapping from effect name to parameters. An effect that i
 simulated and is not part of any cache key; an ideal scene names none. The scene seed enters the
 spike-train key only when a named effect draws random numbers.
 
-Cache keys (:func:`cache_key`) hash exactly the fields a stage depends on; which fields those are
-is declared with the stages themselves, in :mod:`pipeline.stages`::
+Cache keys (:func:`pipeline.stages.cache_key`) hash exactly the fields a stage depends on; which
+fields those are is declared with the stages themselves, in :mod:`pipeline.stages`::
 
     recordings : dataset
     spikes     : dataset, array, readout (+ seed if a random effect is named)
@@ -488,14 +488,6 @@ def _canonical_plan(
     )
 
 
-def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
-    """The scene parts the output of ``stage`` depends on (see :mod:`pipeline.stages`)."""
-    # Imported here: the stage registry imports this module.
-    from pipeline.stages import level_named
-
-    return level_named(stage).key_parts(scene)
-
-
 #: Revision of what the stages compute for a given scene. Bump it with any change that alters a
 #: stage's output for the same fields (a different random stream, a fixed bug, a new training
 #: step), so that stores made before the change are recomputed instead of mixed with new points.
@@ -503,15 +495,6 @@ def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
 #: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
 #: follow the statistics measured on real texture recordings.
 MODEL_REVISION = 3
-
-
-def cache_key(scene: Scene, stage: str, memo: CanonicalMemo | None = None) -> str:
-    """SHA-256 (hex, 32 chars) of :data:`MODEL_REVISION` and the canonical form of exactly the
-    fields ``stage`` uses (:meth:`pipeline.stages.Level.key`); ``memo`` as for
-    :meth:`Scene.canonical`."""
-    from pipeline.stages import level_named
-
-    return level_named(stage).key(scene, memo)
 
 
 def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:

@@ -27,22 +27,28 @@ sweep of many points would pay for them in files and bytes more than it saves in
 trains are kept: encoding a high-density array takes seconds, and every window length and
 training seed of a sweep reuses one train.
 
-A level's cache key (:meth:`Level.key`) hashes :data:`pipeline.scene.MODEL_REVISION`, the level's
-name and the canonical form of the parts it and every level before it read: ``recordings`` hashes
-``dataset``; ``spikes`` ``dataset``, ``array``, ``readout`` (and ``seed`` if a named effect draws
-random numbers); ``rates`` those and ``coding``; ``results`` those and ``training``. Its compute
-function is called with exactly those parts, by keyword (the last name of each: ``dataset``,
-``full_scale_v``, ``seed``, ...), the outputs of the levels it runs after (by level name) and a
-:class:`Stopwatch` ``watch``, never with the whole scene: it cannot use a field its key leaves out.
+A level's cache key (:meth:`Level.key`, :func:`cache_key`) hashes
+:data:`pipeline.scene.MODEL_REVISION`, the level's name and the canonical form of the parts it
+and every level before it read: ``recordings`` hashes ``dataset``; ``spikes`` ``dataset``,
+``array``, ``readout`` (and ``seed`` if a named effect draws random numbers); ``rates`` those
+and ``coding``; ``results`` those and ``training``. Its compute function is called with exactly
+those parts, by keyword (the last name of each: ``dataset``, ``full_scale_v``, ``seed``, ...),
+the outputs of the levels it runs after (by level name) and a :class:`Stopwatch` ``watch``,
+never with the whole scene: it cannot use a field its key leaves out.
 A part read only under a condition (the seed) is passed as None when the condition fails.
+
+A stored level's entry holds the seconds of its own steps, of every stored level upstream of it
+(their entries' seconds) and of the in-memory levels upstream of it that no such stored level
+covers: a result entry holds every step of its point, which is all a cube reads.
 
 Adding a stage: write its compute function (keyword-only arguments as above; it times each of
 its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
-levels it needs. :func:`pipeline.simulate.run_scene`, its stage names, the cache keys, the sweep's
-work on Dask workers and the stages of a cube's ``seconds`` follow from the registry. A level whose
-output the sweep store keeps (``stored=True``) also needs its entry layout in
-:mod:`storage.store` (write and read) and the line of :mod:`flows.work` that turns its output
-into that entry.
+levels it needs. To keep its output in the sweep store, give it a
+:class:`~pipeline.records.Record`: its variables (dims, dtypes, units), its entry type, and how
+its output becomes that entry and back. The levels after a stored level get its output in a run
+and its entry in a sweep, so they read only what both hold. :func:`pipeline.simulate.run_scene`,
+the cache keys, the store's batches, the sweep's work on Dask workers and the stages of a
+cube's ``seconds`` follow from the registry.
 """
 
 from __future__ import annotations
@@ -50,7 +56,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -71,8 +77,23 @@ from pipeline.metrics import (
 )
 from pipeline.readout import level_crossings, real_train
 from pipeline.recordings import Recordings, load_recordings
+from pipeline.records import (
+    METRICS_VARIABLE,
+    OutOfFold,
+    Record,
+    RecordingsInfo,
+    ResultEntry,
+    SpikeEntry,
+    Variable,
+    decode_result_entry,
+    decode_spike_entry,
+    encode_result_entry,
+    encode_spike_entry,
+    train_variables,
+)
 from pipeline.scene import (
     ArraySpec,
+    CanonicalMemo,
     CodingSpec,
     DatasetSpec,
     Model,
@@ -101,8 +122,13 @@ __all__ = [
     "Read",
     "Spikes",
     "Stopwatch",
+    "cache_key",
+    "interval_generator",
     "level_named",
+    "stage_fields",
+    "steps_of",
     "steps_through",
+    "stored_levels",
 ]
 
 
@@ -130,7 +156,8 @@ class Stopwatch:
 
 @dataclass(frozen=True, eq=False)
 class Spikes:
-    """Output of the ``spikes`` level (the store's ``SpikeEntry`` has the same fields).
+    """Output of the ``spikes`` level (its stored :class:`~pipeline.records.SpikeEntry` has the
+    same fields).
 
     Attributes
     ----------
@@ -331,7 +358,7 @@ class Level:
     ----------
     name : str
         Names its output: the argument later levels get it as, the tag of its cache key and,
-        for a stored level, its entry kind in the sweep store.
+        for a stored level, its entry kind in the sweep store (``record.name``).
     reads : tuple of Read
         The scene parts its compute function reads.
     after : tuple of Level
@@ -340,8 +367,9 @@ class Level:
         ``compute(**outputs_of_after, **parts_read, watch=stopwatch) -> output``.
     steps : tuple of str
         The steps it times, in order; ``{model}`` stands for each model the scene trains.
-    stored : bool
-        Whether the sweep store keeps its output (a cache level), or workers keep it in memory.
+    record : Record or None
+        What the sweep store keeps of its output (a cache level); None: workers keep its output
+        in memory.
     """
 
     name: str
@@ -349,10 +377,15 @@ class Level:
     after: tuple[Level, ...]
     compute: Callable[..., Any]
     steps: tuple[str, ...]
-    stored: bool
+    record: Record | None = None
 
     def __repr__(self) -> str:
         return f"Level({self.name!r})"
+
+    @property
+    def stored(self) -> bool:
+        """Whether the sweep store keeps its output."""
+        return self.record is not None
 
     def upstream(self) -> tuple[Level, ...]:
         """Every level this one needs, directly or through others, each once, inputs first."""
@@ -395,7 +428,7 @@ class Level:
             self._parts_by_condition[applies] = parts
         return parts
 
-    def key(self, scene: Scene, memo: scene_module.CanonicalMemo | None = None) -> str:
+    def key(self, scene: Scene, memo: CanonicalMemo | None = None) -> str:
         """SHA-256 (hex, 32 chars) of :data:`pipeline.scene.MODEL_REVISION`, the level's name
         and the canonical form of exactly :meth:`key_parts`; ``memo`` as for
         :meth:`pipeline.scene.Scene.canonical` (the key does not depend on it)."""
@@ -405,7 +438,10 @@ class Level:
 
     def step_names(self, scene: Scene) -> tuple[str, ...]:
         """The steps this level times for ``scene``, in order."""
-        models = [m.value for m in scene.training.models]
+        return self.steps_for([m.value for m in scene.training.models])
+
+    def steps_for(self, models: Sequence[str]) -> tuple[str, ...]:
+        """The steps this level times for a scene training ``models`` (names), in order."""
         return tuple(
             name
             for step in self.steps
@@ -436,13 +472,45 @@ class Level:
         return output
 
 
+# ---------------------------------------------------------------------------------------------
+# How the stored levels' outputs become entries (see pipeline.records for their codecs)
+
+
+def _spike_entry(
+    output: Spikes, seconds: dict[str, float], made: Callable[[str], Any]
+) -> SpikeEntry:
+    return SpikeEntry(output.encoded, output.metrics, seconds)
+
+
+def _result_entry(
+    accuracy: dict[Model, CrossValidation],
+    seconds: dict[str, float],
+    made: Callable[[str], Any],
+) -> ResultEntry:
+    """A point's result: all a cube reads of it, so it also carries its spike metrics, what its
+    recordings were and the number of windows its frames had."""
+    recordings = made(RECORDINGS.name)
+    return ResultEntry(
+        fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
+        seconds=seconds,
+        metrics=made(SPIKES.name).metrics,
+        recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
+        out_of_fold=OutOfFold(
+            recording_names=tuple(recordings.names),
+            labels=recordings.labels,
+            predicted={model.value: cv.predicted for model, cv in accuracy.items()},
+            test_fold=next(iter(accuracy.values())).test_fold,
+        ),
+        n_windows_used=int(made(RATES.name).counts.shape[-1]),
+    )
+
+
 RECORDINGS = Level(
     name="recordings",
     reads=(Read("dataset"),),
     after=(),
     compute=load,
     steps=("load",),
-    stored=False,
 )
 FRONT_END = Level(
     name="front_end",
@@ -450,7 +518,6 @@ FRONT_END = Level(
     after=(RECORDINGS,),
     compute=fit,
     steps=("front_end",),
-    stored=False,
 )
 SPIKES = Level(
     name="spikes",
@@ -458,7 +525,19 @@ SPIKES = Level(
     after=(RECORDINGS, FRONT_END),
     compute=encode_spikes,
     steps=("taxels", "readout", "metrics"),
-    stored=True,
+    record=Record(
+        name="spikes",
+        entry_type=SpikeEntry,
+        variables=(
+            *train_variables("true"),
+            *train_variables("real", optional=True),
+            Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
+            METRICS_VARIABLE,
+        ),
+        make=_spike_entry,
+        encode=encode_spike_entry,
+        decode=decode_spike_entry,
+    ),
 )
 RATES = Level(
     name="rates",
@@ -466,7 +545,6 @@ RATES = Level(
     after=(SPIKES, RECORDINGS),
     compute=code_rates,
     steps=("coding",),
-    stored=False,
 )
 RESULTS = Level(
     name="results",
@@ -474,7 +552,39 @@ RESULTS = Level(
     after=(RATES,),
     compute=classify,
     steps=("train_{model}",),
-    stored=True,
+    record=Record(
+        name="results",
+        entry_type=ResultEntry,
+        variables=(
+            Variable("accuracy", ("model", "repeat", "fold"), "float64", "1", "fold accuracy"),
+            Variable("model", ("model",), "str", "1", "classifier"),
+            Variable(
+                "n_windows_used",
+                (),
+                "int64",
+                "1",
+                "rate-coding windows the point used (coding.n_windows resolved)",
+                optional=True,
+            ),
+            Variable(
+                "predicted",
+                ("model", "repeat", "recording"),
+                "int64",
+                "1",
+                "out-of-fold predicted class",
+                optional=True,
+            ),
+            Variable(
+                "test_fold", ("repeat", "recording"), "int64", "1", "testing fold", optional=True
+            ),
+            Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
+            Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
+            METRICS_VARIABLE,
+        ),
+        make=_result_entry,
+        encode=encode_result_entry,
+        decode=decode_result_entry,
+    ),
 )
 
 
@@ -486,6 +596,8 @@ def _checked(*levels: Level) -> tuple[Level, ...]:
         problems = []
         if level.name in names:
             problems.append("its name is taken")
+        if level.record is not None and level.record.name != level.name:
+            problems.append(f"its record is named {level.record.name!r}")
         problems += [
             f"runs after {b.name!r}, declared later" for b in level.after if b.name not in names
         ]
@@ -512,6 +624,34 @@ def level_named(name: str) -> Level:
             return level
     known = ", ".join(level.name for level in LEVELS)
     raise ValueError(f"no stage {name!r} (known: {known})")
+
+
+def stored_levels() -> tuple[Level, ...]:
+    """The levels of :data:`LEVELS` whose outputs the sweep store keeps, in order."""
+    return tuple(level for level in LEVELS if level.stored)
+
+
+def steps_of(models: Sequence[str]) -> tuple[str, ...]:
+    """Every step of :data:`LEVELS`, in order, for scenes training ``models`` (names, in the
+    order given): the ``stage`` coordinate of a cube."""
+    return tuple(step for level in LEVELS for step in level.steps_for(models))
+
+
+def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
+    """The scene parts the output of ``stage`` depends on (:meth:`Level.key_parts`)."""
+    return level_named(stage).key_parts(scene)
+
+
+def cache_key(scene: Scene, stage: str, memo: CanonicalMemo | None = None) -> str:
+    """The cache key of ``stage``'s output for ``scene`` (:meth:`Level.key`)."""
+    return level_named(stage).key(scene, memo)
+
+
+def interval_generator(result_key: str, model: str) -> np.random.Generator:
+    """The generator of the bootstrap interval of ``model``'s accuracy at the point whose result
+    key is ``result_key``: seeded from the key and the model's name alone, so that a design gets
+    one interval wherever it is computed (any sweep, any grid position, ``eskin run``)."""
+    return np.random.default_rng([int(result_key, 16), *model.encode()])
 
 
 def steps_through(name: str) -> tuple[str, ...]:

@@ -156,7 +156,7 @@ import numpy as np
 from pipeline.errors import DatasetError
 from pipeline.frontend import fit_front_end
 from pipeline.numbers import positive_number, whole_number
-from pipeline.recordings import Recordings
+from pipeline.recording_set import Recordings
 
 __all__ = [
     "CONTACT_SIGMA_MM",

@@ -2,9 +2,6 @@
 
 from storage.store import (
     CorruptEntryError,
-    EntryKind,
-    ResultEntry,
-    SpikeEntry,
     StoreBusyError,
     StoreError,
     StoreLayoutError,
@@ -16,9 +13,6 @@ from storage.tree import open_tree
 
 __all__ = [
     "CorruptEntryError",
-    "EntryKind",
-    "ResultEntry",
-    "SpikeEntry",
     "StoreBusyError",
     "StoreError",
     "StoreLayoutError",

@@ -1,4 +1,4 @@
-"""Golden result cubes: hand-made result entries of a fixed grid, and today's cube variables.
+"""Golden result cubes: hand-made result entries of fixed grids, and the cubes built from them.
 
 ``tests/data/golden_cubes.npz`` (values) and ``golden_cubes.json`` (dimensions, which names are
 coordinates) hold, per sweep of :data:`GRID`, every data variable and coordinate a cube had
@@ -6,8 +6,17 @@ before cubes described themselves, without attributes: they were written by
 ``storage.cubes.build_cube`` of commit a3e6f52 from :func:`entries`, with :func:`write_golden`. A
 cube built now must reproduce them exactly (:func:`existing_part`); coordinates and attributes
 added since are not part of the comparison.
+
+``tests/data/golden_grids.npz`` and ``golden_grids.json`` hold, per sweep of the built-in
+``paper`` and ``smoke`` grids as they were (:data:`GRIDS`, inlined), every data variable and
+coordinate (values, dims, attrs) and the cube's attributes, but the versions of the software,
+as ``pipeline.cube.build_cube`` built them before the stage registry declared what each stage
+stores: from :func:`rich_entries` (which also state the recordings and keep out-of-fold
+predictions), with :func:`write_golden` (``attrs=True``). A cube built now must reproduce them
+(:func:`compare_golden`) apart from the names in :data:`RENAMED` and :data:`ADDED`.
 """
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -17,8 +26,8 @@ import xarray as xr
 
 from pipeline.grid import Grid
 from pipeline.metrics import SpikeMetrics
+from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.scene import Scene
-from storage.store import ResultEntry
 
 DATA = Path(__file__).parent / "data"
 GOLDEN = DATA / "golden_cubes"
@@ -47,6 +56,108 @@ GRID = {
     },
 }
 FOLD_OFFSETS = np.array([-0.03, 0.01, 0.02, 0.0])
+
+GRIDS_GOLDEN = DATA / "golden_grids"
+# The built-in grids' sweeps as they were (inlined from pipeline/grids/*.toml: a later change of
+# those files must not move the golden file).
+_PAPER_NOISE_V = [0.0025, 0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15]
+GRIDS = {
+    "smoke": {
+        "name": "smoke",
+        "base": "smoke",
+        # The smoke grid's sweeps are the first three of GRID's.
+        "sweeps": {name: GRID["sweeps"][name] for name in ("threshold", "window", "noise")},
+    },
+    "paper": {
+        "name": "paper",
+        "base": "paper",
+        "sweeps": {
+            "threshold": {
+                "title": "Fig. 7a: accuracy against the readout threshold",
+                "axes": {
+                    "readout.threshold_v": [
+                        0.01,
+                        0.02,
+                        0.03,
+                        0.05,
+                        0.07,
+                        0.09,
+                        0.12,
+                        0.15,
+                        0.2,
+                        0.25,
+                        0.3,
+                    ]
+                },
+            },
+            "window": {
+                "title": "Fig. 7b: accuracy against the window length (about 4 s of touch each)",
+                "mode": "zip",
+                "axes": {
+                    "coding.window_s": [0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4],
+                    "coding.n_windows": [160, 80, 53, 40, 26, 20, 13, 10],
+                },
+            },
+            "taxels": {
+                "title": "Fig. 8: accuracy against the taxel count (square arrays)",
+                "mode": "zip",
+                "axes": {"array.rows": [1, 2, 3, 4, 5], "array.cols": [1, 2, 3, 4, 5]},
+            },
+            "taxel_rows": {
+                "title": "Fig. 8: accuracy against the taxel count "
+                "(rows x 1 arrays along the scan)",
+                "set": {"array.cols": 1},
+                "axes": {"array.rows": [1, 2, 3, 4, 5]},
+            },
+            "noise": {
+                **{k: GRID["sweeps"]["noise"][k] for k in ("mode", "set", "correlate")},
+                "title": "Fig. 9: SSNR and STE against accuracy (one taxel, constant threshold, "
+                "rising noise)",
+                "axes": {
+                    "readout.effects.amplifier_noise.sigma_v": _PAPER_NOISE_V,
+                    "readout.effects.comparator_noise.sigma_v": _PAPER_NOISE_V,
+                },
+            },
+            "mismatch": {
+                "title": "Fig. 10: accuracy against threshold mismatch between taxels",
+                "axes": {
+                    "readout.effects.threshold_mismatch.sigma_rel": [0.0, 0.05, 0.1, 0.2, 0.3, 0.5]
+                },
+            },
+            "observation": {
+                "title": "Accuracy against observation time: the first n windows of 0.1 s",
+                "set": {"coding.window_s": 0.1},
+                "axes": {"coding.n_windows": [1, 2, 3, 5, 10, 20, 40]},
+            },
+        },
+    },
+}
+# The recordings the rich entries claim: 3 classes of 2 recordings each.
+CLASSES = ("fine", "medium", "coarse")
+RECORDINGS = RecordingsInfo("synthetic", CLASSES, 2000.0)
+RECORDING_NAMES = tuple(f"{c}/{i}" for c in CLASSES for i in range(2))
+LABELS = np.repeat(np.arange(len(CLASSES)), 2)
+
+#: Cube names (variables, coordinates) renamed since the golden grids' files were written: old
+#: name -> the name now holding the same values (broadcast to its dims), in every cube that no
+#: longer has the old name.
+RENAMED: dict[str, str] = {
+    # Equivalent bits are stored once: the spike metric's variable, not also a coordinate.
+    "readout.equivalent_bits": "equivalent_bits",
+    # A swept field is its axis's coordinate alone, no longer also a dotted one.
+    "readout.threshold_v": "threshold_v",
+    "coding.window_s": "window_s",
+    "coding.n_windows": "n_windows",
+    "array.rows": "rows",
+    "array.cols": "cols",
+    "readout.effects.amplifier_noise.sigma_v": "amplifier_noise_sigma_v",
+    "readout.effects.comparator_noise.sigma_v": "comparator_noise_sigma_v",
+    "readout.effects.threshold_mismatch.sigma_rel": "sigma_rel",
+}
+#: Names cubes have now that the golden grids' files do not.
+ADDED: frozenset[str] = frozenset({"n_windows_used"})
+# Attributes that name the software that built a cube: they change with every release.
+_VERSION_ATTRS = ("package_version", "version_")
 
 
 def grid() -> Grid:
@@ -87,14 +198,46 @@ def entries(g: Grid) -> dict[str, ResultEntry]:
     return {key: entry(scene) for key, scene in g.unique_points().items()}
 
 
-def write_golden(cubes: dict[str, xr.Dataset], path: Path = GOLDEN) -> None:
-    """Save every variable of ``cubes`` (values and dimensions; no attributes)."""
+def rich_entry(scene: Scene) -> ResultEntry:
+    """:func:`entry` that also states its recordings and keeps out-of-fold predictions: the
+    first ``k`` recordings right (``k`` a fixed function of the scene), the others wrong."""
+    plain = entry(scene)
+    repeats, folds = scene.training.repeats, scene.training.folds
+    predicted = {}
+    for i, (model, accuracy) in enumerate(plain.fold_accuracy.items()):
+        k = (round(float(np.mean(accuracy)) * 100) + i) % (len(LABELS) + 1)
+        guess = np.where(np.arange(len(LABELS)) < k, LABELS, (LABELS + 1) % len(CLASSES))
+        predicted[model] = np.tile(guess, (repeats, 1))
+    test_fold = np.tile(np.arange(len(LABELS)) % folds, (repeats, 1))
+    return dataclasses.replace(
+        plain,
+        recordings=RECORDINGS,
+        out_of_fold=OutOfFold(RECORDING_NAMES, LABELS, predicted, test_fold),
+    )
+
+
+def rich_entries(g: Grid) -> dict[str, ResultEntry]:
+    return {key: rich_entry(scene) for key, scene in g.unique_points().items()}
+
+
+def grids() -> dict[str, Grid]:
+    """The built-in grids as they were, by name."""
+    return {name: Grid.from_dict(data) for name, data in GRIDS.items()}
+
+
+def write_golden(cubes: dict[str, xr.Dataset], path: Path = GOLDEN, *, attrs: bool = False) -> None:
+    """Save every variable of ``cubes`` (values and dimensions; with ``attrs``, also every
+    variable's attributes and the cube's but those naming the software's versions)."""
     arrays, layout = {}, {}
     for name, cube in cubes.items():
         layout[name] = {}
         for var, variable in cube.variables.items():
             arrays[f"{name}/{var}"] = np.asarray(variable.values)
             layout[name][str(var)] = {"dims": list(variable.dims), "coord": var in cube.coords}
+            if attrs:
+                layout[name][str(var)]["attrs"] = _plain(variable.attrs)
+        if attrs:
+            layout[name]["@attrs"] = _plain(_without_versions(cube.attrs))
     np.savez_compressed(path.with_suffix(".npz"), **arrays)
     path.with_suffix(".json").write_text(json.dumps(layout, indent=1, sort_keys=True) + "\n")
 
@@ -105,10 +248,40 @@ def read_golden(path: Path = GOLDEN) -> dict[str, xr.Dataset]:
         cubes = {}
         for name, variables in layout.items():
             data, coords = {}, {}
+            cube_attrs = variables.pop("@attrs", {})
             for var, spec in variables.items():
-                (coords if spec["coord"] else data)[var] = (spec["dims"], arrays[f"{name}/{var}"])
-            cubes[name] = xr.Dataset(data, coords=coords)
+                values = (spec["dims"], arrays[f"{name}/{var}"], spec.get("attrs", {}))
+                (coords if spec["coord"] else data)[var] = values
+            cubes[name] = xr.Dataset(data, coords=coords, attrs=cube_attrs)
     return cubes
+
+
+def compare_golden(cube: xr.Dataset, golden: xr.Dataset) -> None:
+    """Assert that ``cube`` holds exactly ``golden``'s variables, coordinates and attributes
+    (values, dtypes, dims, attrs), apart from :data:`RENAMED` and :data:`ADDED`."""
+    renamed = {old: new for old, new in RENAMED.items() if old in golden and old not in cube}
+    expected = set(golden.variables) - set(renamed) | set(renamed.values())
+    assert set(cube.variables) == expected | (ADDED & set(cube.variables)), (
+        f"{golden.attrs.get('sweep')}: variables differ: "
+        f"{sorted(set(map(str, cube.variables)) ^ set(map(str, expected)))}"
+    )
+    kept = [name for name in golden.variables if name not in renamed]
+    got = cube[kept].drop_vars([n for n in cube.coords if n not in kept])
+    got.attrs = _plain(_without_versions(cube.attrs))
+    xr.testing.assert_identical(got, golden.drop_vars(list(renamed)))
+    for old, new in renamed.items():
+        now = cube[new].variable
+        was = golden[old].variable.set_dims(dict(now.sizes)).transpose(*now.dims)
+        np.testing.assert_array_equal(was.values, now.values, err_msg=f"{old} -> {new}")
+
+
+def _without_versions(attrs: dict) -> dict:
+    return {k: v for k, v in attrs.items() if not k.startswith(_VERSION_ATTRS)}
+
+
+def _plain(attrs: dict) -> dict:
+    """Attributes as JSON reads them back (tuples as lists, numpy scalars as numbers)."""
+    return json.loads(json.dumps(attrs, default=lambda v: v.item()))
 
 
 def existing_part(cube: xr.Dataset, golden: xr.Dataset) -> xr.Dataset:

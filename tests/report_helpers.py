@@ -13,12 +13,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pipeline.cube import OutOfFold, RecordingsInfo, build_cube
+from pipeline.cube import build_cube
 from pipeline.grid import Grid
 from pipeline.metrics import SpikeMetrics
+from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.scene import Scene
-from storage import ResultEntry
-from storage.cubes import SPIKE_STAGES
 
 N_RECORDINGS = 120
 N_FOLDS = 4
@@ -144,4 +143,4 @@ def make_cubes(
             recordings=recordings,
             out_of_fold=oof if predictions else None,
         )
-    return {s.name: build_cube(grid, s, records, spike_stages=SPIKE_STAGES) for s in grid.sweeps}
+    return {s.name: build_cube(grid, s, records) for s in grid.sweeps}

@@ -87,7 +87,8 @@ def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, clie
     """Dask hands a task whose key it still holds the earlier result: keys must name the root."""
     from distributed import wait
 
-    from storage import EntryKind, SweepStore
+    from pipeline.stages import RESULTS
+    from storage import SweepStore
 
     plans = []
     for name in ("a", "b"):
@@ -99,4 +100,4 @@ def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, clie
     wait([f for futures in held for f in futures.values()])
     for plan in plans:
         store = SweepStore.open(plan.root)
-        assert all(store.has(EntryKind.RESULTS, key) for key in plan.scenes)
+        assert all(store.has(RESULTS.record, key) for key in plan.scenes)

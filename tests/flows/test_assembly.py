@@ -6,11 +6,12 @@ import pytest
 
 from flows.assembly import assemble_cube
 from flows.planning import SweepPlan
-from pipeline.cube import RecordingsInfo
 from pipeline.grid import Grid
+from pipeline.records import RecordingsInfo, ResultEntry
 from storage import StoreError
-from storage.store import ResultEntry, SweepStore
+from storage.store import SweepStore
 from tests.flows.helpers import METRICS
+from tests.store_helpers import write_result
 
 
 def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_point(tmp_path):
@@ -22,11 +23,11 @@ def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_poi
     first, second = scenes
     plan = SweepPlan(grid, str(store.root), scenes, {})
     own = RecordingsInfo("mine", ("bark", "cloth"), 250.0)
-    store.write_result(first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    write_result(store, first, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
     with pytest.raises(StoreError, match=f"1 point.*no result.*first: {second}"):
         assemble_cube(plan, "t")
     assert store.cube_names() == []
-    store.write_result(second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
+    write_result(store, second, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS, own))
     cube = assemble_cube(plan, "t")
     stated = {k: cube.attrs.get(k) for k in ("dataset_name", "sampling_rate_hz", "class_names")}
     assert stated == {
@@ -39,7 +40,7 @@ def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_poi
     bare = SweepPlan(grid, str(tmp_path / "other"), scenes, {})
     empty = SweepStore.open_or_create(bare.root)
     for key in scenes:
-        empty.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+        write_result(empty, key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
     cube = assemble_cube(bare, "t")
     assert not {"dataset_name", "sampling_rate_hz", "class_names", "n_classes"} & set(cube.attrs)
 
@@ -51,7 +52,7 @@ def test_a_cube_equal_to_the_stored_one_is_not_written_again(tmp_path, monkeypat
     store = SweepStore.open_or_create(tmp_path / "run")
     scenes = grid.unique_points()
     for key in scenes:
-        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {"x": 1.0}, METRICS))
+        write_result(store, key, ResultEntry({"ffnn": np.array([0.5])}, {"x": 1.0}, METRICS))
     plan = SweepPlan(grid, str(store.root), scenes, {})
     first = assemble_cube(plan, "t")
     written = []

@@ -10,9 +10,12 @@ import pytest
 
 from flows.dry_run import SweepCounts, dry_run, format_dry_run
 from pipeline.grid import Grid
-from storage import EntryKind, StoreError
-from storage.store import ResultEntry, SweepStore
+from pipeline.records import ResultEntry
+from pipeline.stages import RESULTS
+from storage import StoreError
+from storage.store import SweepStore
 from tests.flows.helpers import METRICS
+from tests.store_helpers import write_result
 
 
 def dry_run_grid() -> Grid:
@@ -65,11 +68,11 @@ def test_dry_run_counts_cached_points_and_estimates_the_rest_writing_nothing(tmp
     }
     for (sweep, i), seconds in measured.items():
         entry = ResultEntry({"ffnn": np.array([0.5, 0.75])}, seconds, METRICS)
-        store.write_result(point_key(grid, sweep, i), entry)
+        write_result(store, point_key(grid, sweep, i), entry)
     # A corrupt result (its attributes edited) counts as missing, and the dry run leaves it.
     corrupt = point_key(grid, "window", 1)
-    store.write_result(corrupt, ResultEntry({"ffnn": np.array([0.5])}, {"a": 1.0}, METRICS))
-    meta = store.entry_location(EntryKind.RESULTS, corrupt) / "zarr.json"
+    write_result(store, corrupt, ResultEntry({"ffnn": np.array([0.5])}, {"a": 1.0}, METRICS))
+    meta = store.entry_location(RESULTS.record, corrupt) / "zarr.json"
     data = json.loads(meta.read_text())
     data["attributes"]["entries"][0]["attrs"]["seconds"] = {"a": 100.0}
     meta.write_text(json.dumps(data))

@@ -13,10 +13,11 @@ from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
 from flows.run import run_sweep
 from pipeline.errors import DatasetError
 from pipeline.grid import DatasetFacts, Grid, load_grid
-from pipeline.stages import RECORDINGS
-from storage import EntryKind
-from storage.store import ResultEntry, SweepStore
+from pipeline.records import ResultEntry
+from pipeline.stages import RECORDINGS, RESULTS
+from storage.store import SweepStore
 from tests.flows.helpers import METRICS, SMALL_GRID, count_grid_loads, hermetic_env
+from tests.store_helpers import write_result
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -66,13 +67,13 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
     grid = load_grid("smoke")
     store = SweepStore.open_or_create(tmp_path / "run")
     keys = list(grid.unique_points())
-    assert not store.complete_keys(EntryKind.RESULTS) & set(keys)
-    assert SweepStore(tmp_path / "absent").complete_keys(EntryKind.RESULTS) == frozenset()
+    assert not store.complete_keys(RESULTS.record) & set(keys)
+    assert SweepStore(tmp_path / "absent").complete_keys(RESULTS.record) == frozenset()
     for key in (keys[2], keys[0]):
-        store.write_result(key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
+        write_result(store, key, ResultEntry({"ffnn": np.array([0.5])}, {}, METRICS))
     (store.path / "results" / ".partial-batch-0").mkdir()
     (store.path / "results" / f"batch-{keys[3]}").mkdir()  # no metadata: not a complete batch
-    assert store.complete_keys(EntryKind.RESULTS) == {keys[0], keys[2]}
+    assert store.complete_keys(RESULTS.record) == {keys[0], keys[2]}
     plan = plan_sweep(grid, store.root)
     assert list(plan.scenes) == keys
     assert list(plan.records) == [keys[0], keys[2]]
@@ -88,6 +89,7 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
 COUNTED_SWEEP = """
 import json, sys
 from flows.cli import main
+from tests.store_helpers import write_result
 from tests.flows.helpers import count_grid_loads
 
 calls = count_grid_loads(setattr)

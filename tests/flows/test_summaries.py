@@ -97,3 +97,61 @@ def test_format_sweep_summary_uses_the_given_cubes_and_their_best_points(tmp_pat
     assert lines[2].split() == best_ffnn
     assert lines[3].split()[2:4] == ["cnn", "80.0"]
     assert lines[-1] == "report: r.html"
+
+
+def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
+    """With several repeats the interval is a bootstrap: seeded from the design's result key
+    and the model, not from where the design sits in a grid, so two sweeps holding it at
+    different positions and ``eskin run`` of it give the same interval."""
+    from pipeline.cube import build_cube
+    from pipeline.grid import Grid
+    from pipeline.records import OutOfFold, ResultEntry
+
+    repeats = {"training.repeats": 3}
+    grid = Grid.from_dict(
+        {
+            "base": "smoke",
+            "sweeps": {
+                "wide": {"set": repeats, "axes": {"readout.threshold_v": [0.05, 0.07, 0.09]}},
+                "one": {"set": repeats, "axes": {"readout.threshold_v": [0.09]}},
+            },
+        }
+    )
+    n = 60
+    labels = np.arange(n) % 3
+    rng = np.random.default_rng(5)
+    # Each repeat gets a different part of the recordings right: resampling matters.
+    predicted = np.where(rng.random((3, n)) < 0.6, labels, (labels + 1) % 3)
+    names = tuple(f"r{i}" for i in range(n))
+    folds = np.tile(np.arange(n) % 4, (3, 1))
+    entry = ResultEntry(
+        {"ffnn": np.full((3, 4), 0.5)},
+        {},
+        fake_result(1.0).metrics,
+        None,
+        OutOfFold(names, labels, {"ffnn": predicted}, folds),
+    )
+    records = {key: entry for key in grid.unique_points()}
+    cubes = {sweep.name: build_cube(grid, sweep, records) for sweep in grid.sweeps}
+    wide = cubes["wide"].sel(threshold_v=0.09, model="ffnn")
+    one = cubes["one"].sel(threshold_v=0.09, model="ffnn")
+    assert "bootstrap" in wide["accuracy_low"].attrs["interval"]
+    design = next(p.scene for p in grid.points() if p.sweep == "one")
+    cv = CrossValidation(Model.FFNN, np.full((3, 4), 0.5), 1.0, predicted=predicted)
+    run = SimpleNamespace(**{**vars(fake_result(1.0)), "scene": design, "labels": labels})
+    run.accuracy = {Model.FFNN: cv}
+    summary = result_summary(run)["accuracy"]["ffnn"]
+    interval = (summary["low"], summary["high"])
+    assert (wide["accuracy_low"].item(), wide["accuracy_high"].item()) == interval
+    assert (one["accuracy_low"].item(), one["accuracy_high"].item()) == interval
+    # Another design (threshold 0.07, same predictions) draws other resamples.
+    other = cubes["wide"].sel(threshold_v=0.07, model="ffnn")
+    assert (other["accuracy_low"].item(), other["accuracy_high"].item()) != interval
+    # ... as the same design would at another grid position, were it seeded by position.
+    from pipeline.stats import accuracy_interval
+
+    by_position = [
+        accuracy_interval(predicted == labels, labels, rng=np.random.default_rng([0, i, 0]))
+        for i in (0, 2)
+    ]
+    assert (by_position[0].low, by_position[0].high) != (by_position[1].low, by_position[1].high)

@@ -10,7 +10,8 @@ import pytest
 import xarray as xr
 
 from flows.cli import main
-from storage import EntryKind, SweepStore, open_results
+from pipeline.stages import SPIKES
+from storage import SweepStore, open_results
 from storage.batches import BATCH_PREFIX, read_batch_keys
 from tests.flows.helpers import eskin, hermetic_env
 
@@ -112,7 +113,7 @@ def test_xarray_queries_from_the_readme(smoke_sweep):
 
 
 def test_window_sweep_reuses_spike_trains(smoke_sweep):
-    folder = SweepStore.open(smoke_sweep[0]).path / EntryKind.SPIKES.value
+    folder = SweepStore.open(smoke_sweep[0]).path / SPIKES.name
     batches = [p for p in folder.iterdir() if p.name.startswith(BATCH_PREFIX)]
     written = [key for batch in batches for key in read_batch_keys(batch)]
     # thresholds 0.05 and 0.09 (shared by both windows) and four noise levels, each made once.

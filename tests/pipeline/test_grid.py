@@ -21,8 +21,8 @@ from pipeline.grid import (
     sweep_points,
 )
 from pipeline.recordings import Recordings
-from pipeline.scene import MODEL_REVISION, Effect, Scene, SceneVariants, cache_key
-from pipeline.stages import LEVELS
+from pipeline.scene import MODEL_REVISION, Effect, Scene, SceneVariants
+from pipeline.stages import LEVELS, cache_key
 from pipeline.taxels import cut_samples, taxel_delays_s, taxel_signals
 
 

@@ -13,10 +13,9 @@ from pipeline.scene import (
     Scene,
     ThresholdMismatch,
     builtin_scene_names,
-    cache_key,
     scene_fields,
-    stage_fields,
 )
+from pipeline.stages import cache_key, stage_fields
 
 
 def test_paper_scene_is_the_papers_operating_point():

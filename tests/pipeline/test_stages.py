@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from pipeline import fields
 from pipeline.fields import param, part
-from pipeline.scene import ReadoutSpec, Scene, cache_key
+from pipeline.scene import ReadoutSpec, Scene
 from pipeline.simulate import run_scene, stage_names
 from pipeline.stages import (
     FRONT_END,
@@ -22,6 +22,7 @@ from pipeline.stages import (
     Read,
     Stopwatch,
     _checked,
+    cache_key,
     level_named,
     steps_through,
 )
@@ -244,7 +245,7 @@ def test_a_level_that_times_an_undeclared_step_fails():
         with watch.stage("elsewhere"):
             return dataset
 
-    level = Level("odd", (Read("dataset"),), (), compute, ("load",), stored=False)
+    level = Level("odd", (Read("dataset"),), (), compute, ("load",))
     with pytest.raises(RuntimeError, match="elsewhere"):
         level.run(SMOKE, {}, Stopwatch(None))
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import zarr
 
-import storage.store as store_module
+import storage.layout as store_layout
 from flows.cli import main
 from tests.flows.helpers import eskin, hermetic_env
 
@@ -382,7 +382,7 @@ def test_bad_roots_are_refused(capsys, tmp_path, monkeypatch, make, expected):
         def denied(*args, **kwargs):
             raise PermissionError(13, "Permission denied")
 
-        monkeypatch.setattr(store_module.tempfile, "mkstemp", denied)
+        monkeypatch.setattr(store_layout.tempfile, "mkstemp", denied)
     try:
         line = assert_refused(capsys, ["--grid", "smoke"], root, expected)
     finally:

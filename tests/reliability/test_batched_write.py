@@ -18,9 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.cube import OutOfFold, RecordingsInfo
 from pipeline.metrics import SpikeMetrics
-from storage import EntryKind, ResultEntry, SweepStore
+from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.stages import RESULTS
+from storage import SweepStore
+from tests.store_helpers import read_result, write_result
 
 pytestmark = pytest.mark.slow
 
@@ -29,6 +31,7 @@ N_ENTRIES = 400
 WRITER = textwrap.dedent(
     """
     import os, sys, time
+    from pipeline.stages import RESULTS
     from storage import SweepStore
     from tests.reliability.test_batched_write import batch_entries
 
@@ -45,7 +48,7 @@ WRITER = textwrap.dedent(
     import dask.array  # what xarray imports on its first write, so the kill hits the write
     entries = batch_entries()
     print("writing", flush=True)
-    SweepStore.open(root).write_entries("results", entries)
+    SweepStore.open(root).write_entries(RESULTS.record, entries)
     print("renamed", flush=True)
     """
 )
@@ -99,11 +102,11 @@ def start_writer(root: Path, mode: str) -> subprocess.Popen:
 
 
 def assert_nothing_half_written(store: SweepStore, before: ResultEntry) -> None:
-    keys = store.complete_keys(EntryKind.RESULTS)
+    keys = store.complete_keys(RESULTS.record)
     assert keys == {"0" * 32} or keys == {"0" * 32, *batch_entries()}, "a torn batch is visible"
-    assert_results_identical(store.read_result("0" * 32), before)
+    assert_results_identical(read_result(store, "0" * 32), before)
     if len(keys) > 1:  # the kill came after the rename: the batch is whole
-        found = store.read_many(EntryKind.RESULTS, batch_entries(), discard_corrupt=False)
+        found = store.read_many(RESULTS.record, batch_entries(), discard_corrupt=False)
         for key, entry in batch_entries().items():
             assert_results_identical(found[key], entry)
 
@@ -112,8 +115,8 @@ def rewrite_and_check(store: SweepStore) -> None:
     with store.lock():
         store.clean_partials()
     assert not list(store.path.glob("*/.partial-*"))
-    store.write_entries(EntryKind.RESULTS, batch_entries())
-    found = store.read_many(EntryKind.RESULTS, batch_entries(), discard_corrupt=False)
+    store.write_entries(RESULTS.record, batch_entries())
+    found = store.read_many(RESULTS.record, batch_entries(), discard_corrupt=False)
     assert found.keys() == batch_entries().keys()
     for key, entry in batch_entries().items():
         assert_results_identical(found[key], entry)
@@ -122,7 +125,7 @@ def rewrite_and_check(store: SweepStore) -> None:
 def test_kill_after_the_data_before_the_rename_leaves_only_a_partial(tmp_path):
     store = SweepStore.open_or_create(tmp_path / "run")
     before = make_result_entry(seed=0)
-    store.write_result("0" * 32, before)
+    write_result(store, "0" * 32, before)
     writer = start_writer(store.root, "stall")
     try:
         assert writer.stdout.readline().strip() == "writing"
@@ -142,7 +145,7 @@ def test_kills_at_random_moments_of_the_write_never_expose_a_torn_batch(tmp_path
     for attempt, delay_s in enumerate(rng.uniform(0.0, 0.5, size=4)):
         store = SweepStore.open_or_create(tmp_path / f"run{attempt}")
         before = make_result_entry(seed=0)
-        store.write_result("0" * 32, before)
+        write_result(store, "0" * 32, before)
         writer = start_writer(store.root, "plain")
         try:
             assert writer.stdout.readline().strip() == "writing"

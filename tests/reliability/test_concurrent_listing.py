@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from storage import EntryKind, SweepStore
+from pipeline.stages import SPIKES
+from storage import SweepStore
 from tests.flows.helpers import live_tree
 
 KEYS = [f"{i:032x}" for i in range(3)]
@@ -150,7 +151,7 @@ def test_live_tree_survives_a_writer_renaming_and_removing_for_a_while(tmp_path)
 
 def test_store_listings_survive_entries_renamed_or_removed_after_listing(monkeypatch, tmp_path):
     store = SweepStore.open_or_create(tmp_path / "root")
-    spikes = store.path / EntryKind.SPIKES.value
+    spikes = store.path / SPIKES.name
     partial = spikes / f".partial-{KEYS[1]}-aa"
     (partial / "x").mkdir(parents=True)
     old = time.time() - 3600

@@ -218,8 +218,7 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     import shutil
 
     from pipeline.grid import load_grid
-    from pipeline.scene import cache_key
-    from storage import EntryKind
+    from pipeline.stages import RESULTS, SPIKES, cache_key
 
     _, _, env = smoke_sweep
     root = tmp_path / "run"
@@ -227,11 +226,11 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     store = SweepStore.open(root)
     scene = next(iter(load_grid("smoke").unique_points().values()))
     result_key, spikes_key = cache_key(scene, "results"), cache_key(scene, "spikes")
-    chunk = first_file(store.entry_location(EntryKind.RESULTS, result_key) / "accuracy")
+    chunk = first_file(store.entry_location(RESULTS.record, result_key) / "accuracy")
     data = bytearray(chunk.read_bytes())
     data[len(data) // 2] ^= 0xFF
     chunk.write_bytes(bytes(data))
-    train = first_file(store.entry_location(EntryKind.SPIKES, spikes_key) / "true_times_s")
+    train = first_file(store.entry_location(SPIKES.record, spikes_key) / "true_times_s")
     train.write_bytes(train.read_bytes()[:3])
 
     proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
@@ -241,5 +240,5 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     assert re.search(f"corrupt results batch [^\\n]*{result_key}", proc.stderr)
     assert re.search(f"corrupt spikes batch [^\\n]*{spikes_key}", proc.stderr)
     assert proc.stderr.count("RuntimeWarning") >= 2
-    assert store.read_valid(EntryKind.SPIKES, spikes_key) is not None
+    assert store.read_valid(SPIKES.record, spikes_key) is not None
     assert_same_cubes(smoke_sweep[0], root)

@@ -8,7 +8,10 @@ import pytest
 from flows.planning import plan_sweep
 from pipeline.grid import load_grid
 from pipeline.metrics import SpikeMetrics
-from storage import EntryKind, ResultEntry, SweepStore
+from pipeline.records import ResultEntry
+from pipeline.stages import RESULTS
+from storage import SweepStore
+from tests.store_helpers import write_result
 
 
 def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
@@ -16,10 +19,10 @@ def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
     keys = list(load_grid("smoke").unique_points())
     metrics = SpikeMetrics(*([1.0] * 6))
     for key in keys[:2]:
-        store.write_result(key, ResultEntry({"ffnn": np.array([0.5, 0.5])}, {"x": 1.0}, metrics))
+        write_result(store, key, ResultEntry({"ffnn": np.array([0.5, 0.5])}, {"x": 1.0}, metrics))
     partial = store.path / "spikes" / f".partial-batch-{uuid.uuid4().hex}"
     (partial / "true_times_s").mkdir(parents=True)
-    batch = store.entry_location(EntryKind.RESULTS, keys[0])
+    batch = store.entry_location(RESULTS.record, keys[0])
     chunk = next(p for p in (batch / "accuracy").rglob("*")
                  if p.is_file() and p.name != "zarr.json")  # fmt: skip
     chunk.write_bytes(chunk.read_bytes()[::-1])
@@ -27,5 +30,5 @@ def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
     with store.lock(), pytest.warns(RuntimeWarning, match=f"corrupt results batch .*{keys[0]}"):
         plan = plan_sweep(load_grid("smoke"), store.root)
     assert plan.cached == {keys[1]}
-    assert keys[0] in plan.missing and not store.has(EntryKind.RESULTS, keys[0])
+    assert keys[0] in plan.missing and not store.has(RESULTS.record, keys[0])
     assert not partial.exists()

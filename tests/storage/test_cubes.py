@@ -6,8 +6,8 @@ from importlib import metadata
 
 import xarray as xr
 
-from pipeline.cube import RecordingsInfo, build_cube
-from storage.cubes import SPIKE_STAGES
+from pipeline.cube import build_cube
+from pipeline.records import RecordingsInfo
 from storage.store import SweepStore
 from tests import golden_cubes as golden
 
@@ -21,7 +21,7 @@ def test_cube_records_dependency_versions_and_round_trips(tmp_path):
     }
     store = SweepStore.open_or_create(tmp_path / "run")
     for sweep in grid.sweeps:
-        cube = build_cube(grid, sweep, records, spike_stages=SPIKE_STAGES)
+        cube = build_cube(grid, sweep, records)
         store.write_cube(sweep.name, cube)
         # Scalar and dotted coordinates, units, lists in attributes: all as they were built.
         xr.testing.assert_identical(store.read_cube(sweep.name), cube)

@@ -3,7 +3,7 @@ numbers; facts the cubes do not state are unknown, never guessed."""
 
 import pytest
 
-from pipeline.cube import RecordingsInfo
+from pipeline.records import RecordingsInfo
 from pipeline.report import build_report, sampling_rate_hz
 from pipeline.report import paper as paper_numbers
 from pipeline.report.document import report_blocks
