@@ -106,9 +106,8 @@ def test_a_level_registered_in_a_test_is_computed_stored_read_back_and_timed(reg
     sweep = grid.sweeps[0]
     points = grid.points_of(sweep)
     store = SweepStore.open_or_create(tmp_path / "run")
-    keys = ensure_entries(
-        str(store.root), "results", [(p.scene, point_keys(p.scene)) for p in points]
-    )
+    with_keys = [(p.scene, point_keys(p.scene)) for p in points]
+    keys = ensure_entries(str(store.root), "results", with_keys)
     assert keys == [p.key for p in points]
 
     count_keys = [COUNTS.key(p.scene) for p in points]
@@ -149,6 +148,6 @@ def test_a_level_registered_in_a_test_is_computed_stored_read_back_and_timed(reg
 
     # A second task finds everything stored and computes nothing.
     before = {name: store.complete_keys(name) for name in ("spikes", "counts", "results")}
-    assert ensure_entries(str(store.root), "results", [p.scene for p in points]) == keys
+    assert ensure_entries(str(store.root), "results", with_keys) == keys
     assert {name: store.complete_keys(name) for name in before} == before
     assert len(list((store.path / "counts").glob("batch-*"))) == 1
