@@ -154,67 +154,134 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import DatasetError
-from pipeline.frontend import fit_front_end
 from pipeline.numbers import positive_number, whole_number
 from pipeline.recordings import Recordings
 
 __all__ = [
+    "ACCEL_S",
+    "APPROACH_MM_S",
+    "CONTACT_JITTER_S",
+    "CONTACT_S",
     "CONTACT_SIGMA_MM",
     "DEFAULT_FS_HZ",
+    "FINGER_MASS_KG",
+    "FINGER_STIFFNESS_N_PER_MM",
     "FORCE_SPREAD",
     "GRID_MM",
-    "NOISE_RMS_AU",
+    "HOLD_JITTER_S",
+    "HOLD_S",
+    "MAP_CORRELATION_MM",
+    "MAP_PERIOD_MM",
+    "MAP_SHARED",
+    "NOISE_RMS_MN",
+    "PRESS_FORCE_N",
+    "RELAX_S",
+    "RING_DAMPING",
     "SCAN_SPEED_MM_S",
     "SENSOR_BAND_HZ",
     "SENSOR_FILTER_ORDER",
+    "SENSOR_HIGHPASS_HZ",
+    "SHEAR_STIFFNESS_N_PER_MM",
+    "SLIP_DEPTH_SPREAD",
     "SPEED_SPREAD",
     "SPEED_WOBBLE_RMS",
+    "START_JITTER_MM",
     "TEXTURE_CLASSES",
-    "UM_PER_AU",
-    "ClassStatistics",
+    "TEXTURE_COUPLING",
     "TextureClass",
-    "class_statistics",
+    "Touch",
+    "material_map",
     "ridge_shape",
     "synthetic_recordings",
+    "touch",
 ]
 
-#: Default sampling rate (Hz).
+#: Default sampling rate (Hz), as the real fingertip recordings (about 2 kHz).
 DEFAULT_FS_HZ = 2000.0
-#: Nominal scan speed (mm/s).
-SCAN_SPEED_MM_S = 20.0
-#: Standard deviation of the per-recording speed factor ``m`` (relative).
-SPEED_SPREAD = 0.02
-#: RMS of the slow speed wobble within one recording (relative).
-SPEED_WOBBLE_RMS = 0.03
-#: Half-width of the uniform per-recording contact-force factor ``kappa`` (relative).
+
+# Contact and press
+#: Mean time at which the fingertip meets the surface (s) and the half-width of its jitter (s).
+CONTACT_S = 0.03
+CONTACT_JITTER_S = 0.01
+#: Target normal force of the press (N) and the half-width of its per-touch jitter (relative).
+PRESS_FORCE_N = 0.15
 FORCE_SPREAD = 0.15
+#: Approach speed of the fingertip into the surface (mm/s).
+APPROACH_MM_S = 4.0
+#: Stiffness of the fingertip pad in the normal direction (N/mm), in series with the material's.
+FINGER_STIFFNESS_N_PER_MM = 1.0
+#: Moving mass of the fingertip (kg) and the damping ratio of its impact ring.
+FINGER_MASS_KG = 0.01
+RING_DAMPING = 0.3
+#: Time constant of the viscoelastic relaxation of the normal force while holding the height (s).
+RELAX_S = 2.0
+
+# Sliding
+#: Time from contact to the start of the tangential motion (s) and its jitter's half-width (s).
+HOLD_S = 0.08
+HOLD_JITTER_S = 0.02
+#: Nominal sliding speed (mm/s), its per-touch spread (relative s.d.), the time constant of the
+#: robot's acceleration (s) and the RMS of the slow speed wobble within a touch (relative).
+SCAN_SPEED_MM_S = 20.0
+SPEED_SPREAD = 0.03
+ACCEL_S = 0.15
+SPEED_WOBBLE_RMS = 0.08
+#: Tangential stiffness of the pad and the robot's drive (N/mm): the stick phase loads it.
+SHEAR_STIFFNESS_N_PER_MM = 0.03
+#: Standard deviation of the log of each stick-slip cycle's depth factor.
+SLIP_DEPTH_SPREAD = 0.6
+
+# The material sample along the sliding path
+#: Period (mm) and correlation length (mm) of a sample's slow variation along the path.
+MAP_PERIOD_MM = 400.0
+MAP_CORRELATION_MM = 6.0
+#: Share ``rho`` of the variation a touch meets that is the sample's own (the rest is the touch's:
+#: its path crosses the sample at a slightly different place).
+MAP_SHARED = 0.8
+#: Standard deviation of where on the sample a touch starts sliding (mm).
+START_JITTER_MM = 4.0
+
+# Texture
 #: Standard deviation of the Gaussian contact patch (mm).
 CONTACT_SIGMA_MM = 0.03
-#: Profile height (um) that gives 1 a.u. of force at nominal contact force.
-UM_PER_AU = 10.0
-#: RMS of the additive white sensor noise per sample, before the sensor filter (a.u.).
-NOISE_RMS_AU = 0.05
-#: Corner frequency of the recording chain's anti-aliasing low-pass (Hz).
+#: Share of the filtered surface profile that indents the pad (the pad partly conforms).
+TEXTURE_COUPLING = 0.4
+#: Spatial grid on which the surface is generated (mm); well below CONTACT_SIGMA_MM.
+GRID_MM = 0.005
+
+# Sensor
+#: Corner of the sensor's first-order AC coupling (Hz) and of its anti-aliasing low-pass (Hz).
+SENSOR_HIGHPASS_HZ = 7.0
 SENSOR_BAND_HZ = 85.0
 #: Order of that Butterworth low-pass.
 SENSOR_FILTER_ORDER = 8
-#: Spatial grid on which the surface is generated (mm); well below CONTACT_SIGMA_MM.
-GRID_MM = 0.005
+#: RMS of the additive white sensor noise per sample, before the sensor filter (mN).
+NOISE_RMS_MN = 0.05
 
 _WOBBLE_COMPONENTS = 3
 _WOBBLE_BAND_HZ = (0.1, 1.0)
 # An asperity's bump is added over +-this many contact widths (exp(-4.5^2 / 2) < 4e-5).
 _ASPERITY_REACH = 4.5
+# Samples of the material map over one period.
+_MAP_SAMPLES = 2048
+# Child stream of SeedSequence([seed, class]) that draws the material sample; a recording's own
+# streams are the children 0..3 of SeedSequence([seed, class, recording]). (A key of its own is
+# needed: SeedSequence([s, c]) and SeedSequence([s, c, 0]) hold the same entropy.)
+_MATERIAL_STREAM = 1000
+# Stick-slip faster than this fraction of the sampling rate is steady sliding at this sampling.
+_MAX_SLIP_RATE = 0.25
+# Below this depth (mN) stick-slip has died out.
+_MIN_SLIP_MN = 1e-3
 
 
 @dataclass(frozen=True)
 class TextureClass:
-    """One synthetic texture: a ridge pattern, random roughness and scattered asperities.
+    """One material: its surface texture and its mechanics.
 
     Attributes
     ----------
     name
-        Class name, e.g. ``"sine-0.50mm-smooth"``.
+        Class name, e.g. ``"sine-0.35mm-smooth"``.
     shape
         Ridge shape, one of ``"sine"``, ``"square"``, ``"bumps"``, ``"sawtooth"``,
         ``"triangle"``, ``"none"`` (see :func:`ridge_shape`).
@@ -230,6 +297,17 @@ class TextureClass:
         Mean number ``lambda`` of asperities per mm of scan (0: none).
     asperity_um
         Mean height ``H`` (um) of an asperity as the contact patch sees it.
+    mu_static, mu_kinetic
+        Static and kinetic friction coefficients ``mu_s > mu_k`` of the fingertip on it.
+    stiffness_n_per_mm
+        Normal contact stiffness ``k_m`` of the material (N/mm; its compliance is ``1 / k_m``).
+    relaxation
+        Share ``r`` of the normal force that relaxes (time constant :data:`RELAX_S`) while the
+        height is held.
+    stribeck_mm_s
+        Stribeck speed ``v_c`` (mm/s): stick-slip dies out as the sliding speed exceeds it.
+    patchiness
+        Standard deviation ``s`` of the log of the sample's local friction and texture factor.
     """
 
     name: str
@@ -238,23 +316,49 @@ class TextureClass:
     ridge_um: float
     roughness_um: float
     correlation_mm: float
-    asperities_per_mm: float = 0.0
-    asperity_um: float = 0.0
+    asperities_per_mm: float
+    asperity_um: float
+    mu_static: float
+    mu_kinetic: float
+    stiffness_n_per_mm: float
+    relaxation: float
+    stribeck_mm_s: float
+    patchiness: float
 
 
-TEXTURE_CLASSES: tuple[TextureClass, ...] = (
-    TextureClass("sine-0.35mm-smooth", "sine", 0.35, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sine-0.35mm-rough", "sine", 0.35, 2.0, 4.2, 0.04, 1.0, 7.0),
-    TextureClass("sine-0.35mm-gritty", "sine", 0.35, 2.0, 2.1, 0.02, 2.5, 7.0),
-    TextureClass("sine-0.30mm-smooth", "sine", 0.30, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sine-0.42mm-smooth", "sine", 0.42, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sawtooth-0.50mm-deep", "sawtooth", 0.50, 7.5, 15.0, 0.02, 2.0, 12.0),
-    TextureClass("bumps-0.75mm", "bumps", 0.75, 2.5, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("bumps-0.90mm", "bumps", 0.90, 2.5, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("square-0.75mm", "square", 0.75, 1.7, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("grit-fine", "none", 1.00, 0.0, 1.4, 0.02, 3.0, 5.5),
-    TextureClass("grit-coarse", "none", 1.00, 0.0, 2.0, 0.06, 1.0, 11.5),
-    TextureClass("random-rough", "none", 1.00, 0.0, 9.5, 0.03, 0.0, 0.0),
+# name, shape, P (mm), A (um), sigma (um), l (mm), lambda (/mm), H (um): the module docstring.
+_TEXTURES = (
+    ("sine-0.35mm-smooth", "sine", 0.35, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sine-0.35mm-rough", "sine", 0.35, 2.0, 4.2, 0.04, 1.0, 7.0),
+    ("sine-0.35mm-gritty", "sine", 0.35, 2.0, 2.1, 0.02, 2.5, 7.0),
+    ("sine-0.30mm-smooth", "sine", 0.30, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sine-0.42mm-smooth", "sine", 0.42, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sawtooth-0.50mm-deep", "sawtooth", 0.50, 7.5, 15.0, 0.02, 2.0, 12.0),
+    ("bumps-0.75mm", "bumps", 0.75, 2.5, 1.7, 0.02, 1.5, 6.5),
+    ("bumps-0.90mm", "bumps", 0.90, 2.5, 1.7, 0.02, 1.5, 6.5),
+    ("square-0.75mm", "square", 0.75, 1.7, 1.7, 0.02, 1.5, 6.5),
+    ("grit-fine", "none", 1.00, 0.0, 1.4, 0.02, 3.0, 5.5),
+    ("grit-coarse", "none", 1.00, 0.0, 2.0, 0.06, 1.0, 11.5),
+    ("random-rough", "none", 1.00, 0.0, 9.5, 0.03, 0.0, 0.0),
+)
+# mu_s, mu_k, k_m (N/mm), r, v_c (mm/s), s: the module docstring.
+_MECHANICS = (
+    (0.55, 0.40, 2.0, 0.25, 25.0, 0.40),
+    (0.65, 0.45, 2.0, 0.25, 20.0, 0.48),
+    (0.70, 0.50, 2.0, 0.25, 18.0, 0.48),
+    (0.55, 0.40, 2.0, 0.25, 30.0, 0.40),
+    (0.55, 0.40, 2.0, 0.25, 22.0, 0.40),
+    (0.80, 0.50, 4.0, 0.15, 25.0, 0.56),
+    (0.45, 0.35, 1.0, 0.35, 30.0, 0.32),
+    (0.45, 0.35, 1.0, 0.35, 25.0, 0.32),
+    (0.55, 0.35, 1.5, 0.30, 20.0, 0.40),
+    (0.85, 0.55, 3.0, 0.20, 25.0, 0.64),
+    (0.80, 0.60, 3.0, 0.20, 15.0, 0.56),
+    (0.65, 0.45, 0.6, 0.40, 30.0, 0.48),
+)
+TEXTURE_CLASSES: tuple[TextureClass, ...] = tuple(
+    TextureClass(*texture, *mechanics)
+    for texture, mechanics in zip(_TEXTURES, _MECHANICS, strict=True)
 )
 
 
@@ -367,7 +471,7 @@ def synthetic_recordings(
     duration_s: float = 5.0,
     fs_hz: float = DEFAULT_FS_HZ,
 ) -> Recordings:
-    """Generate the synthetic texture dataset (12 classes; see the module docstring).
+    """Generate the built-in touch dataset (12 materials; see the module docstring).
 
     Parameters
     ----------
@@ -386,7 +490,7 @@ def synthetic_recordings(
     -------
     Recordings
         ``12 * recordings_per_class`` recordings, class-major (class 0's recordings first),
-        float64 force signals in a.u., names ``"<class name>/rec01"`` (1-based), dataset name
+        float64 sensor signals in mN, names ``"<class name>/rec01"`` (1-based), dataset name
         ``"synthetic"``.
 
     Raises
@@ -399,68 +503,183 @@ def synthetic_recordings(
     )
     t = np.arange(layout.n_samples, dtype=np.float64) / fs_hz
     signals = []
-    for c, texture in enumerate(TEXTURE_CLASSES):
+    for c in range(len(TEXTURE_CLASSES)):
+        sample = material_map(seed, c)
         for r in range(int(recordings_per_class)):
-            children = np.random.SeedSequence([int(seed), c, r]).spawn(4)
-            streams = tuple(np.random.default_rng(s) for s in children)
-            signals.append(_recording(texture, t, float(fs_hz), streams))
+            signals.append(touch(seed, c, r, t, float(fs_hz), sample).signal)
     return Recordings(
         signals=tuple(signals),
         labels=np.array(layout.labels, dtype=np.int64),
         class_names=layout.class_names,
         fs_hz=layout.fs_hz,
         names=layout.names,
-        units="a.u.",
+        units="mN",
         name="synthetic",
     )
 
 
-def _recording(
-    texture: TextureClass,
-    t: np.ndarray,
-    fs_hz: float,
-    streams: tuple[np.random.Generator, ...],
-) -> np.ndarray:
-    """One recording: float64, shape ``t.shape``, a.u. (the model of the module docstring).
+def material_map(seed: int, class_index: int) -> np.ndarray:
+    """The material sample's slow variation along the path: float64 ``(_MAP_SAMPLES,)``.
 
-    ``streams`` are the scan, roughness, asperity and sensor-noise generators, in that order.
+    A stationary Gaussian process of unit variance, periodic over :data:`MAP_PERIOD_MM`, with a
+    Gaussian spectrum of correlation length :data:`MAP_CORRELATION_MM`, sampled at
+    ``MAP_PERIOD_MM / _MAP_SAMPLES`` mm; drawn from ``SeedSequence([seed, class_index])``'s
+    child ``_MATERIAL_STREAM``, so every touch of the class meets the same sample.
+    """
+    stream = np.random.SeedSequence([int(seed), int(class_index)], spawn_key=(_MATERIAL_STREAM,))
+    return _periodic_process(np.random.default_rng(stream))
+
+
+def _periodic_process(rng: np.random.Generator) -> np.ndarray:
+    """Unit-variance periodic Gaussian process on the map's grid (see :func:`material_map`)."""
+    k = np.fft.rfftfreq(_MAP_SAMPLES, d=MAP_PERIOD_MM / _MAP_SAMPLES)  # cycles/mm
+    weight = np.exp(-((math.pi * k * MAP_CORRELATION_MM) ** 2))
+    weight[0] = 0.0
+    coefficients = (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) * weight
+    process = np.fft.irfft(coefficients, _MAP_SAMPLES)
+    return process / process.std()
+
+
+@dataclass(frozen=True, eq=False)
+class Touch:
+    """One touch and the forces behind it; every array is float64 of the time axis' shape.
+
+    Attributes
+    ----------
+    signal
+        The recording: the sensor's output with its mean removed (mN).
+    normal_mn
+        Normal force ``N(t)`` (mN).
+    friction_mn
+        Tangential (friction) force ``F_T(t)`` (mN).
+    texture_mn
+        Texture force ``V(t)`` (mN).
+    ring_mn
+        Impact ring ``R(t)`` (mN).
+    speed_mm_s
+        Sliding speed ``v(t)`` (mm/s).
+    contact_s, slide_s, break_s
+        Contact time ``t_c``, start of the sliding motion ``t_s`` and the first slip ``t_b`` (s;
+        ``inf`` when the touch ends before it).
+    """
+
+    signal: np.ndarray
+    normal_mn: np.ndarray
+    friction_mn: np.ndarray
+    texture_mn: np.ndarray
+    ring_mn: np.ndarray
+    speed_mm_s: np.ndarray
+    contact_s: float
+    slide_s: float
+    break_s: float
+
+
+def touch(
+    seed: int, class_index: int, recording: int, t: np.ndarray, fs_hz: float, sample: np.ndarray
+) -> Touch:
+    """Recording ``recording`` of class ``class_index`` (the model of the module docstring).
+
+    ``t`` is the time axis (s, float64 ``(n,)``, ``k / fs_hz``); ``sample`` the class's
+    :func:`material_map`. The touch's own draws come from the children 0..3 (motion, surface,
+    asperities, sensor noise) of ``SeedSequence([seed, class_index, recording])``.
     """
     # scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
     # cached, or that checks a grid on other recordings, never needs them.
     from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import butter, sosfilt, sosfilt_zi
+    from scipy.signal import butter, sosfilt
 
-    scan, rough, grains, noise = streams
-    # Scan: position x(t) in mm, integrated analytically from the speed.
-    speed = SCAN_SPEED_MM_S * (1.0 + SPEED_SPREAD * scan.standard_normal())
-    freqs = scan.uniform(*_WOBBLE_BAND_HZ, size=_WOBBLE_COMPONENTS)
-    psi = scan.uniform(0.0, 2 * np.pi, size=_WOBBLE_COMPONENTS)
-    direction = scan.standard_normal(_WOBBLE_COMPONENTS)
+    m = TEXTURE_CLASSES[class_index]
+    children = np.random.SeedSequence([int(seed), int(class_index), int(recording)]).spawn(4)
+    motion, rough, grains, noise = (np.random.default_rng(s) for s in children)
+    n = t.size
+
+    # Per-touch jitter: timing, force, speed, where on the sample, the path's own variation.
+    t_c = CONTACT_S + CONTACT_JITTER_S * motion.uniform(-1.0, 1.0)
+    t_s = t_c + HOLD_S + HOLD_JITTER_S * motion.uniform(-1.0, 1.0)
+    force_n = PRESS_FORCE_N * motion.uniform(1.0 - FORCE_SPREAD, 1.0 + FORCE_SPREAD)
+    speed = SCAN_SPEED_MM_S * (1.0 + SPEED_SPREAD * motion.standard_normal())
+    freqs = motion.uniform(*_WOBBLE_BAND_HZ, size=_WOBBLE_COMPONENTS)
+    psi = motion.uniform(0.0, 2 * np.pi, size=_WOBBLE_COMPONENTS)
+    direction = motion.standard_normal(_WOBBLE_COMPONENTS)
     amps = SPEED_WOBBLE_RMS * math.sqrt(2.0) * direction / np.linalg.norm(direction)
-    omega = 2 * np.pi * freqs
-    wobble = (amps / omega) @ (np.cos(psi)[:, None] - np.cos(np.outer(omega, t) + psi[:, None]))
-    x = speed * (t + wobble)
-    kappa = scan.uniform(1.0 - FORCE_SPREAD, 1.0 + FORCE_SPREAD)
-    phi0 = scan.uniform()
+    x_start = START_JITTER_MM * motion.standard_normal()
+    own = _periodic_process(motion)
+    phi0 = motion.uniform()
 
-    # Surface on a grid covering the scanned stretch plus the contact filter's reach.
+    # Contact and press: force-controlled approach into the series of pad and material springs,
+    # then the height is held and the force relaxes.
+    k_eff = 1.0 / (1.0 / FINGER_STIFFNESS_N_PER_MM + 1.0 / m.stiffness_n_per_mm)  # N/mm
+    s = np.maximum(t - t_c, 0.0)
+    touching = t >= t_c
+    tau_press = force_n / (k_eff * APPROACH_MM_S)
+    relaxed = 1.0 - m.relaxation * (1.0 - np.exp(-s / RELAX_S))
+    normal = 1e3 * force_n * (1.0 - np.exp(-s / tau_press)) * relaxed * touching  # mN
+    omega = math.sqrt(1e3 * k_eff / FINGER_MASS_KG)  # rad/s
+    ring_peak = 1e3 * APPROACH_MM_S * 1e-3 * math.sqrt(1e3 * k_eff * FINGER_MASS_KG)  # mN
+    damped = omega * math.sqrt(1.0 - RING_DAMPING**2)
+    ring = ring_peak * np.sin(damped * s) * np.exp(-RING_DAMPING * omega * s) * touching
+
+    # Sliding: the robot accelerates to its speed; x is the position on the sample (mm).
+    u = np.maximum(t - t_s, 0.0)
+    wobble = amps @ np.sin(2 * np.pi * np.outer(freqs, t) + psi[:, None])
+    v = speed * (1.0 - np.exp(-u / ACCEL_S)) * (1.0 + wobble) * (t >= t_s)
+    travel = np.cumsum(v) / fs_hz
+    x = x_start + travel
+    grid_map = np.arange(_MAP_SAMPLES) * (MAP_PERIOD_MM / _MAP_SAMPLES)
+    mixed = MAP_SHARED * sample + math.sqrt(1.0 - MAP_SHARED**2) * own
+    local = np.exp(m.patchiness * np.interp(x, grid_map, mixed, period=MAP_PERIOD_MM))
+
+    # Friction: the stick phase loads the shear spring up to mu_s N; then stick-slip about
+    # mu_k N whose depth falls with speed (Stribeck) and whose cycles come at k_t v / D.
+    k_t = 1e3 * SHEAR_STIFFNESS_N_PER_MM  # mN/mm
+    load = k_t * travel
+    broken = (t >= t_s) & (load >= m.mu_static * local * normal)
+    first = int(np.argmax(broken)) if broken.any() else n
+    depth = (m.mu_static - m.mu_kinetic) * local * normal * np.exp(-v / m.stribeck_mm_s)
+    rate = np.where(depth > _MIN_SLIP_MN, k_t * v / np.maximum(depth, _MIN_SLIP_MN), 0.0)
+    phase = np.cumsum(np.minimum(rate, _MAX_SLIP_RATE * fs_hz)) / fs_hz
+    phase -= phase[min(first, n - 1)]
+    cycle = np.floor(phase).astype(np.int64)
+    cycle -= cycle.min()
+    depth_factor = np.exp(SLIP_DEPTH_SPREAD * motion.standard_normal(int(cycle.max()) + 1))
+    stick_slip = depth * depth_factor[cycle] * (phase - np.floor(phase) - 0.5)
+    after = np.arange(n) >= first
+    friction = np.where(after, m.mu_kinetic * local * normal + stick_slip, load * (t >= t_s))
+
+    # Texture: the surface profile under the contact patch, pressed in by the normal force.
     margin = 5.0 * CONTACT_SIGMA_MM
     x0 = float(x.min()) - margin
     n_grid = math.ceil((float(x.max()) + margin - x0) / GRID_MM) + 2
     grid = x0 + GRID_MM * np.arange(n_grid)
-    height = texture.ridge_um * ridge_shape(texture.shape, grid / texture.period_mm + phi0)
-    if texture.roughness_um > 0:
-        height += _ou_roughness(rough, n_grid, texture.roughness_um, texture.correlation_mm)
-    contact = gaussian_filter1d(height, CONTACT_SIGMA_MM / GRID_MM, mode="nearest", truncate=4.0)
-    if texture.asperities_per_mm > 0 and texture.asperity_um > 0:
-        contact += _asperities(grains, grid, texture.asperities_per_mm, texture.asperity_um)
+    height = m.ridge_um * ridge_shape(m.shape, grid / m.period_mm + phi0)
+    if m.roughness_um > 0:
+        height += _ou_roughness(rough, n_grid, m.roughness_um, m.correlation_mm)
+    profile = gaussian_filter1d(height, CONTACT_SIGMA_MM / GRID_MM, mode="nearest", truncate=4.0)
+    if m.asperities_per_mm > 0 and m.asperity_um > 0:
+        profile += _asperities(grains, grid, m.asperities_per_mm, m.asperity_um)
+    # k_eff (N/mm) times um is mN.
+    texture = TEXTURE_COUPLING * k_eff * local * normal / (1e3 * PRESS_FORCE_N)
+    texture = texture * np.interp(x, grid, profile)
 
-    u = kappa * np.interp(x, grid, contact) / UM_PER_AU
-    u += NOISE_RMS_AU * noise.standard_normal(t.size)
+    # Sensor: AC coupling, anti-aliasing low-pass, from rest (nothing touches it before t = 0).
+    raw = normal + friction + texture + ring + NOISE_RMS_MN * noise.standard_normal(n)
+    sections = []
+    if SENSOR_HIGHPASS_HZ < fs_hz / 2:
+        sections.append(butter(1, SENSOR_HIGHPASS_HZ, "highpass", fs=fs_hz, output="sos"))
     if SENSOR_BAND_HZ < fs_hz / 2:
-        sos = butter(SENSOR_FILTER_ORDER, SENSOR_BAND_HZ, fs=fs_hz, output="sos")
-        u, _ = sosfilt(sos, u, zi=sosfilt_zi(sos) * u[0])
-    return u - u.mean()
+        sections.append(butter(SENSOR_FILTER_ORDER, SENSOR_BAND_HZ, fs=fs_hz, output="sos"))
+    out = sosfilt(np.vstack(sections), raw) if sections else raw
+    return Touch(
+        signal=out - out.mean(),
+        normal_mn=normal,
+        friction_mn=friction,
+        texture_mn=texture,
+        ring_mn=ring,
+        speed_mm_s=v,
+        contact_s=float(t_c),
+        slide_s=float(t_s),
+        break_s=float(t[first]) if first < n else math.inf,
+    )
 
 
 def _ou_roughness(rng: np.random.Generator, n: int, sigma: float, corr_mm: float) -> np.ndarray:
@@ -496,172 +715,3 @@ def _asperities(
     out = np.zeros(grid.size)
     np.add.at(out, cells.ravel(), bumps.ravel())
     return out
-
-
-# ---------------------------------------------------------------------------------------------
-# Statistics of a dataset's classes (what the comparison with real recordings measures)
-
-
-@dataclass(frozen=True, eq=False)
-class ClassStatistics:
-    """Per-class statistics of a dataset, as :func:`class_statistics` measures them.
-
-    Every array is float64 of shape ``(n_classes,)``, in class-label order; a class value is the
-    mean over the class's recordings of the per-recording value, except ``rms_cv``.
-
-    Attributes
-    ----------
-    dataset
-        Name of the dataset.
-    class_names
-        ``n_classes`` names.
-    fs_hz
-        Sampling rate (Hz).
-    units
-        Units of the recordings (``rms``).
-    full_scale_v
-        Full scale of the front end (V) that ``rms_v`` and ``mad_v`` refer to.
-    gain_v_per_unit
-        The front end's gain fitted on the whole dataset (V per recording unit).
-    n_recordings
-        int64: recordings per class.
-    rms
-        RMS of the mean-removed recording (recording units).
-    rms_v
-        ``rms`` after the front end (V): ``gain_v_per_unit * rms``.
-    rms_cv
-        Within-class coefficient of variation of the recordings' RMS, ``std(ddof=1) / mean``
-        (NaN for a class of one recording).
-    mad_v
-        Median absolute deviation from the recording's mean after the front end (V).
-    centroid_hz
-        Power-weighted mean frequency of the recording's periodogram (Hz).
-    bandwidth_hz
-        Power-weighted standard deviation of frequency about the centroid (Hz).
-    excess_kurtosis
-        Fisher (excess) kurtosis of the samples (0 for a Gaussian, -1.5 for a sine).
-    """
-
-    dataset: str
-    class_names: tuple[str, ...]
-    fs_hz: float
-    units: str
-    full_scale_v: float
-    gain_v_per_unit: float
-    n_recordings: np.ndarray
-    rms: np.ndarray
-    rms_v: np.ndarray
-    rms_cv: np.ndarray
-    mad_v: np.ndarray
-    centroid_hz: np.ndarray
-    bandwidth_hz: np.ndarray
-    excess_kurtosis: np.ndarray
-
-    @property
-    def nyquist_hz(self) -> float:
-        """``fs_hz / 2`` (Hz)."""
-        return self.fs_hz / 2.0
-
-    @property
-    def centroid_nyquist(self) -> np.ndarray:
-        """float64 ``(n_classes,)``: ``centroid_hz`` as a fraction of the Nyquist frequency."""
-        return self.centroid_hz / self.nyquist_hz
-
-    @property
-    def bandwidth_nyquist(self) -> np.ndarray:
-        """float64 ``(n_classes,)``: ``bandwidth_hz`` as a fraction of the Nyquist frequency."""
-        return self.bandwidth_hz / self.nyquist_hz
-
-    @property
-    def across_class_cv(self) -> float:
-        """Spread of the class levels: ``std(rms_v, ddof=1) / mean(rms_v)`` over the classes."""
-        return float(np.std(self.rms_v, ddof=1) / np.mean(self.rms_v))
-
-    @property
-    def across_class_ratio(self) -> float:
-        """Loudest over quietest class: ``max(rms_v) / min(rms_v)``."""
-        return float(np.max(self.rms_v) / np.min(self.rms_v))
-
-    @property
-    def median_rms_v(self) -> float:
-        """Median over the classes of ``rms_v`` (V)."""
-        return float(np.median(self.rms_v))
-
-    @property
-    def median_rms_cv(self) -> float:
-        """Median over the classes of ``rms_cv``."""
-        return float(np.median(self.rms_cv))
-
-
-def class_statistics(recordings: Recordings, *, full_scale_v: float = 1.0) -> ClassStatistics:
-    """Level, spread, spectrum and peakedness of each class of a dataset.
-
-    Per recording ``x`` (mean removed, ``x0 = x - mean(x)``): ``rms = sqrt(mean(x0^2))``;
-    ``mad = median(|x0|)``; the periodogram ``P(f)`` of ``x0`` (:func:`scipy.signal.periodogram`,
-    rectangular window) gives ``centroid = sum(f P) / sum(P)`` and
-    ``bandwidth = sqrt(sum((f - centroid)^2 P) / sum(P))``; the excess kurtosis is
-    :func:`scipy.stats.kurtosis` (Fisher, biased). Volts are those of the project's front end
-    (:func:`pipeline.frontend.fit_front_end`, fitted on the whole dataset at ``full_scale_v``),
-    which is what the level-crossing threshold is compared with: this makes levels of datasets
-    in different units comparable.
-
-    Parameters
-    ----------
-    recordings
-        Any dataset; every class needs at least one recording.
-    full_scale_v
-        Full scale of the front end (V, finite and > 0).
-
-    Returns
-    -------
-    ClassStatistics
-        A constant recording has ``rms = 0`` and NaN spectrum and kurtosis.
-
-    Raises
-    ------
-    ValueError
-        A class without recordings, or ``full_scale_v`` not a finite number > 0.
-    """
-    from scipy.signal import periodogram
-    from scipy.stats import kurtosis
-
-    counts = np.bincount(recordings.labels, minlength=recordings.n_classes)
-    empty = [name for name, n in zip(recordings.class_names, counts, strict=True) if n == 0]
-    if empty:
-        raise ValueError(f"dataset {recordings.name}: classes without recordings: {empty}")
-    gain = fit_front_end(recordings, full_scale_v).gain_v_per_unit
-    per_recording = np.empty((recordings.n_recordings, 5))
-    for n, signal in enumerate(recordings.signals):
-        x0 = signal - signal.mean()
-        freqs, power = periodogram(x0, fs=recordings.fs_hz, detrend=False)
-        total = power.sum()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            centroid = (freqs * power).sum() / total
-            bandwidth = math.sqrt(((freqs - centroid) ** 2 * power).sum() / total)
-            peakedness = kurtosis(x0) if total > 0 else math.nan
-        rms = math.sqrt(np.mean(x0**2))
-        per_recording[n] = rms, np.median(np.abs(x0)), centroid, bandwidth, peakedness
-
-    def by_class(column: int, reduce=np.mean) -> np.ndarray:
-        values = per_recording[:, column]
-        return np.array([reduce(values[recordings.labels == c]) for c in range(len(counts))])
-
-    rms = by_class(0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rms_cv = by_class(0, lambda v: np.std(v, ddof=1) / np.mean(v) if v.size > 1 else np.nan)
-    return ClassStatistics(
-        dataset=recordings.name,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        units=recordings.units,
-        full_scale_v=float(full_scale_v),
-        gain_v_per_unit=gain,
-        n_recordings=counts.astype(np.int64),
-        rms=rms,
-        rms_v=gain * rms,
-        rms_cv=rms_cv,
-        mad_v=gain * by_class(1),
-        centroid_hz=by_class(2),
-        bandwidth_hz=by_class(3),
-        excess_kurtosis=by_class(4),
-    )
