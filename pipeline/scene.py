@@ -464,7 +464,7 @@ def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
 #: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
 #: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
 #: follow the statistics measured on real texture recordings.
-MODEL_REVISION = 3
+MODEL_REVISION = 4
 
 
 def cache_key(scene: Scene, stage: str, memo: CanonicalMemo | None = None) -> str:
