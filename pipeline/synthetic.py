@@ -59,9 +59,9 @@ drive reloads a drop, each cycle's depth scaled by ``exp(SLIP_DEPTH_SPREAD z_j)`
 
 Texture. The surface profile under the contact patch, ``h_a(x)`` (um; below), indents the pad in
 proportion to the normal force (``TEXTURE_COUPLING`` of it: the pad partly conforms; ``k`` in N/mm
-times um is mN)::
+times um is mN; ``F_0`` is ``PRESS_FORCE_N`` in mN)::
 
-    V(t) = TEXTURE_COUPLING k L(x) (N(t) / PRESS_FORCE_N) h_a(x(t))
+    V(t) = TEXTURE_COUPLING k L(x) (N(t) / F_0) h_a(x(t))
 
 Before the sliding motion ``x`` is constant and ``V`` only follows the press: there is no sliding
 vibration before contact nor before the motion starts.
