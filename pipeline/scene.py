@@ -494,7 +494,7 @@ def _canonical_plan(
 #: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
 #: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
 #: follow the statistics measured on real texture recordings.
-MODEL_REVISION = 3
+MODEL_REVISION = 4
 
 
 def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:

@@ -1,52 +1,95 @@
-"""Synthetic textures: the embedded default dataset (no download needed).
+"""Synthetic touches: the embedded default dataset (no download needed).
 
-A probe with a small contact patch slides over a textured surface; the sensor reports the
-contact-force fluctuation through a band-limited recording chain. Every recording is generated
-from its own random stream, ``numpy.random.default_rng(SeedSequence([seed, class_index,
-recording_index]))`` (split into independent child streams for the scan, the roughness, the
-asperities and the sensor noise), so a recording does not depend on how many other recordings
-are generated or in which order.
+A robot presses a fingertip on a material sample and slides it across, as in real texture
+recordings; a fingertip vibration/force sensor reports the force on the pad. A touch has a time
+course: the fingertip meets the surface (an impact), presses (the normal force rises at a rate set
+by the material's compliance), starts to slide (the shear load builds to static friction, breaks
+away, and stick-slip follows whose rate and depth depend on the material and die out as the speed
+rises), then slides with the texture's vibration on top, over a sample whose friction and texture
+vary slowly along the path the same way for every touch of that sample. Every recording is
+generated from its own random stream, the children 0..3 (motion, roughness, asperities, sensor
+noise) of ``numpy.random.SeedSequence([seed, class_index, recording_index])``; the material
+sample of a class is drawn from ``SeedSequence([seed, class_index], spawn_key=(1000,))``, which no
+recording uses. So a recording does not depend on how many other recordings are generated or in
+which order.
 
 Model
 -----
-Surface profile of class ``c`` (height in um over the scan coordinate ``x`` in mm), as the
-probe sees it::
+Times ``t`` in s, forces in mN, lengths in mm (heights in um). Per touch ``i`` of material ``m``
+the jitter is drawn first: contact time ``t_c ~ CONTACT_S + U(-1, 1) CONTACT_JITTER_S``, start of
+the sliding motion ``t_s = t_c + HOLD_S + U(-1, 1) HOLD_JITTER_S``, press force ``F ~
+PRESS_FORCE_N U(1 - FORCE_SPREAD, 1 + FORCE_SPREAD)``, speed ``v0 = SCAN_SPEED_MM_S (1 +
+SPEED_SPREAD z)``, a slow wobble ``w(t)`` of three sinusoids (``U(0.1, 1) Hz``, random phases,
+``SPEED_WOBBLE_RMS`` rms in all), the start on the sample ``x_0 ~ N(0, START_JITTER_MM)``.
 
-    h(x)   = A_c s_c(x / P_c + phi_0) + rho(x)
+Contact and press. The pad (stiffness ``k_f = FINGER_STIFFNESS_N_PER_MM``) and the material
+(``k_m``) are springs in series, ``k = 1 / (1/k_f + 1/k_m)``. The robot approaches at ``v_a =
+APPROACH_MM_S`` under force control, so the force rises with time constant ``tau_p = F / (k v_a)``
+(a softer material takes longer), then holds the height while the contact relaxes (share ``r`` of
+the force, time constant ``RELAX_S``); the impact rings at the contact resonance of the fingertip
+mass ``M = FINGER_MASS_KG`` on ``k`` (damping ratio ``zeta = RING_DAMPING``)::
+
+    s    = max(t - t_c, 0),       omega = sqrt(k / M)
+    N(t) = F (1 - exp(-s / tau_p)) (1 - r (1 - exp(-s / RELAX_S)))         (t >= t_c, else 0)
+    R(t) = v_a sqrt(k M) sin(omega sqrt(1 - zeta^2) s) exp(-zeta omega s)  (t >= t_c, else 0)
+
+Sliding. The robot accelerates to its speed (time constant ``ACCEL_S``); ``X`` is how far it has
+moved, ``x`` where the fingertip is on the sample::
+
+    v(t) = v0 (1 - exp(-(t - t_s) / ACCEL_S)) (1 + w(t))    (t >= t_s, else 0)
+    X(t) = integral of v from 0 to t,     x(t) = x_0 + X(t)
+
+The sample varies slowly along the path: ``g_m(x)`` is a stationary Gaussian process of unit
+variance with a Gaussian spectrum of correlation length ``MAP_CORRELATION_MM`` (periodic over
+``MAP_PERIOD_MM``), one per material sample (:func:`material_map`); a touch's path crosses the
+sample at a slightly different place, so it meets ``rho g_m + sqrt(1 - rho^2) g_i`` with
+``rho = MAP_SHARED`` and ``g_i`` its own draw of the same process. The local factor of friction
+and texture is ``L(x) = exp(s_m (rho g_m(x) + sqrt(1 - rho^2) g_i(x)))``.
+
+Friction. The shear spring of pad and drive (``k_t = SHEAR_STIFFNESS_N_PER_MM``) is loaded by the
+motion until it reaches static friction, at the first slip ``t_b``; from then on the tangential
+force is stick-slip about kinetic friction: a sawtooth whose drop ``D`` falls with speed as the
+Stribeck curve does (velocity weakening dies out above ``v_c``), whose cycles come at the rate the
+drive reloads a drop, each cycle's depth scaled by ``exp(SLIP_DEPTH_SPREAD z_j)``::
+
+    F_T(t) = k_t X(t)                                    t_s <= t < t_b: k_t X < mu_s L N
+    D(t)   = (mu_s - mu_k) L(x) N(t) exp(-v(t) / v_c)
+    phi(t) = integral from t_b to t of min(k_t v / D, fs / 4)          (0 where D < 1e-3 mN)
+    F_T(t) = mu_k L(x) N(t) + D(t) exp(SLIP_DEPTH_SPREAD z_floor(phi)) (frac(phi) - 1/2)   t >= t_b
+
+Texture. The surface profile under the contact patch, ``h_a(x)`` (um; below), indents the pad in
+proportion to the normal force (``TEXTURE_COUPLING`` of it: the pad partly conforms; ``k`` in N/mm
+times um is mN; ``F_0`` is ``PRESS_FORCE_N`` in mN)::
+
+    V(t) = TEXTURE_COUPLING k L(x) (N(t) / F_0) h_a(x(t))
+
+Before the sliding motion ``x`` is constant and ``V`` only follows the press: there is no sliding
+vibration before contact nor before the motion starts.
+
+Profile of texture ``m`` (height in um over ``x``)::
+
+    h(x)   = A_m s_m(x / P_m + phi_0) + rho_r(x)
     h_a(x) = (g_a * h)(x) + sum_j H_j exp(-(x - xi_j)^2 / (2 sigma_a^2))
 
-``s_c`` is the ridge shape (period 1, range [-1, 1]; the shapes below), ``P_c`` the ridge
-period (mm), ``A_c`` the ridge amplitude (um), ``phi_0 ~ U(0, 1)`` where the scan starts on the
-ridge pattern. ``rho`` is Gaussian roughness with an exponential autocorrelation,
-``E[rho(x) rho(x + u)] = sigma_c^2 exp(-|u| / l_c)`` (an Ornstein-Uhlenbeck process in space,
-Lorentzian spectrum; exact AR(1) recursion on a grid of ``GRID_MM``), a fresh patch of surface
-for every recording. The probe touches the surface over a patch: it sees the profile averaged by
-the Gaussian ``g_a`` of standard deviation ``sigma_a = CONTACT_SIGMA_MM`` (a spatial low-pass
-filter, transfer ``exp(-2 pi^2 sigma_a^2 k^2)`` at ``k`` cycles/mm). The asperities are grains
-much narrower than the contact patch, at the points ``xi_j`` of a Poisson process of
-``lambda_c`` per mm (fresh for every recording); through the patch each is a Gaussian bump of
-width ``sigma_a`` and height ``H_j ~ Exponential(mean H_c)`` (um), added at its exact position.
+``s_m`` is the ridge shape (period 1, range [-1, 1]; the shapes below), ``P_m`` the ridge period,
+``A_m`` the ridge amplitude, ``phi_0 ~ U(0, 1)``. ``rho_r`` is Gaussian roughness with an
+exponential autocorrelation, ``E[rho_r(x) rho_r(x + u)] = sigma_m^2 exp(-|u| / l_m)`` (exact AR(1)
+recursion on a grid of ``GRID_MM``), fresh for every touch. The pad sees the profile averaged by
+the Gaussian ``g_a`` of standard deviation ``sigma_a = CONTACT_SIGMA_MM``; asperities are grains
+at the points ``xi_j`` of a Poisson process of ``lambda_m`` per mm, heights ``H_j ~
+Exponential(mean H_m)``, each a Gaussian bump of width ``sigma_a`` at its exact position.
 
-The scan position follows a nominal speed ``v0 = SCAN_SPEED_MM_S`` with a per-recording speed
-factor ``m ~ N(1, SPEED_SPREAD)`` and a slow wobble of three sinusoids (frequencies
-``U(0.1, 1) Hz``, random phases, ``SPEED_WOBBLE_RMS`` rms in all)::
+Sensor. The pad's sensor sums normal and tangential force with the texture and the ring, plus
+white noise ``n`` (``NOISE_RMS_MN`` rms per sample); it is AC-coupled (first-order high-pass at
+``SENSOR_HIGHPASS_HZ``) and band-limited (Butterworth low-pass of order ``SENSOR_FILTER_ORDER`` at
+``SENSOR_BAND_HZ``; a filter whose corner is not below ``fs_hz / 2`` is left out), starting from
+rest (nothing touches it before ``t = 0``); the recording is its output with the mean removed::
 
-    v(t) = v0 * m * (1 + sum_k a_k sin(2 pi f_k t + psi_k))
-    x(t) = v0 * m * (t + sum_k a_k (cos(psi_k) - cos(2 pi f_k t + psi_k)) / (2 pi f_k))
+    y = B(HP(N + F_T + V + R + n)),        y <- y - mean(y)
 
-The sensor output (a.u.; 1 a.u. is ``UM_PER_AU`` um of filtered profile at nominal force) is::
-
-    u(t) = kappa * h_a(x(t)) / UM_PER_AU + n(t)
-    y    = B(u),                                  y <- y - mean(y)
-
-with ``kappa ~ U(1 - FORCE_SPREAD, 1 + FORCE_SPREAD)`` the per-recording contact-force factor
-(a harder press gives a larger force fluctuation) and ``n`` white Gaussian sensor noise of
-``NOISE_RMS_AU`` rms per sample. ``B`` is the recording chain's anti-aliasing filter: a causal
-Butterworth low-pass of order ``SENSOR_FILTER_ORDER`` with its corner at ``SENSOR_BAND_HZ``,
-started in its steady state for the first sample (it is left out when ``SENSOR_BAND_HZ`` is not
-below the Nyquist frequency ``fs_hz / 2``: the sampling then limits the band). The mean is
-removed (an AC-coupled sensor: the static preload is not in the output). Samples are taken at
-``t_k = k / fs_hz``, ``k = 0 .. round(duration_s * fs_hz) - 1``.
+Samples are taken at ``t_k = k / fs_hz``, ``k = 0 .. round(duration_s * fs_hz) - 1`` (2 kHz by
+default, as the real recordings; 5 s by default: the paper's 40 windows of 0.1 s plus room for
+the taxel delays).
 
 Classes
 -------
@@ -67,13 +110,28 @@ index   name                  shape     P (mm)  A(um)  sigma(um) l (mm)  lambda/
 11      random-rough          none      --      0      9.5       0.03    0         0
 ======  ====================  ========  ======  =====  ========  ======  ========  =====
 
-The table is built so that classes are separable but not trivially: 0/1/2 share the ridges and
-differ in roughness (amount and correlation length), then in asperity density; 0/3/4 share
-everything but the period (14-20 % apart), as do 6/7; 6/8 differ in ridge shape (harmonic
-content) and depth; 5 is the one deep texture; 9/10/11 have no ridges: dense fine grains, sparse
-large grains on a coarser roughness, and roughness alone. The values follow the physical picture
-above; their levels, densities and the sensor band were set so that the classes' statistics fall
-inside those measured on real recordings (last section), never to reach an accuracy or a figure.
+Mechanics (friction coefficients, material stiffness ``k_m``, relaxing share ``r``, Stribeck
+speed ``v_c``, patchiness ``s``)::
+
+    index   mu_s   mu_k   k_m (N/mm)  r     v_c (mm/s)  s
+    0       0.55   0.40   2.0         0.20  25          0.50
+    1       0.65   0.45   2.0         0.20  20          0.60
+    2       0.70   0.50   2.0         0.20  18          0.60
+    3       0.55   0.40   2.0         0.20  30          0.50
+    4       0.55   0.40   2.0         0.20  22          0.50
+    5       0.80   0.50   4.0         0.12  25          0.70
+    6       0.45   0.35   1.0         0.28  30          0.40
+    7       0.45   0.35   1.0         0.28  25          0.40
+    8       0.55   0.35   1.5         0.24  20          0.50
+    9       0.85   0.55   3.0         0.16  25          0.80
+    10      0.80   0.60   3.0         0.16  15          0.70
+    11      0.65   0.45   0.6         0.32  30          0.60
+
+The classes are separable but not trivially: 0/1/2 share the ridges and differ in roughness, then
+in asperity density, and in friction; 0/3/4 share the mechanics and differ in the period (14-20 %
+apart) and Stribeck speed, as 6/7 do; 6/8 differ in ridge shape and friction; 5 is the one deep,
+stiff texture; 9/10/11 have no ridges (dense fine grains and sparse large grains on grippy, stiff
+samples; roughness alone on a soft one). Soft materials (6, 7, 11) press slowly and relax most.
 
 Shapes of ``s(u)`` for the phase ``u = frac(x / P + phi_0)``:
 
@@ -84,66 +142,50 @@ Shapes of ``s(u)`` for the phase ``u = frac(x / P + phi_0)``:
 - ``triangle``: ``1 - 4 |u - 1/2|`` (odd harmonics, falling as 1/n^2);
 - ``none``: 0.
 
-Measured against real recordings
---------------------------------
-Measured on 2026-11-23 with ``.venv/bin/python -m benchmarks.data_statistics``, which applies
-:func:`class_statistics` (front end at 1 V full scale) to the VibTac-12 copy in
-``shared/datasets/vibtac12`` (read with the project's loader: kind ``vibtac12``, z axis, 10
-segments of 399 samples per texture, 200 Hz; segments of one recording stand in for the paper's
-10 trials) and to this dataset at its defaults (seed 0, 10 recordings of 5 s per class, 2 kHz).
-Per-class rows give the range over the 12 classes; dataset rows give one number per dataset, and
-their VibTac-12 range is that of its x, y and z axes (the same recordings seen three ways: one
-number has no spread of its own). "before" is this module before the calibration (force sensor
-without a recording-chain filter, ridge-dominated classes, no asperities)::
+Measured against real touches
+-----------------------------
+Measured on 2026-11-25 with ``.venv/bin/python -m benchmarks.data_statistics --vibtac12
+../shared/datasets/vibtac12``, which prints :func:`pipeline.touch_statistics.touch_statistics`
+(0.1 s windows of the first 4 s; the statistics of ``shared/REAL_RECORDINGS.md``) for the real
+12 x 10 touches (:data:`pipeline.touch_statistics.REAL_TOUCHES`, with the range each is judged
+by), the VibTac-12 copy (z axis, 10 segments of one row per texture, 200 Hz), this dataset
+before the touch model (stationary scans of a surface profile) and now, at its defaults (seed
+0, 10 touches of 5 s per class, 2 kHz), and now over seeds 0-7::
 
-    statistic               VibTac-12 min/max   before min/max      built-in min/max
-    rms_v                   0.0370   0.1887     0.0517   0.1931     0.0428   0.1780
-    rms_cv                  0.040    0.214      0.066    0.099      0.077    0.140
-    mad_v                   0.0107   0.1514     0.0398   0.1880     0.0229   0.1152
-    centroid_hz             33.4     47.6       13.3     61.6       35.2     44.1
-    bandwidth_hz            20.0     27.1       37.9     132.6      21.9     24.6
-    excess_kurtosis         -0.8     39.6       -1.5     0.1        -0.1     20.8
-    across_class_cv         0.462    0.667      0.326    0.326      0.571    0.571
-    across_class_ratio      2.94     9.48       3.74     3.74       4.16     4.16
-    median_rms_v            0.0493   0.0675     0.1535   0.1535     0.0533   0.0533
-    median_rms_cv           0.103    0.126      0.091    0.091      0.106    0.106
-    centroid_nyquist        0.334    0.476      0.013    0.062      0.035    0.044
-    bandwidth_nyquist       0.200    0.271      0.038    0.133      0.022    0.025
+    statistic               real 12x10  range      VibTac-12   before      seed 0     seeds 0-7
+    envelope_corr_within    0.59        >= 0.4     -0.005      -0.006      0.600      0.561-0.606
+    envelope_corr_between   0.33        -          -0.000      -0.003      0.309      0.309-0.371
+    contact_transient       4.1         2 .. 8     1.12        1.09        4.24       4.24-5.10
+      (10th-90th pct)       1.9-6.6                0.68-2.26   0.82-1.58   1.69-6.74
+    slow_decay              0.91        0.7 .. 1   n/a         1.003       0.752      0.719-1.023
+    level_spread_within     0.09        <= 0.3     0.103       0.106       0.099      0.099-0.139
+    loudest_quietest_ratio  3.0         1.5 .. 10  5.02        4.30        3.785      2.218-3.995
+    centroid_hz             8-19        5 .. 60    33.4-47.6   35.2-44.1   6.7-15.7   5.5-18.3
+    bandwidth_hz            24-59       10 .. 80   20.0-27.1   21.9-24.6   18.7-33.4  18.7-34.0
 
-(``rms_v``, ``mad_v`` in V, the rest as in :class:`ClassStatistics`; VibTac-12's z axis alone
-gives 0.667, 5.11, 0.0493 and 0.103 for the four dataset rows.) The tests check that every
-built-in class and summary lies inside the VibTac-12 range, except the last two rows (not
-matched, see below), and that both columns still read as printed here. Over seeds 0-7 every
-per-class statistic stays inside the VibTac-12 range; of the summaries, ``median_rms_v`` spans
-0.0494-0.0549 and ``median_rms_cv`` 0.098-0.126 (slightly below VibTac-12's range for some
-seeds).
+The tests check that the built-in data at seed 0 reads as printed here and lies inside every
+reference range, with the within-class envelope correlation at least 0.15 above the between-class
+one. The classes were calibrated before on the VibTac-12 copy; that copy is the wrong yardstick
+for time structure, because its 10 "recordings" per class are segments of one long recording,
+stationary like the scans it was used to calibrate (both correlations about 0, no transient).
 
-What the numbers say and what was changed. Levels are compared after the front end, in volts
-of the 1 V full scale, because that is what the 0.02-0.2 V level-crossing thresholds see; the
-front end maps the whole dataset's 99.9th percentile deviation to 0.5 V, so a level is set by
-how a class compares with the loudest, most peaked parts of its dataset. VibTac-12 has two loud,
-near-Gaussian textures and ten quieter ones, most of them peaky (median class 0.049 V, kurtosis
-up to 40: mostly small vibration with sparse large events); before, most built-in classes sat at
-0.13-0.19 V and were sub-Gaussian (ridge-dominated), with their power at the ridge fundamentals
-(centroid 13-62 Hz) and a tail of harmonics and white sensor noise up to 1 kHz (bandwidth
-38-133 Hz). Now one texture (5) is loud and one (11) in between, the others are quiet and carry
-sparse asperities, ridges hold a smaller share of the power, and the recording chain has a band
-like VibTac-12's.
-
-Centroid and bandwidth are matched in Hz, not as fractions of the Nyquist frequency. VibTac-12
-at 200 Hz is close to white up to its Nyquist frequency (last two rows; a white signal gives 0.5
-and 0.289): its content lies below 100 Hz. The readout, the rate-coding windows and the taxel
-delays all work in seconds, so the built-in recordings keep their content below about 100 Hz
-too (``SENSOR_BAND_HZ``), which at 2 kHz is a few hundredths of their own Nyquist frequency.
-Matching the fractions at 2 kHz would put the content near 400 Hz and multiply the level
-crossings per second of signal about tenfold over VibTac-12's; matching both would need
-sampling at 200 Hz.
-
-Not matched: VibTac-12 is quantised to 6 bits (one count is 0.018 V at full scale) and its
-segments last 2 s; the built-in recordings are not quantised and last ``duration_s`` (5 s by
-default). The class levels, asperity densities, ``CONTACT_SIGMA_MM``, ``SENSOR_BAND_HZ`` and
-``SENSOR_FILTER_ORDER`` were chosen to land inside the measured ranges; no accuracy or figure
-was looked at.
+What was set, and how. The time course comes from the mechanics: the contact transient is the
+press (and the breakaway) seen through the AC-coupled sensor, its size against the sliding level
+set by ``APPROACH_MM_S`` and ``SENSOR_HIGHPASS_HZ``; the between-class envelope correlation is the
+shape every touch shares (transient, acceleration, relaxation), the within-class one adds the
+material's own course (stick-slip dying out at its Stribeck speed, the sample's variation along
+the path: ``MAP_SHARED`` and the patchiness ``s``), and the touch's own variation (its path, the
+irregular stick-slip cycles ``SLIP_DEPTH_SPREAD``, the wobble) keeps both below 1; the slow decay
+is the relaxation ``r``; the centroid is set by the stick-slip rate (``SHEAR_STIFFNESS_N_PER_MM``)
+and the high-pass, the bandwidth by the texture vibration that ``SENSOR_BAND_HZ`` lets through.
+Not matched: the slow decay of seed 0 (0.75) is lower than the real 0.91 and varies over seeds
+(0.72-1.02, seed 4 just above 1): a sample's variation along the path reaches scales of seconds,
+so each material's level between 1-2 s and 3-4 s moves with its own sample; the narrowest class
+bandwidth (about 19 Hz) is below the real 24 Hz. Level crossings per recording at 0.01 V after the
+front end (1 V full scale), mean over the 120 recordings of seed 0: 1862 now, 6220 before (0.09 V:
+46 against 351; 0.3 V: 2 against 30): a loud contact transient sets the front-end gain, so the
+sliding part crosses fewer levels. Generating the dataset takes 0.5-0.9 s (0.35 s before). No
+accuracy or figure was looked at.
 """
 
 from __future__ import annotations
@@ -154,67 +196,134 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import DatasetError
-from pipeline.frontend import fit_front_end
 from pipeline.numbers import positive_number, whole_number
 from pipeline.recording_set import Recordings
 
 __all__ = [
+    "ACCEL_S",
+    "APPROACH_MM_S",
+    "CONTACT_JITTER_S",
+    "CONTACT_S",
     "CONTACT_SIGMA_MM",
     "DEFAULT_FS_HZ",
+    "FINGER_MASS_KG",
+    "FINGER_STIFFNESS_N_PER_MM",
     "FORCE_SPREAD",
     "GRID_MM",
-    "NOISE_RMS_AU",
+    "HOLD_JITTER_S",
+    "HOLD_S",
+    "MAP_CORRELATION_MM",
+    "MAP_PERIOD_MM",
+    "MAP_SHARED",
+    "NOISE_RMS_MN",
+    "PRESS_FORCE_N",
+    "RELAX_S",
+    "RING_DAMPING",
     "SCAN_SPEED_MM_S",
     "SENSOR_BAND_HZ",
     "SENSOR_FILTER_ORDER",
+    "SENSOR_HIGHPASS_HZ",
+    "SHEAR_STIFFNESS_N_PER_MM",
+    "SLIP_DEPTH_SPREAD",
     "SPEED_SPREAD",
     "SPEED_WOBBLE_RMS",
+    "START_JITTER_MM",
     "TEXTURE_CLASSES",
-    "UM_PER_AU",
-    "ClassStatistics",
+    "TEXTURE_COUPLING",
     "TextureClass",
-    "class_statistics",
+    "Touch",
+    "material_map",
     "ridge_shape",
     "synthetic_recordings",
+    "touch",
 ]
 
-#: Default sampling rate (Hz).
+#: Default sampling rate (Hz), as the real fingertip recordings (about 2 kHz).
 DEFAULT_FS_HZ = 2000.0
-#: Nominal scan speed (mm/s).
-SCAN_SPEED_MM_S = 20.0
-#: Standard deviation of the per-recording speed factor ``m`` (relative).
-SPEED_SPREAD = 0.02
-#: RMS of the slow speed wobble within one recording (relative).
-SPEED_WOBBLE_RMS = 0.03
-#: Half-width of the uniform per-recording contact-force factor ``kappa`` (relative).
+
+# Contact and press
+#: Mean time at which the fingertip meets the surface (s) and the half-width of its jitter (s).
+CONTACT_S = 0.03
+CONTACT_JITTER_S = 0.01
+#: Target normal force of the press (N) and the half-width of its per-touch jitter (relative).
+PRESS_FORCE_N = 0.15
 FORCE_SPREAD = 0.15
+#: Approach speed of the fingertip into the surface (mm/s).
+APPROACH_MM_S = 3.0
+#: Stiffness of the fingertip pad in the normal direction (N/mm), in series with the material's.
+FINGER_STIFFNESS_N_PER_MM = 1.0
+#: Moving mass of the fingertip (kg) and the damping ratio of its impact ring.
+FINGER_MASS_KG = 0.01
+RING_DAMPING = 0.3
+#: Time constant of the viscoelastic relaxation of the normal force while holding the height (s).
+RELAX_S = 2.0
+
+# Sliding
+#: Time from contact to the start of the tangential motion (s) and its jitter's half-width (s).
+HOLD_S = 0.08
+HOLD_JITTER_S = 0.02
+#: Nominal sliding speed (mm/s), its per-touch spread (relative s.d.), the time constant of the
+#: robot's acceleration (s) and the RMS of the slow speed wobble within a touch (relative).
+SCAN_SPEED_MM_S = 20.0
+SPEED_SPREAD = 0.03
+ACCEL_S = 0.15
+SPEED_WOBBLE_RMS = 0.08
+#: Tangential stiffness of the pad and the robot's drive (N/mm): the stick phase loads it.
+SHEAR_STIFFNESS_N_PER_MM = 0.02
+#: Standard deviation of the log of each stick-slip cycle's depth factor.
+SLIP_DEPTH_SPREAD = 0.6
+
+# The material sample along the sliding path
+#: Period (mm) and correlation length (mm) of a sample's slow variation along the path.
+MAP_PERIOD_MM = 400.0
+MAP_CORRELATION_MM = 6.0
+#: Share ``rho`` of the variation a touch meets that is the sample's own (the rest is the touch's:
+#: its path crosses the sample at a slightly different place).
+MAP_SHARED = 0.85
+#: Standard deviation of where on the sample a touch starts sliding (mm).
+START_JITTER_MM = 4.0
+
+# Texture
 #: Standard deviation of the Gaussian contact patch (mm).
 CONTACT_SIGMA_MM = 0.03
-#: Profile height (um) that gives 1 a.u. of force at nominal contact force.
-UM_PER_AU = 10.0
-#: RMS of the additive white sensor noise per sample, before the sensor filter (a.u.).
-NOISE_RMS_AU = 0.05
-#: Corner frequency of the recording chain's anti-aliasing low-pass (Hz).
-SENSOR_BAND_HZ = 85.0
-#: Order of that Butterworth low-pass.
-SENSOR_FILTER_ORDER = 8
+#: Share of the filtered surface profile that indents the pad (the pad partly conforms).
+TEXTURE_COUPLING = 0.4
 #: Spatial grid on which the surface is generated (mm); well below CONTACT_SIGMA_MM.
 GRID_MM = 0.005
+
+# Sensor
+#: Corner of the sensor's first-order AC coupling (Hz) and of its anti-aliasing low-pass (Hz).
+SENSOR_HIGHPASS_HZ = 4.0
+SENSOR_BAND_HZ = 250.0
+#: Order of that Butterworth low-pass.
+SENSOR_FILTER_ORDER = 8
+#: RMS of the additive white sensor noise per sample, before the sensor filter (mN).
+NOISE_RMS_MN = 0.05
 
 _WOBBLE_COMPONENTS = 3
 _WOBBLE_BAND_HZ = (0.1, 1.0)
 # An asperity's bump is added over +-this many contact widths (exp(-4.5^2 / 2) < 4e-5).
 _ASPERITY_REACH = 4.5
+# Samples of the material map over one period.
+_MAP_SAMPLES = 2048
+# Child stream of SeedSequence([seed, class]) that draws the material sample; a recording's own
+# streams are the children 0..3 of SeedSequence([seed, class, recording]). (A key of its own is
+# needed: SeedSequence([s, c]) and SeedSequence([s, c, 0]) hold the same entropy.)
+_MATERIAL_STREAM = 1000
+# Stick-slip faster than this fraction of the sampling rate is steady sliding at this sampling.
+_MAX_SLIP_RATE = 0.25
+# Below this depth (mN) stick-slip has died out.
+_MIN_SLIP_MN = 1e-3
 
 
 @dataclass(frozen=True)
 class TextureClass:
-    """One synthetic texture: a ridge pattern, random roughness and scattered asperities.
+    """One material: its surface texture and its mechanics.
 
     Attributes
     ----------
     name
-        Class name, e.g. ``"sine-0.50mm-smooth"``.
+        Class name, e.g. ``"sine-0.35mm-smooth"``.
     shape
         Ridge shape, one of ``"sine"``, ``"square"``, ``"bumps"``, ``"sawtooth"``,
         ``"triangle"``, ``"none"`` (see :func:`ridge_shape`).
@@ -230,6 +339,17 @@ class TextureClass:
         Mean number ``lambda`` of asperities per mm of scan (0: none).
     asperity_um
         Mean height ``H`` (um) of an asperity as the contact patch sees it.
+    mu_static, mu_kinetic
+        Static and kinetic friction coefficients ``mu_s > mu_k`` of the fingertip on it.
+    stiffness_n_per_mm
+        Normal contact stiffness ``k_m`` of the material (N/mm; its compliance is ``1 / k_m``).
+    relaxation
+        Share ``r`` of the normal force that relaxes (time constant :data:`RELAX_S`) while the
+        height is held.
+    stribeck_mm_s
+        Stribeck speed ``v_c`` (mm/s): stick-slip dies out as the sliding speed exceeds it.
+    patchiness
+        Standard deviation ``s`` of the log of the sample's local friction and texture factor.
     """
 
     name: str
@@ -238,23 +358,49 @@ class TextureClass:
     ridge_um: float
     roughness_um: float
     correlation_mm: float
-    asperities_per_mm: float = 0.0
-    asperity_um: float = 0.0
+    asperities_per_mm: float
+    asperity_um: float
+    mu_static: float
+    mu_kinetic: float
+    stiffness_n_per_mm: float
+    relaxation: float
+    stribeck_mm_s: float
+    patchiness: float
 
 
-TEXTURE_CLASSES: tuple[TextureClass, ...] = (
-    TextureClass("sine-0.35mm-smooth", "sine", 0.35, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sine-0.35mm-rough", "sine", 0.35, 2.0, 4.2, 0.04, 1.0, 7.0),
-    TextureClass("sine-0.35mm-gritty", "sine", 0.35, 2.0, 2.1, 0.02, 2.5, 7.0),
-    TextureClass("sine-0.30mm-smooth", "sine", 0.30, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sine-0.42mm-smooth", "sine", 0.42, 2.0, 2.1, 0.02, 1.0, 7.0),
-    TextureClass("sawtooth-0.50mm-deep", "sawtooth", 0.50, 7.5, 15.0, 0.02, 2.0, 12.0),
-    TextureClass("bumps-0.75mm", "bumps", 0.75, 2.5, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("bumps-0.90mm", "bumps", 0.90, 2.5, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("square-0.75mm", "square", 0.75, 1.7, 1.7, 0.02, 1.5, 6.5),
-    TextureClass("grit-fine", "none", 1.00, 0.0, 1.4, 0.02, 3.0, 5.5),
-    TextureClass("grit-coarse", "none", 1.00, 0.0, 2.0, 0.06, 1.0, 11.5),
-    TextureClass("random-rough", "none", 1.00, 0.0, 9.5, 0.03, 0.0, 0.0),
+# name, shape, P (mm), A (um), sigma (um), l (mm), lambda (/mm), H (um): the module docstring.
+_TEXTURES = (
+    ("sine-0.35mm-smooth", "sine", 0.35, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sine-0.35mm-rough", "sine", 0.35, 2.0, 4.2, 0.04, 1.0, 7.0),
+    ("sine-0.35mm-gritty", "sine", 0.35, 2.0, 2.1, 0.02, 2.5, 7.0),
+    ("sine-0.30mm-smooth", "sine", 0.30, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sine-0.42mm-smooth", "sine", 0.42, 2.0, 2.1, 0.02, 1.0, 7.0),
+    ("sawtooth-0.50mm-deep", "sawtooth", 0.50, 7.5, 15.0, 0.02, 2.0, 12.0),
+    ("bumps-0.75mm", "bumps", 0.75, 2.5, 1.7, 0.02, 1.5, 6.5),
+    ("bumps-0.90mm", "bumps", 0.90, 2.5, 1.7, 0.02, 1.5, 6.5),
+    ("square-0.75mm", "square", 0.75, 1.7, 1.7, 0.02, 1.5, 6.5),
+    ("grit-fine", "none", 1.00, 0.0, 1.4, 0.02, 3.0, 5.5),
+    ("grit-coarse", "none", 1.00, 0.0, 2.0, 0.06, 1.0, 11.5),
+    ("random-rough", "none", 1.00, 0.0, 9.5, 0.03, 0.0, 0.0),
+)
+# mu_s, mu_k, k_m (N/mm), r, v_c (mm/s), s: the module docstring.
+_MECHANICS = (
+    (0.55, 0.40, 2.0, 0.20, 25.0, 0.50),
+    (0.65, 0.45, 2.0, 0.20, 20.0, 0.60),
+    (0.70, 0.50, 2.0, 0.20, 18.0, 0.60),
+    (0.55, 0.40, 2.0, 0.20, 30.0, 0.50),
+    (0.55, 0.40, 2.0, 0.20, 22.0, 0.50),
+    (0.80, 0.50, 4.0, 0.12, 25.0, 0.70),
+    (0.45, 0.35, 1.0, 0.28, 30.0, 0.40),
+    (0.45, 0.35, 1.0, 0.28, 25.0, 0.40),
+    (0.55, 0.35, 1.5, 0.24, 20.0, 0.50),
+    (0.85, 0.55, 3.0, 0.16, 25.0, 0.80),
+    (0.80, 0.60, 3.0, 0.16, 15.0, 0.70),
+    (0.65, 0.45, 0.6, 0.32, 30.0, 0.60),
+)
+TEXTURE_CLASSES: tuple[TextureClass, ...] = tuple(
+    TextureClass(*texture, *mechanics)
+    for texture, mechanics in zip(_TEXTURES, _MECHANICS, strict=True)
 )
 
 
@@ -367,7 +513,7 @@ def synthetic_recordings(
     duration_s: float = 5.0,
     fs_hz: float = DEFAULT_FS_HZ,
 ) -> Recordings:
-    """Generate the synthetic texture dataset (12 classes; see the module docstring).
+    """Generate the built-in touch dataset (12 materials; see the module docstring).
 
     Parameters
     ----------
@@ -386,7 +532,7 @@ def synthetic_recordings(
     -------
     Recordings
         ``12 * recordings_per_class`` recordings, class-major (class 0's recordings first),
-        float64 force signals in a.u., names ``"<class name>/rec01"`` (1-based), dataset name
+        float64 sensor signals in mN, names ``"<class name>/rec01"`` (1-based), dataset name
         ``"synthetic"``.
 
     Raises
@@ -399,68 +545,183 @@ def synthetic_recordings(
     )
     t = np.arange(layout.n_samples, dtype=np.float64) / fs_hz
     signals = []
-    for c, texture in enumerate(TEXTURE_CLASSES):
+    for c in range(len(TEXTURE_CLASSES)):
+        sample = material_map(seed, c)
         for r in range(int(recordings_per_class)):
-            children = np.random.SeedSequence([int(seed), c, r]).spawn(4)
-            streams = tuple(np.random.default_rng(s) for s in children)
-            signals.append(_recording(texture, t, float(fs_hz), streams))
+            signals.append(touch(seed, c, r, t, float(fs_hz), sample).signal)
     return Recordings(
         signals=tuple(signals),
         labels=np.array(layout.labels, dtype=np.int64),
         class_names=layout.class_names,
         fs_hz=layout.fs_hz,
         names=layout.names,
-        units="a.u.",
+        units="mN",
         name="synthetic",
     )
 
 
-def _recording(
-    texture: TextureClass,
-    t: np.ndarray,
-    fs_hz: float,
-    streams: tuple[np.random.Generator, ...],
-) -> np.ndarray:
-    """One recording: float64, shape ``t.shape``, a.u. (the model of the module docstring).
+def material_map(seed: int, class_index: int) -> np.ndarray:
+    """The material sample's slow variation along the path: float64 ``(_MAP_SAMPLES,)``.
 
-    ``streams`` are the scan, roughness, asperity and sensor-noise generators, in that order.
+    A stationary Gaussian process of unit variance, periodic over :data:`MAP_PERIOD_MM`, with a
+    Gaussian spectrum of correlation length :data:`MAP_CORRELATION_MM`, sampled at
+    ``MAP_PERIOD_MM / _MAP_SAMPLES`` mm; drawn from ``SeedSequence([seed, class_index])``'s
+    child ``_MATERIAL_STREAM``, so every touch of the class meets the same sample.
+    """
+    stream = np.random.SeedSequence([int(seed), int(class_index)], spawn_key=(_MATERIAL_STREAM,))
+    return _periodic_process(np.random.default_rng(stream))
+
+
+def _periodic_process(rng: np.random.Generator) -> np.ndarray:
+    """Unit-variance periodic Gaussian process on the map's grid (see :func:`material_map`)."""
+    k = np.fft.rfftfreq(_MAP_SAMPLES, d=MAP_PERIOD_MM / _MAP_SAMPLES)  # cycles/mm
+    weight = np.exp(-((math.pi * k * MAP_CORRELATION_MM) ** 2))
+    weight[0] = 0.0
+    coefficients = (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) * weight
+    process = np.fft.irfft(coefficients, _MAP_SAMPLES)
+    return process / process.std()
+
+
+@dataclass(frozen=True, eq=False)
+class Touch:
+    """One touch and the forces behind it; every array is float64 of the time axis' shape.
+
+    Attributes
+    ----------
+    signal
+        The recording: the sensor's output with its mean removed (mN).
+    normal_mn
+        Normal force ``N(t)`` (mN).
+    friction_mn
+        Tangential (friction) force ``F_T(t)`` (mN).
+    texture_mn
+        Texture force ``V(t)`` (mN).
+    ring_mn
+        Impact ring ``R(t)`` (mN).
+    speed_mm_s
+        Sliding speed ``v(t)`` (mm/s).
+    contact_s, slide_s, break_s
+        Contact time ``t_c``, start of the sliding motion ``t_s`` and the first slip ``t_b`` (s;
+        ``inf`` when the touch ends before it).
+    """
+
+    signal: np.ndarray
+    normal_mn: np.ndarray
+    friction_mn: np.ndarray
+    texture_mn: np.ndarray
+    ring_mn: np.ndarray
+    speed_mm_s: np.ndarray
+    contact_s: float
+    slide_s: float
+    break_s: float
+
+
+def touch(
+    seed: int, class_index: int, recording: int, t: np.ndarray, fs_hz: float, sample: np.ndarray
+) -> Touch:
+    """Recording ``recording`` of class ``class_index`` (the model of the module docstring).
+
+    ``t`` is the time axis (s, float64 ``(n,)``, ``k / fs_hz``); ``sample`` the class's
+    :func:`material_map`. The touch's own draws come from the children 0..3 (motion, surface,
+    asperities, sensor noise) of ``SeedSequence([seed, class_index, recording])``.
     """
     # scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
     # cached, or that checks a grid on other recordings, never needs them.
     from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import butter, sosfilt, sosfilt_zi
+    from scipy.signal import butter, sosfilt
 
-    scan, rough, grains, noise = streams
-    # Scan: position x(t) in mm, integrated analytically from the speed.
-    speed = SCAN_SPEED_MM_S * (1.0 + SPEED_SPREAD * scan.standard_normal())
-    freqs = scan.uniform(*_WOBBLE_BAND_HZ, size=_WOBBLE_COMPONENTS)
-    psi = scan.uniform(0.0, 2 * np.pi, size=_WOBBLE_COMPONENTS)
-    direction = scan.standard_normal(_WOBBLE_COMPONENTS)
+    m = TEXTURE_CLASSES[class_index]
+    children = np.random.SeedSequence([int(seed), int(class_index), int(recording)]).spawn(4)
+    motion, rough, grains, noise = (np.random.default_rng(s) for s in children)
+    n = t.size
+
+    # Per-touch jitter: timing, force, speed, where on the sample, the path's own variation.
+    t_c = CONTACT_S + CONTACT_JITTER_S * motion.uniform(-1.0, 1.0)
+    t_s = t_c + HOLD_S + HOLD_JITTER_S * motion.uniform(-1.0, 1.0)
+    force_n = PRESS_FORCE_N * motion.uniform(1.0 - FORCE_SPREAD, 1.0 + FORCE_SPREAD)
+    speed = SCAN_SPEED_MM_S * (1.0 + SPEED_SPREAD * motion.standard_normal())
+    freqs = motion.uniform(*_WOBBLE_BAND_HZ, size=_WOBBLE_COMPONENTS)
+    psi = motion.uniform(0.0, 2 * np.pi, size=_WOBBLE_COMPONENTS)
+    direction = motion.standard_normal(_WOBBLE_COMPONENTS)
     amps = SPEED_WOBBLE_RMS * math.sqrt(2.0) * direction / np.linalg.norm(direction)
-    omega = 2 * np.pi * freqs
-    wobble = (amps / omega) @ (np.cos(psi)[:, None] - np.cos(np.outer(omega, t) + psi[:, None]))
-    x = speed * (t + wobble)
-    kappa = scan.uniform(1.0 - FORCE_SPREAD, 1.0 + FORCE_SPREAD)
-    phi0 = scan.uniform()
+    x_start = START_JITTER_MM * motion.standard_normal()
+    own = _periodic_process(motion)
+    phi0 = motion.uniform()
 
-    # Surface on a grid covering the scanned stretch plus the contact filter's reach.
+    # Contact and press: force-controlled approach into the series of pad and material springs,
+    # then the height is held and the force relaxes.
+    k_eff = 1.0 / (1.0 / FINGER_STIFFNESS_N_PER_MM + 1.0 / m.stiffness_n_per_mm)  # N/mm
+    s = np.maximum(t - t_c, 0.0)
+    touching = t >= t_c
+    tau_press = force_n / (k_eff * APPROACH_MM_S)
+    relaxed = 1.0 - m.relaxation * (1.0 - np.exp(-s / RELAX_S))
+    normal = 1e3 * force_n * (1.0 - np.exp(-s / tau_press)) * relaxed * touching  # mN
+    omega = math.sqrt(1e3 * k_eff / FINGER_MASS_KG)  # rad/s
+    ring_peak = 1e3 * APPROACH_MM_S * 1e-3 * math.sqrt(1e3 * k_eff * FINGER_MASS_KG)  # mN
+    damped = omega * math.sqrt(1.0 - RING_DAMPING**2)
+    ring = ring_peak * np.sin(damped * s) * np.exp(-RING_DAMPING * omega * s) * touching
+
+    # Sliding: the robot accelerates to its speed; x is the position on the sample (mm).
+    u = np.maximum(t - t_s, 0.0)
+    wobble = amps @ np.sin(2 * np.pi * np.outer(freqs, t) + psi[:, None])
+    v = speed * (1.0 - np.exp(-u / ACCEL_S)) * (1.0 + wobble) * (t >= t_s)
+    travel = np.cumsum(v) / fs_hz
+    x = x_start + travel
+    grid_map = np.arange(_MAP_SAMPLES) * (MAP_PERIOD_MM / _MAP_SAMPLES)
+    mixed = MAP_SHARED * sample + math.sqrt(1.0 - MAP_SHARED**2) * own
+    local = np.exp(m.patchiness * np.interp(x, grid_map, mixed, period=MAP_PERIOD_MM))
+
+    # Friction: the stick phase loads the shear spring up to mu_s N; then stick-slip about
+    # mu_k N whose depth falls with speed (Stribeck) and whose cycles come at k_t v / D.
+    k_t = 1e3 * SHEAR_STIFFNESS_N_PER_MM  # mN/mm
+    load = k_t * travel
+    broken = (t >= t_s) & (load >= m.mu_static * local * normal)
+    first = int(np.argmax(broken)) if broken.any() else n
+    depth = (m.mu_static - m.mu_kinetic) * local * normal * np.exp(-v / m.stribeck_mm_s)
+    rate = np.where(depth > _MIN_SLIP_MN, k_t * v / np.maximum(depth, _MIN_SLIP_MN), 0.0)
+    phase = np.cumsum(np.minimum(rate, _MAX_SLIP_RATE * fs_hz)) / fs_hz
+    phase -= phase[min(first, n - 1)]
+    cycle = np.floor(phase).astype(np.int64)
+    cycle -= cycle.min()
+    depth_factor = np.exp(SLIP_DEPTH_SPREAD * motion.standard_normal(int(cycle.max()) + 1))
+    stick_slip = depth * depth_factor[cycle] * (phase - np.floor(phase) - 0.5)
+    after = np.arange(n) >= first
+    friction = np.where(after, m.mu_kinetic * local * normal + stick_slip, load * (t >= t_s))
+
+    # Texture: the surface profile under the contact patch, pressed in by the normal force.
     margin = 5.0 * CONTACT_SIGMA_MM
     x0 = float(x.min()) - margin
     n_grid = math.ceil((float(x.max()) + margin - x0) / GRID_MM) + 2
     grid = x0 + GRID_MM * np.arange(n_grid)
-    height = texture.ridge_um * ridge_shape(texture.shape, grid / texture.period_mm + phi0)
-    if texture.roughness_um > 0:
-        height += _ou_roughness(rough, n_grid, texture.roughness_um, texture.correlation_mm)
-    contact = gaussian_filter1d(height, CONTACT_SIGMA_MM / GRID_MM, mode="nearest", truncate=4.0)
-    if texture.asperities_per_mm > 0 and texture.asperity_um > 0:
-        contact += _asperities(grains, grid, texture.asperities_per_mm, texture.asperity_um)
+    height = m.ridge_um * ridge_shape(m.shape, grid / m.period_mm + phi0)
+    if m.roughness_um > 0:
+        height += _ou_roughness(rough, n_grid, m.roughness_um, m.correlation_mm)
+    profile = gaussian_filter1d(height, CONTACT_SIGMA_MM / GRID_MM, mode="nearest", truncate=4.0)
+    if m.asperities_per_mm > 0 and m.asperity_um > 0:
+        profile += _asperities(grains, grid, m.asperities_per_mm, m.asperity_um)
+    # k_eff (N/mm) times um is mN.
+    texture = TEXTURE_COUPLING * k_eff * local * normal / (1e3 * PRESS_FORCE_N)
+    texture = texture * np.interp(x, grid, profile)
 
-    u = kappa * np.interp(x, grid, contact) / UM_PER_AU
-    u += NOISE_RMS_AU * noise.standard_normal(t.size)
+    # Sensor: AC coupling, anti-aliasing low-pass, from rest (nothing touches it before t = 0).
+    raw = normal + friction + texture + ring + NOISE_RMS_MN * noise.standard_normal(n)
+    sections = []
+    if SENSOR_HIGHPASS_HZ < fs_hz / 2:
+        sections.append(butter(1, SENSOR_HIGHPASS_HZ, "highpass", fs=fs_hz, output="sos"))
     if SENSOR_BAND_HZ < fs_hz / 2:
-        sos = butter(SENSOR_FILTER_ORDER, SENSOR_BAND_HZ, fs=fs_hz, output="sos")
-        u, _ = sosfilt(sos, u, zi=sosfilt_zi(sos) * u[0])
-    return u - u.mean()
+        sections.append(butter(SENSOR_FILTER_ORDER, SENSOR_BAND_HZ, fs=fs_hz, output="sos"))
+    out = sosfilt(np.vstack(sections), raw) if sections else raw
+    return Touch(
+        signal=out - out.mean(),
+        normal_mn=normal,
+        friction_mn=friction,
+        texture_mn=texture,
+        ring_mn=ring,
+        speed_mm_s=v,
+        contact_s=float(t_c),
+        slide_s=float(t_s),
+        break_s=float(t[first]) if first < n else math.inf,
+    )
 
 
 def _ou_roughness(rng: np.random.Generator, n: int, sigma: float, corr_mm: float) -> np.ndarray:
@@ -496,172 +757,3 @@ def _asperities(
     out = np.zeros(grid.size)
     np.add.at(out, cells.ravel(), bumps.ravel())
     return out
-
-
-# ---------------------------------------------------------------------------------------------
-# Statistics of a dataset's classes (what the comparison with real recordings measures)
-
-
-@dataclass(frozen=True, eq=False)
-class ClassStatistics:
-    """Per-class statistics of a dataset, as :func:`class_statistics` measures them.
-
-    Every array is float64 of shape ``(n_classes,)``, in class-label order; a class value is the
-    mean over the class's recordings of the per-recording value, except ``rms_cv``.
-
-    Attributes
-    ----------
-    dataset
-        Name of the dataset.
-    class_names
-        ``n_classes`` names.
-    fs_hz
-        Sampling rate (Hz).
-    units
-        Units of the recordings (``rms``).
-    full_scale_v
-        Full scale of the front end (V) that ``rms_v`` and ``mad_v`` refer to.
-    gain_v_per_unit
-        The front end's gain fitted on the whole dataset (V per recording unit).
-    n_recordings
-        int64: recordings per class.
-    rms
-        RMS of the mean-removed recording (recording units).
-    rms_v
-        ``rms`` after the front end (V): ``gain_v_per_unit * rms``.
-    rms_cv
-        Within-class coefficient of variation of the recordings' RMS, ``std(ddof=1) / mean``
-        (NaN for a class of one recording).
-    mad_v
-        Median absolute deviation from the recording's mean after the front end (V).
-    centroid_hz
-        Power-weighted mean frequency of the recording's periodogram (Hz).
-    bandwidth_hz
-        Power-weighted standard deviation of frequency about the centroid (Hz).
-    excess_kurtosis
-        Fisher (excess) kurtosis of the samples (0 for a Gaussian, -1.5 for a sine).
-    """
-
-    dataset: str
-    class_names: tuple[str, ...]
-    fs_hz: float
-    units: str
-    full_scale_v: float
-    gain_v_per_unit: float
-    n_recordings: np.ndarray
-    rms: np.ndarray
-    rms_v: np.ndarray
-    rms_cv: np.ndarray
-    mad_v: np.ndarray
-    centroid_hz: np.ndarray
-    bandwidth_hz: np.ndarray
-    excess_kurtosis: np.ndarray
-
-    @property
-    def nyquist_hz(self) -> float:
-        """``fs_hz / 2`` (Hz)."""
-        return self.fs_hz / 2.0
-
-    @property
-    def centroid_nyquist(self) -> np.ndarray:
-        """float64 ``(n_classes,)``: ``centroid_hz`` as a fraction of the Nyquist frequency."""
-        return self.centroid_hz / self.nyquist_hz
-
-    @property
-    def bandwidth_nyquist(self) -> np.ndarray:
-        """float64 ``(n_classes,)``: ``bandwidth_hz`` as a fraction of the Nyquist frequency."""
-        return self.bandwidth_hz / self.nyquist_hz
-
-    @property
-    def across_class_cv(self) -> float:
-        """Spread of the class levels: ``std(rms_v, ddof=1) / mean(rms_v)`` over the classes."""
-        return float(np.std(self.rms_v, ddof=1) / np.mean(self.rms_v))
-
-    @property
-    def across_class_ratio(self) -> float:
-        """Loudest over quietest class: ``max(rms_v) / min(rms_v)``."""
-        return float(np.max(self.rms_v) / np.min(self.rms_v))
-
-    @property
-    def median_rms_v(self) -> float:
-        """Median over the classes of ``rms_v`` (V)."""
-        return float(np.median(self.rms_v))
-
-    @property
-    def median_rms_cv(self) -> float:
-        """Median over the classes of ``rms_cv``."""
-        return float(np.median(self.rms_cv))
-
-
-def class_statistics(recordings: Recordings, *, full_scale_v: float = 1.0) -> ClassStatistics:
-    """Level, spread, spectrum and peakedness of each class of a dataset.
-
-    Per recording ``x`` (mean removed, ``x0 = x - mean(x)``): ``rms = sqrt(mean(x0^2))``;
-    ``mad = median(|x0|)``; the periodogram ``P(f)`` of ``x0`` (:func:`scipy.signal.periodogram`,
-    rectangular window) gives ``centroid = sum(f P) / sum(P)`` and
-    ``bandwidth = sqrt(sum((f - centroid)^2 P) / sum(P))``; the excess kurtosis is
-    :func:`scipy.stats.kurtosis` (Fisher, biased). Volts are those of the project's front end
-    (:func:`pipeline.frontend.fit_front_end`, fitted on the whole dataset at ``full_scale_v``),
-    which is what the level-crossing threshold is compared with: this makes levels of datasets
-    in different units comparable.
-
-    Parameters
-    ----------
-    recordings
-        Any dataset; every class needs at least one recording.
-    full_scale_v
-        Full scale of the front end (V, finite and > 0).
-
-    Returns
-    -------
-    ClassStatistics
-        A constant recording has ``rms = 0`` and NaN spectrum and kurtosis.
-
-    Raises
-    ------
-    ValueError
-        A class without recordings, or ``full_scale_v`` not a finite number > 0.
-    """
-    from scipy.signal import periodogram
-    from scipy.stats import kurtosis
-
-    counts = np.bincount(recordings.labels, minlength=recordings.n_classes)
-    empty = [name for name, n in zip(recordings.class_names, counts, strict=True) if n == 0]
-    if empty:
-        raise ValueError(f"dataset {recordings.name}: classes without recordings: {empty}")
-    gain = fit_front_end(recordings, full_scale_v).gain_v_per_unit
-    per_recording = np.empty((recordings.n_recordings, 5))
-    for n, signal in enumerate(recordings.signals):
-        x0 = signal - signal.mean()
-        freqs, power = periodogram(x0, fs=recordings.fs_hz, detrend=False)
-        total = power.sum()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            centroid = (freqs * power).sum() / total
-            bandwidth = math.sqrt(((freqs - centroid) ** 2 * power).sum() / total)
-            peakedness = kurtosis(x0) if total > 0 else math.nan
-        rms = math.sqrt(np.mean(x0**2))
-        per_recording[n] = rms, np.median(np.abs(x0)), centroid, bandwidth, peakedness
-
-    def by_class(column: int, reduce=np.mean) -> np.ndarray:
-        values = per_recording[:, column]
-        return np.array([reduce(values[recordings.labels == c]) for c in range(len(counts))])
-
-    rms = by_class(0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rms_cv = by_class(0, lambda v: np.std(v, ddof=1) / np.mean(v) if v.size > 1 else np.nan)
-    return ClassStatistics(
-        dataset=recordings.name,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        units=recordings.units,
-        full_scale_v=float(full_scale_v),
-        gain_v_per_unit=gain,
-        n_recordings=counts.astype(np.int64),
-        rms=rms,
-        rms_v=gain * rms,
-        rms_cv=rms_cv,
-        mad_v=gain * by_class(1),
-        centroid_hz=by_class(2),
-        bandwidth_hz=by_class(3),
-        excess_kurtosis=by_class(4),
-    )

@@ -36,43 +36,43 @@ SATURATING = PAPER.replace(
     **{"readout.effects": {"saturation": {"rail_v": 0.4}}, "coding.polarity": "split"}
 )
 
-# The keys of stores made at this MODEL_REVISION (3): a change of code that alters them without a
+# The keys of stores made at this MODEL_REVISION (4): a change of code that alters them without a
 # revision bump would recompute every store made so far instead of reusing it.
 EARLIER_KEYS = {
     "smoke": (
         SMOKE,
         {
-            "recordings": "95d957731f8f4f1fbf6b50e47d2d9ecf",
-            "spikes": "a025649373b95cc63e941aae5bfd2397",
-            "rates": "8138f4d0a7b904a6115b7de61d9f6c48",
-            "results": "ac8405b384354194e3acaf108b409bb6",
+            "recordings": "df8af45b626a70f0dbeb2fc18251b580",
+            "spikes": "9c8a25dcb87620e2d1bf4b7c362fc675",
+            "rates": "a9f9b276e01efaf41cd5d628a1028150",
+            "results": "c31e6ef474f7df2fbdd070f571b68dd8",
         },
     ),
     "paper": (
         PAPER,
         {
-            "recordings": "e2ba475370c5e2e7ab74040d63691cc3",
-            "spikes": "768c4ad45a85ace948c37e23bd38d28f",
-            "rates": "2dfedf1bb5c5c3d0038d5930c62b34cf",
-            "results": "74420b9566b4dacd25307eabc50e464f",
+            "recordings": "dd5088c9b0c69287f853e69f491f8ea7",
+            "spikes": "da3cf67b10e20d56192e816913205be6",
+            "rates": "4936e29a6141174d46de9b8787700c04",
+            "results": "6ce563713a2f6b3bd584b03e3fc9e12d",
         },
     ),
     "noisy": (
         NOISY,
         {
-            "recordings": "95d957731f8f4f1fbf6b50e47d2d9ecf",
-            "spikes": "c4323d17d7d9d9148367297231b3aa12",
-            "rates": "dfefd805059906711379a13570c1f188",
-            "results": "925c163187387013192d71c99c29d46f",
+            "recordings": "df8af45b626a70f0dbeb2fc18251b580",
+            "spikes": "bbedd5a82ba6696eb6bb212c27e2d3ab",
+            "rates": "4e4004ffb5859925df4208406f6c56bd",
+            "results": "e5a9e27977170cb1afcab9e2e861a1bf",
         },
     ),
     "saturating": (
         SATURATING,
         {
-            "recordings": "e2ba475370c5e2e7ab74040d63691cc3",
-            "spikes": "acb0d2ba682f1a75a99be3d2c2b2d7ba",
-            "rates": "00478ab6bbddc90ce9a67d4e9e63edfd",
-            "results": "d368c867699c6e8fd4364fb675024653",
+            "recordings": "dd5088c9b0c69287f853e69f491f8ea7",
+            "spikes": "55ce240ec748ba2eb98a00dfdc7d3efc",
+            "rates": "0e8b55229dbfe4705b6c5025874a7d1d",
+            "results": "f75858f0ed243477d9d1677c0b9816f3",
         },
     ),
 }

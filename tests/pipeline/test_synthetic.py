@@ -1,11 +1,10 @@
-"""Tests of pipeline.synthetic: determinism, layout, class-level structure, and the statistics
-the module docstring quotes (built-in classes inside VibTac-12's ranges)."""
+"""Tests of pipeline.synthetic: determinism, layout, the phases of a touch, and the statistics
+the module docstring quotes (built-in touches inside the real touches' ranges)."""
 
 from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,18 +14,17 @@ from scipy.signal import welch
 
 import pipeline.synthetic as synthetic
 from pipeline.errors import DatasetError
-from pipeline.frontend import fit_front_end
-from pipeline.recordings import Recordings, load_recordings
-from pipeline.scene import DatasetSpec
 from pipeline.synthetic import (
     TEXTURE_CLASSES,
-    class_statistics,
+    material_map,
     ridge_shape,
     synthetic_recordings,
+    touch,
 )
+from pipeline.touch_statistics import REAL_TOUCHES, touch_statistics
 
 SHAPES = ("sine", "square", "bumps", "sawtooth", "triangle", "none")
-REAL_VIBTAC12 = Path(__file__).resolve().parents[3] / "shared/datasets/vibtac12"
+FS = 2000.0
 
 
 @pytest.fixture(scope="module")
@@ -67,12 +65,12 @@ def test_layout_labels_names_and_units(small):
     np.testing.assert_array_equal(np.bincount(small.labels), np.full(12, 6))
     assert small.names[0] == "sine-0.35mm-smooth/rec01"
     assert small.names[-1] == "random-rough/rec06"
-    assert (small.fs_hz, small.units, small.name) == (2000.0, "a.u.", "synthetic")
+    assert (small.fs_hz, small.units, small.name) == (2000.0, "mN", "synthetic")
     assert set(small.lengths) == {4000}
     for signal in small.signals:
         assert signal.dtype == np.float64
         assert np.isfinite(signal).all()
-        assert abs(signal.mean()) < 1e-12  # AC-coupled sensor
+        assert abs(signal.mean()) < 1e-9  # AC-coupled sensor, mean removed
         assert signal.std() > 0
 
 
@@ -102,51 +100,78 @@ def test_invalid_arguments_name_the_field(kwargs, field):
         synthetic_recordings(**kwargs)
 
 
-def _log_spectra(rec, max_hz=250.0):
-    freqs, psd = welch(np.stack(rec.signals), fs=rec.fs_hz, nperseg=512, axis=-1)
-    keep = freqs <= max_hz
-    return freqs[keep], np.log10(psd[:, keep])
+def test_a_recording_does_not_depend_on_the_order_of_generation():
+    t = np.arange(2000) / FS
+    alone = touch(4, 7, 3, t, FS, material_map(4, 7)).signal
+    rec = synthetic_recordings(seed=4, recordings_per_class=4, duration_s=1.0)
+    np.testing.assert_array_equal(rec.signals[7 * 4 + 3], alone)
 
 
-def test_every_pair_of_classes_differs_in_mean_spectrum(small):
-    # For every pair of classes some frequency band's mean log-power differs by more than
-    # 3 standard errors: class-level differences exist (this is not an accuracy target).
-    _, spectra = _log_spectra(small)
-    n = np.bincount(small.labels)
-    mean = np.stack([spectra[small.labels == c].mean(0) for c in range(12)])
-    var = np.stack([spectra[small.labels == c].var(0, ddof=1) for c in range(12)])
+def test_the_material_sample_is_shared_by_a_class_and_differs_between_classes():
+    sample = material_map(0, 2)
+    np.testing.assert_array_equal(sample, material_map(0, 2))
+    assert sample.std() == pytest.approx(1.0)
+    # Independent draws (about 70 correlation lengths per period: |r| well below 0.6).
+    assert abs(np.corrcoef(sample, material_map(0, 3))[0, 1]) < 0.6
+    assert abs(np.corrcoef(sample, material_map(1, 2))[0, 1]) < 0.6
+
+
+@pytest.fixture(scope="module")
+def built_in():
+    return synthetic_recordings()
+
+
+def test_every_pair_of_classes_differs_in_mean_log_envelope_or_spectrum(built_in):
+    # For every pair of classes some window's mean log envelope, or some band's mean log power,
+    # differs by more than 3 standard errors: class-level differences exist (no accuracy target).
+    windows = np.stack([s[:8000].reshape(40, 200) for s in built_in.signals])
+    envelope = np.log(np.sqrt((windows**2).mean(-1)))
+    freqs, psd = welch(np.stack(built_in.signals), fs=built_in.fs_hz, nperseg=1024, axis=-1)
+    features = np.hstack([envelope, np.log10(psd[:, freqs <= 250.0])])
+    n = np.bincount(built_in.labels)
+    mean = np.stack([features[built_in.labels == c].mean(0) for c in range(12)])
+    var = np.stack([features[built_in.labels == c].var(0, ddof=1) for c in range(12)])
     for a in range(12):
         for b in range(a + 1, 12):
             se = np.sqrt(var[a] / n[a] + var[b] / n[b])
             assert np.max(np.abs(mean[a] - mean[b]) / se) > 3, (a, b)
 
 
-@pytest.mark.parametrize("index", [0, 3, 4, 5, 6])
-def test_ridge_period_sets_the_dominant_frequency(small, index):
-    # Scanning a period P at ~20 mm/s gives a fundamental near 20 / P Hz.
-    texture = TEXTURE_CLASSES[index]
-    signals = np.stack([s for s, c in zip(small.signals, small.labels, strict=True) if c == index])
-    freqs, psd = welch(signals, fs=small.fs_hz, nperseg=2048, axis=-1)
-    peak = freqs[np.argmax(psd.mean(0))]
-    expected = synthetic.SCAN_SPEED_MM_S / texture.period_mm
-    assert abs(peak - expected) < 0.1 * expected
+def _docstring_rows(heading: str, columns: int) -> list[list[str]]:
+    section = synthetic.__doc__.split(heading)[1]
+    return re.findall(r"^ *(\d+)" + r"\s+(\S+)" * columns + " *$", section, re.M)
 
 
-def test_class_table_in_docstring_matches_the_code():
-    rows = re.findall(r"^(\d+)" + r"\s+(\S+)" * 8 + "$", synthetic.__doc__, re.M)
-    assert len(rows) == 12
-    for (index, name, shape, period, ridge, rough, corr, density, height), texture in zip(
-        rows, TEXTURE_CLASSES, strict=True
+def test_class_tables_in_docstring_match_the_code():
+    rows = _docstring_rows("Classes\n", 8)[:12]
+    mechanics = _docstring_rows("Mechanics (", 6)[:12]
+    assert len(rows) == len(mechanics) == 12
+    for (index, name, shape, *texture), (index2, *mech), m in zip(
+        rows, mechanics, TEXTURE_CLASSES, strict=True
     ):
-        assert (name, shape) == (texture.name, texture.shape)
+        assert int(index) == int(index2) == TEXTURE_CLASSES.index(m)
+        assert (name, shape) == (m.name, m.shape)
+        period, ridge, rough, corr, density, height = texture
         if shape != "none":
-            assert float(period) == texture.period_mm
-        assert float(ridge) == texture.ridge_um
-        assert float(rough) == texture.roughness_um
-        assert float(corr) == texture.correlation_mm
-        assert float(density) == texture.asperities_per_mm
-        assert float(height) == texture.asperity_um
-        assert int(index) == TEXTURE_CLASSES.index(texture)
+            assert float(period) == m.period_mm
+        values = (m.ridge_um, m.roughness_um, m.correlation_mm, m.asperities_per_mm, m.asperity_um)
+        assert [float(v) for v in (ridge, rough, corr, density, height)] == list(values)
+        expected = (
+            m.mu_static,
+            m.mu_kinetic,
+            m.stiffness_n_per_mm,
+            m.relaxation,
+            m.stribeck_mm_s,
+            m.patchiness,
+        )
+        assert [float(v) for v in mech] == list(expected)
+
+
+def test_materials_are_physical():
+    for m in TEXTURE_CLASSES:
+        assert 0 < m.mu_kinetic < m.mu_static < 1.5
+        assert m.stiffness_n_per_mm > 0 and 0 <= m.relaxation < 1
+        assert m.stribeck_mm_s > 0 and m.patchiness >= 0
 
 
 @settings(max_examples=50, deadline=None)
@@ -166,12 +191,108 @@ def test_unknown_ridge_shape():
 
 
 # ---------------------------------------------------------------------------------------------
+# The phases of a touch
+
+
+@pytest.fixture(scope="module")
+def touches():
+    t = np.arange(10_000) / FS
+    return [touch(0, c, 1, t, FS, material_map(0, c)) for c in range(12)]
+
+
+def test_nothing_before_contact_and_no_sliding_before_the_motion(touches):
+    t = np.arange(10_000) / FS
+    for tc in touches:
+        before = t < tc.contact_s
+        assert 0.0 < tc.contact_s < tc.slide_s < tc.break_s < 1.0
+        for force in (tc.normal_mn, tc.friction_mn, tc.texture_mn, tc.ring_mn):
+            assert np.all(force[before] == 0.0)
+        assert np.all(tc.speed_mm_s[t < tc.slide_s] == 0.0)
+        assert np.all(tc.friction_mn[t < tc.slide_s] == 0.0)
+        # No texture vibration while the fingertip is not moving: the texture force only
+        # follows the press, whose shape it keeps.
+        pressing = (t >= tc.contact_s + 0.005) & (t < tc.slide_s)
+        ratio = tc.texture_mn[pressing] / tc.normal_mn[pressing]
+        np.testing.assert_allclose(ratio, ratio[0], rtol=1e-9)
+
+
+def test_the_press_rises_to_the_target_force_and_relaxes(touches):
+    t = np.arange(10_000) / FS
+    for tc, m in zip(touches, TEXTURE_CLASSES, strict=True):
+        n = tc.normal_mn
+        peak = n.max()
+        target = 1e3 * synthetic.PRESS_FORCE_N
+        assert (1 - synthetic.FORCE_SPREAD) * target * (1 - m.relaxation) < peak
+        assert peak <= (1 + synthetic.FORCE_SPREAD) * target
+        assert np.all(np.diff(n[(t >= tc.contact_s) & (t < tc.contact_s + 0.05)]) > 0)
+        # Relaxation: the force falls towards (1 - r) of its peak once pressed.
+        late = n[t >= 3.0]
+        assert np.all(np.diff(late) < 0)
+        assert late[-1] > (1 - m.relaxation) * peak * 0.99
+
+
+def test_the_softer_material_presses_more_slowly(touches):
+    t = np.arange(10_000) / FS
+
+    def rise_s(tc):
+        n = tc.normal_mn
+        return t[np.argmax(n >= 0.5 * n.max())] - tc.contact_s
+
+    soft, stiff = touches[11], touches[5]  # k_m 0.6 and 4 N/mm
+    assert rise_s(soft) > 1.5 * rise_s(stiff)
+
+
+def test_static_friction_breaks_away_into_kinetic_friction(touches):
+    t = np.arange(10_000) / FS
+    for tc, m in zip(touches, TEXTURE_CLASSES, strict=True):
+        f, n = tc.friction_mn, tc.normal_mn
+        broke = int(np.searchsorted(t, tc.break_s))
+        # Before the first slip the shear load grows with the motion up to static friction.
+        loading = f[(t >= tc.slide_s) & (t < tc.break_s)]
+        assert np.all(np.diff(loading) >= 0)
+        # The breakaway is a drop from static friction to below kinetic friction.
+        assert f[broke] < f[broke - 1]
+        assert f[broke - 1] / n[broke - 1] > f[broke] / n[broke]
+        # Sliding: the force stays about mu_k N (times the sample's local factor).
+        mu = f[t > 2.0] / n[t > 2.0]
+        assert 0.2 * m.mu_kinetic < np.median(mu) < 5.0 * m.mu_kinetic
+
+
+def test_the_sliding_speed_reaches_the_nominal_speed(touches):
+    t = np.arange(10_000) / FS
+    for tc in touches:
+        late = tc.speed_mm_s[t > tc.slide_s + 6 * synthetic.ACCEL_S]
+        assert abs(np.median(late) / synthetic.SCAN_SPEED_MM_S - 1) < 0.15
+        assert np.all(tc.speed_mm_s >= 0)
+
+
+def test_the_contact_transient_stands_out_of_the_sliding_level(touches):
+    ratios = [
+        np.sqrt(np.mean(tc.signal[:500] ** 2) / np.mean(tc.signal[2000:8000] ** 2))
+        for tc in touches
+    ]
+    assert np.median(ratios) > 2.0
+
+
+@pytest.mark.parametrize("index", [0, 5, 6])
+def test_ridge_period_shows_in_the_sliding_spectrum(index):
+    # Sliding at ~20 mm/s over a period P puts a peak near 20 / P Hz into the texture force.
+    t = np.arange(10_000) / FS
+    texture = TEXTURE_CLASSES[index]
+    forces = [touch(2, index, r, t, FS, material_map(2, index)).texture_mn for r in range(4)]
+    freqs, psd = welch(np.stack(forces)[:, 2000:], fs=FS, nperseg=2048, axis=-1)
+    band = (freqs > 10) & (freqs < 200)
+    peak = freqs[band][np.argmax(psd.mean(0)[band])]
+    expected = synthetic.SCAN_SPEED_MM_S / texture.period_mm
+    assert abs(peak - expected) < 0.15 * expected
+
+
+# ---------------------------------------------------------------------------------------------
 # The recording chain
 
 
 def test_recordings_are_band_limited_by_the_sensor_filter(small):
-    # Above twice the corner the 8th-order low-pass leaves about 1e-7 of the power; without it
-    # (sensor noise, asperity edges) every recording here would keep 1 % to 7 %.
+    # Above twice the corner the 8th-order low-pass leaves about 1e-7 of the power.
     freqs, psd = welch(np.stack(small.signals), fs=small.fs_hz, nperseg=1024, axis=-1)
     above = psd[:, freqs > 2 * synthetic.SENSOR_BAND_HZ].sum(-1) / psd.sum(-1)
     assert above.max() < 1e-5
@@ -182,6 +303,12 @@ def test_the_sensor_filter_is_left_out_below_its_band():
     rec = synthetic_recordings(recordings_per_class=1, duration_s=2.0, fs_hz=150.0)
     assert set(rec.lengths) == {300}
     assert all(np.isfinite(s).all() and s.std() > 0 for s in rec.signals)
+
+
+def test_short_recordings_end_before_sliding():
+    rec = synthetic_recordings(recordings_per_class=1, duration_s=0.05)
+    assert set(rec.lengths) == {100}
+    assert all(np.isfinite(s).all() for s in rec.signals)
 
 
 def test_asperities_are_gaussian_bumps_of_the_drawn_heights():
@@ -210,95 +337,20 @@ def test_asperities_are_gaussian_bumps_of_the_drawn_heights():
 
 
 # ---------------------------------------------------------------------------------------------
-# class_statistics
-
-
-def _recordings(signals, labels, fs_hz=1000.0, n_classes=None):
-    n_classes = max(labels) + 1 if n_classes is None else n_classes
-    return Recordings(
-        signals=tuple(signals),
-        labels=np.array(labels),
-        class_names=tuple(f"c{i}" for i in range(n_classes)),
-        fs_hz=fs_hz,
-        names=tuple(f"r{i}" for i in range(len(signals))),
-        units="N",
-        name="handmade",
-    )
-
-
-def test_class_statistics_of_known_signals():
-    t = np.arange(1000) / 1000.0  # whole periods of 50 Hz and 150 Hz
-    tone = np.sin(2 * np.pi * 50 * t)
-    two_tones = 2 * np.sin(2 * np.pi * 50 * t) + np.sin(2 * np.pi * 150 * t)
-    square = np.where(np.arange(1000) % 20 < 10, 3.0, -3.0)
-    rec = _recordings([tone + 7.0, 2 * tone, two_tones, square], [0, 0, 1, 2])
-    stats = class_statistics(rec)
-    gain = fit_front_end(rec, 1.0).gain_v_per_unit
-
-    assert stats.class_names == ("c0", "c1", "c2")
-    assert (stats.fs_hz, stats.units, stats.dataset) == (1000.0, "N", "handmade")
-    np.testing.assert_array_equal(stats.n_recordings, [2, 1, 1])
-    assert stats.gain_v_per_unit == gain
-    # RMS of the mean-removed signal: a sine's is A / sqrt(2), whatever its offset.
-    np.testing.assert_allclose(stats.rms, [1.5 / math.sqrt(2), math.sqrt(2.5), 3.0], rtol=1e-12)
-    np.testing.assert_allclose(stats.rms_v, gain * stats.rms, rtol=1e-15)
-    # Amplitudes 1 and 2: std(ddof=1) / mean = sqrt(2) |a - b| / (a + b) = sqrt(2) / 3.
-    assert stats.rms_cv[0] == pytest.approx(math.sqrt(2) / 3, rel=1e-12)
-    assert np.isnan(stats.rms_cv[1:]).all()  # one recording
-    assert stats.mad_v[2] == pytest.approx(3.0 * gain, rel=1e-12)
-    # Power-weighted: (4 * 50 + 1 * 150) / 5 = 70 Hz; sqrt((4 * 20^2 + 80^2) / 5) = 40 Hz.
-    assert stats.centroid_hz[0] == pytest.approx(50.0, rel=1e-9)
-    assert stats.bandwidth_hz[0] == pytest.approx(0.0, abs=1e-4)
-    assert stats.centroid_hz[1] == pytest.approx(70.0, rel=1e-9)
-    assert stats.bandwidth_hz[1] == pytest.approx(40.0, rel=1e-9)
-    np.testing.assert_allclose(stats.centroid_nyquist[:2], [0.1, 0.14], rtol=1e-9)
-    assert stats.bandwidth_nyquist[1] == pytest.approx(0.08, rel=1e-9)
-    # Excess kurtosis: -1.5 for a sine, -2 for a symmetric square wave.
-    assert stats.excess_kurtosis[0] == pytest.approx(-1.5, abs=1e-9)
-    assert stats.excess_kurtosis[2] == pytest.approx(-2.0, abs=1e-12)
-
-
-def test_class_statistics_dataset_summaries():
-    t = np.arange(400) / 400.0
-    tone = np.sin(2 * np.pi * 20 * t)
-    rec = _recordings([1 * tone, 3 * tone, 2 * tone, 4 * tone], [0, 0, 1, 1], fs_hz=400.0)
-    stats = class_statistics(rec, full_scale_v=2.0)
-    gain = fit_front_end(rec, 2.0).gain_v_per_unit
-    assert stats.full_scale_v == 2.0
-    level = np.array([2.0, 3.0]) / math.sqrt(2) * gain  # mean RMS per class
-    np.testing.assert_allclose(stats.rms_v, level, rtol=1e-12)
-    assert stats.across_class_ratio == pytest.approx(1.5, rel=1e-12)
-    assert stats.across_class_cv == pytest.approx((1 / math.sqrt(2)) / 2.5, rel=1e-12)
-    assert stats.median_rms_v == pytest.approx(level.mean(), rel=1e-12)
-    cvs = [math.sqrt(2) * 2 / 4, math.sqrt(2) * 2 / 6]
-    assert stats.median_rms_cv == pytest.approx(np.mean(cvs), rel=1e-12)
-
-
-def test_class_statistics_constant_recording_and_errors():
-    t = np.arange(200) / 200.0
-    rec = _recordings([np.full(200, 4.0), np.sin(2 * np.pi * 10 * t)], [0, 1])
-    stats = class_statistics(rec)
-    assert stats.rms[0] == 0.0
-    assert np.isnan([stats.centroid_hz[0], stats.bandwidth_hz[0], stats.excess_kurtosis[0]]).all()
-    assert np.isfinite([stats.centroid_hz[1], stats.excess_kurtosis[1]]).all()
-    with pytest.raises(ValueError, match=r"classes without recordings: \['c2'\]"):
-        class_statistics(_recordings([t, t], [0, 1], n_classes=3))
-    with pytest.raises(ValueError, match="full_scale_v"):
-        class_statistics(rec, full_scale_v=0.0)
-
-
-# ---------------------------------------------------------------------------------------------
 # The measurement quoted in the module docstring
 
-PER_DATASET = ("across_class_cv", "across_class_ratio", "median_rms_v", "median_rms_cv")
-NOT_MATCHED = ("centroid_nyquist", "bandwidth_nyquist")
+
+@pytest.fixture(scope="module")
+def built_in_statistics(built_in):
+    return touch_statistics(built_in)
 
 
-def _docstring_table() -> dict[str, list[str]]:
-    """``statistic -> [real min, real max, before min, before max, min, max]`` as printed."""
-    section = synthetic.__doc__.split("Measured against real recordings")[1]
-    rows = re.findall(r"^    ([a-z_]+)" + r"\s+(-?\d+\.\d+)" * 6 + r"$", section, re.M)
-    return {name: list(values) for name, *values in rows}
+def _docstring_seed0() -> dict[str, str]:
+    """``statistic -> value as printed`` in the "seed 0" column of the docstring's table."""
+    section = synthetic.__doc__.split("Measured against real touches")[1]
+    rows = re.findall(r"^    ([a-z_]+)\s+(.*)$", section, re.M)
+    columns = {name: re.split(r"\s{2,}", rest.strip()) for name, rest in rows}
+    return {name: cells[-2] for name, cells in columns.items() if name in REAL_TOUCHES}
 
 
 def _matches_as_printed(value: float, text: str) -> bool:
@@ -306,58 +358,25 @@ def _matches_as_printed(value: float, text: str) -> bool:
     return abs(value - float(text)) <= 0.5 * 10.0**-decimals + 1e-12
 
 
-def _extremes(stats, name: str) -> tuple[float, float]:
-    value = getattr(stats, name)
-    return (float(value), float(value)) if name in PER_DATASET else (value.min(), value.max())
+def test_built_in_touches_are_like_real_ones(built_in_statistics):
+    s = built_in_statistics
+    assert s.envelope_corr_within >= 0.4
+    assert s.envelope_corr_within >= s.envelope_corr_between + 0.15
+    assert 2.0 <= s.contact_transient <= 8.0
+    for name, reference in REAL_TOUCHES.items():
+        values = getattr(s, f"class_{name}") if name.endswith("_hz") else [getattr(s, name)]
+        assert all(reference.holds(float(v)) for v in values), (name, values)
 
 
-@pytest.fixture(scope="module")
-def built_in_statistics():
-    return class_statistics(synthetic_recordings())
-
-
-def test_docstring_table_lists_every_statistic():
-    table = _docstring_table()
-    per_class = {"rms_v", "rms_cv", "mad_v", "centroid_hz", "bandwidth_hz", "excess_kurtosis"}
-    assert set(table) == per_class | set(PER_DATASET) | set(NOT_MATCHED)
-
-
-def test_built_in_statistics_fall_inside_the_measured_ranges(built_in_statistics):
-    for name, (real_min, real_max, *_) in _docstring_table().items():
-        if name in NOT_MATCHED:
-            continue
-        low, high = _extremes(built_in_statistics, name)
-        assert float(real_min) <= low and high <= float(real_max), (name, low, high)
-
-
-def test_docstring_built_in_column_matches_the_code(built_in_statistics):
-    for name, (*_, printed_min, printed_max) in _docstring_table().items():
-        low, high = _extremes(built_in_statistics, name)
-        assert _matches_as_printed(low, printed_min), (name, low, printed_min)
-        assert _matches_as_printed(high, printed_max), (name, high, printed_max)
-
-
-@pytest.mark.skipif(
-    not REAL_VIBTAC12.is_dir(), reason=f"the VibTac-12 copy is absent ({REAL_VIBTAC12})"
-)
-def test_docstring_vibtac12_column_matches_the_data():
-    def axis(name):
-        spec = DatasetSpec(
-            kind="vibtac12", path=str(REAL_VIBTAC12), axis=name, segments=10, sampling_rate_hz=200.0
-        )
-        return class_statistics(load_recordings(spec))
-
-    axes = {name: axis(name) for name in ("z", "x", "y")}
-    for name, (printed_min, printed_max, *_) in _docstring_table().items():
-        if name in PER_DATASET:
-            values = [getattr(stats, name) for stats in axes.values()]
-            low, high = min(values), max(values)
+def test_docstring_seed0_column_matches_the_code(built_in_statistics):
+    printed = _docstring_seed0()
+    assert set(printed) == set(REAL_TOUCHES)
+    for name, text in printed.items():
+        if name.endswith("_hz"):
+            values = getattr(built_in_statistics, f"class_{name}")
+            low, high = text.split("-")
+            assert _matches_as_printed(values.min(), low), (name, values.min(), low)
+            assert _matches_as_printed(values.max(), high), (name, values.max(), high)
         else:
-            low, high = _extremes(axes["z"], name)
-        assert _matches_as_printed(low, printed_min), (name, low, printed_min)
-        assert _matches_as_printed(high, printed_max), (name, high, printed_max)
-    quoted = re.search(
-        r"z axis alone\s+gives ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+)", synthetic.__doc__
-    )
-    for name, printed in zip(PER_DATASET, quoted.groups(), strict=True):
-        assert _matches_as_printed(getattr(axes["z"], name), printed), name
+            value = getattr(built_in_statistics, name)
+            assert _matches_as_printed(value, text), (name, value, text)
