@@ -347,7 +347,7 @@ def _describe(args: argparse.Namespace) -> int:
 
     spec = dataset_spec(args.dataset)
     if args.export is not None:
-        check_export_folder(args.export)
+        check_export_folder(args.export, spec)
     recordings = load_recordings(spec)
     description = describe_dataset(recordings)
     export = None

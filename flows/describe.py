@@ -61,16 +61,23 @@ def dataset_spec(argument: str | None) -> DatasetSpec:
     return scene.dataset
 
 
-def check_export_folder(target: str | os.PathLike[str]) -> Path:
+def check_export_folder(target: str | os.PathLike[str], dataset: DatasetSpec | None = None) -> Path:
     """The absolute export folder, if it may be written: missing or an empty folder.
 
     Raises
     ------
     ExportError
-        ``target`` is a file or a symlink, a non-empty folder, or its parent is not a folder.
+        ``target`` is a file or a symlink, a non-empty folder, its parent is not a folder, or
+        it lies inside the folder of ``dataset`` (it would become one of its classes).
     """
     path = Path(target).expanduser().absolute()
     head = f"--export {target}: folder {path}"
+    if (
+        dataset is not None
+        and dataset.path
+        and path.resolve().is_relative_to(Path(dataset.path).resolve())
+    ):
+        raise ExportError(f"{head} is inside the dataset folder {dataset.path}")
     if path.is_symlink() or (path.exists() and not path.is_dir()):
         raise ExportError(f"{head} is not a directory")
     if path.is_dir():
