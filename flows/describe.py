@@ -16,6 +16,7 @@ import math
 import os
 import shutil
 import tempfile
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,6 +28,10 @@ from pipeline.recordings import Recordings
 from pipeline.scene import DatasetKind, DatasetSpec
 
 __all__ = ["Export", "ExportError", "check_export_folder", "export_folder", "format_description"]
+
+
+#: Warnings are wrapped to lines of this many characters.
+WIDTH = 100
 
 
 class ExportError(EskinError):
@@ -188,7 +193,7 @@ def format_description(description: DatasetDescription, export: Export | None = 
             if stats is not None
             else (math.nan,) * 3
         )
-        class_rows.append((name, str(n), *(_number(v) for v in measured)))
+        class_rows.append((name, str(n), *(_number(v, 3) for v in measured)))
     lines += _table(class_rows)
     lines.append("")
     stat_rows = [("statistic", "this dataset", "real 12x10", "real range", "judged")]
@@ -206,7 +211,8 @@ def format_description(description: DatasetDescription, export: Export | None = 
     lines.append("")
     if description.warnings:
         lines.append("warnings")
-        lines += [f"  - {w}" for w in description.warnings]
+        for warning in description.warnings:
+            lines += textwrap.wrap(warning, WIDTH, initial_indent="  - ", subsequent_indent="    ")
     else:
         lines.append("no warnings")
     if export is not None:
@@ -224,16 +230,19 @@ def _table(rows: list[tuple[str, ...]]) -> list[str]:
     ]
 
 
-def _number(value: float | tuple[float, float]) -> str:
-    """A measured value: 3 decimals below 10 (a correlation of -0.005 is not "-0"), else 3
-    significant digits; "n/a" for NaN."""
+def _number(value: float | tuple[float, float], significant: int | None = None) -> str:
+    """``significant`` digits, zeros kept; by default 3 decimals below 10 (a correlation of
+    0.0047 is "0.005", a decay of 1.003 not "1") and 4 digits above; "n/a" for NaN; a range as
+    "low-high"."""
     if isinstance(value, tuple):
-        return f"{_number(value[0])}-{_number(value[1])}"
+        return f"{_number(value[0], significant)}-{_number(value[1], significant)}"
     if math.isnan(value):
         return "n/a"
     if not math.isfinite(value):
         return "inf" if value > 0 else "-inf"
-    return f"{value:.3f}" if abs(value) < 10 else f"{value:.3g}"
+    if significant is None:
+        return f"{value:.3f}" if abs(value) < 10 else f"{value:#.4g}"
+    return f"{value:#.{significant}g}"
 
 
 def _value(comparison: Comparison, description: DatasetDescription) -> str:
