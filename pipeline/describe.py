@@ -329,8 +329,9 @@ def _warnings(
             )
     else:
         out.append(
-            "the touches' time courses cannot be compared (fewer than 3 windows, or fewer than "
-            "two non-silent touches in a class)"
+            "the touches' time courses cannot be compared within and between classes (that "
+            "needs at least 3 windows, two classes, and a class with two touches that are not "
+            "silent)"
         )
     transient = stats.contact_transient
     low = REAL_TOUCHES["contact_transient"].low

@@ -2,11 +2,14 @@
 
 import json
 import math
+import re
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pipeline.describe import (
     MAX_NAME_CHARS,
@@ -262,3 +265,22 @@ def test_layout_numbers_recordings_whose_names_would_not_sort_in_order():
     assert layout.files == ("c0/1_b.npy", "c0/2_a.npy", "c0/3_b.npy")
     long = folder_layout(_dataset(signals[:1], [0], names=["c0/" + "x" * 300]))
     assert long.files == ("c0/" + "x" * MAX_NAME_CHARS + ".npy",)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.text(min_size=0, max_size=120), min_size=1, max_size=12, unique=True))
+def test_layout_names_are_always_safe_distinct_and_in_order(class_names):
+    made = _dataset([np.arange(3.0)] * len(class_names), list(range(len(class_names))), class_names)
+    folders = folder_layout(made).class_folders
+    assert len({f.casefold() for f in folders}) == len(folders)
+    assert list(folders) == sorted(folders)
+    for folder in folders:
+        assert 0 < len(folder) <= MAX_NAME_CHARS and not folder.startswith(".")
+        assert re.fullmatch(r"[A-Za-z0-9._-]+", folder) and folder.casefold() != "dataset.toml"
+
+
+def test_one_class_cannot_compare_time_courses_and_says_so():
+    signals, labels = _touches(per_class=10)
+    description = describe_dataset(_dataset(signals[:10], labels[:10]))
+    assert any("cannot be compared within and between classes" in w for w in description.warnings)
+    assert not any(w.endswith(SEGMENTS) for w in description.warnings)
