@@ -14,8 +14,9 @@
   * segments of one recording: ``corr_within - corr_between < SEGMENT_MARGIN`` (0.15), where
     ``corr_*`` are the median envelope correlations within and between classes. Real touches
     give 0.59 vs 0.33 (0.26 apart); stationary scans and segments cut from one long recording
-    give about 0 for both. The margin is the one real touches must clear (the issue that built
-    this check asks for a within-class correlation at least 0.15 above the between-class one);
+    give about 0 for both. The margin lies between the two gaps: real touches (0.26) clear it,
+    the VibTac-12 copy's segments (-0.004) do not. When the correlations are undefined (fewer
+    than 3 windows, one class, no two non-silent touches of a class) the warning says so;
   * fewer recordings in a class than the folds of cross-validation (the paper scene's 10);
   * a silent class (every recording constant) and silent recordings (constant, no spike ever);
   * no contact transient: the first 0.25 s is less than the real range's lower bound (2) times
@@ -25,7 +26,8 @@
 
 :func:`folder_layout` names the files of a folder dataset (the layout
 :func:`pipeline.recordings.load_folder` reads) that holds a dataset's recordings, so that
-loading it gives back the same signals, labels, class names and rate. It writes nothing.
+loading it gives back the same signals, labels, class names (made safe file names where needed)
+and rate. It writes nothing.
 """
 
 from __future__ import annotations
