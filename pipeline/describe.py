@@ -9,14 +9,17 @@
   on real touches (:data:`pipeline.touch_statistics.REAL_TOUCHES`) and judged inside or outside
   the real range (undefined when the dataset cannot give it); a per-class spectrum statistic is
   the range ``(min, max)`` over classes, inside when every class is;
-- plain warnings, each raised only by the test written beside it:
+- plain warnings, each with the condition that raises it:
 
   * segments of one recording: ``corr_within - corr_between < SEGMENT_MARGIN`` (0.15), where
     ``corr_*`` are the median envelope correlations within and between classes. Real touches
     give 0.59 vs 0.33 (0.26 apart); stationary scans and segments cut from one long recording
     give about 0 for both. The margin lies between the two gaps: real touches (0.26) clear it,
-    the VibTac-12 copy's segments (-0.004) do not. When the correlations are undefined (fewer
-    than 3 windows, one class, no two non-silent touches of a class) the warning says so;
+    the VibTac-12 copy's segments (-0.004) do not. The warning asks whether the touches are
+    segments of one recording when the within-class correlation is below the real range (0.4),
+    and says the time course is shared by every class when it is not. When the correlations
+    are undefined (fewer than 3 windows, one class, no two non-silent touches of a class) the
+    warning says so;
   * fewer recordings in a class than the folds of cross-validation (the paper scene's 10);
   * a silent class (every recording constant) and silent recordings (constant, no spike ever);
   * no contact transient: the first 0.25 s is less than the real range's lower bound (2) times
@@ -323,11 +326,20 @@ def _warnings(
     within, between = stats.envelope_corr_within, stats.envelope_corr_between
     if math.isfinite(within) and math.isfinite(between):
         if within - between < SEGMENT_MARGIN:
+            # Alike within classes as real touches are, but as alike across them: a time course
+            # shared by every class (the robot's motion, say), not segments of a scan.
+            low = REAL_TOUCHES["envelope_corr_within"].low
+            shared = low is not None and within >= low
             out.append(
                 "touches of a class are no more alike over time than touches of different "
                 f"classes (envelope correlation {within:.2f} within, {between:.2f} between; real "
                 f"touches {_typical('envelope_corr_within')} and "
-                f"{_typical('envelope_corr_between')}): are these segments of one recording?"
+                f"{_typical('envelope_corr_between')}): "
+                + (
+                    "their time course is the same for every class"
+                    if shared
+                    else "are these segments of one recording?"
+                )
             )
     else:
         out.append(

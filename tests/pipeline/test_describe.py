@@ -284,3 +284,15 @@ def test_one_class_cannot_compare_time_courses_and_says_so():
     description = describe_dataset(_dataset(signals[:10], labels[:10]))
     assert any("cannot be compared within and between classes" in w for w in description.warnings)
     assert not any(w.endswith(SEGMENTS) for w in description.warnings)
+
+
+def test_a_time_course_shared_by_every_class_is_called_so_not_segments():
+    rng = np.random.default_rng(6)
+    t = np.arange(int(4 * FS)) / FS
+    course = 1 + 0.8 * np.sin(2 * np.pi * 0.5 * t)
+    labels = [i // 10 for i in range(30)]
+    signals = [course * rng.standard_normal(t.size) for _ in labels]
+    description = describe_dataset(_dataset(signals, labels))
+    assert description.statistics.envelope_corr_within > 0.4
+    (warning,) = [w for w in description.warnings if "no more alike over time" in w]
+    assert warning.endswith("their time course is the same for every class")
