@@ -168,6 +168,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.set_defaults(handler=_serve)
 
+    describe = commands.add_parser(
+        "describe",
+        parents=[common],
+        help="is a dataset informative? its classes, durations and touch statistics beside real "
+        "touches, with warnings",
+        description="Describe a dataset before sweeping it: classes, touches per class, sampling "
+        "rate, durations, the 0.1 s windows it holds, the statistics of real texture touches "
+        "(envelope correlation within and between classes, contact transient, slow decay, level "
+        "spread, spectra) beside their real values, and plain warnings.",
+    )
+    describe.add_argument(
+        "--dataset",
+        metavar="NAME|PATH",
+        help="'synthetic' (the default: the built-in data eskin run uses), a VibTac-12 folder "
+        "(X/Y/Z.csv) or a folder dataset (dataset.toml)",
+    )
+    describe.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object on stdout (a statistic the dataset cannot give, NaN or "
+        "infinite, is null)",
+    )
+    describe.add_argument(
+        "--export",
+        metavar="DIR",
+        help="also write the recordings as a folder dataset (dataset.toml, one sub-folder per "
+        "class, one float64 .npy per recording) to DIR, a new or empty folder",
+    )
+    describe.set_defaults(handler=_describe)
+
     report = commands.add_parser(
         "report",
         parents=[common],
@@ -302,6 +332,35 @@ def _sweep(args: argparse.Namespace) -> int:
         print(json.dumps(json_safe(summary), indent=2))
     else:
         print(format_sweep_summary(summary))
+    return 0
+
+
+def _describe(args: argparse.Namespace) -> int:
+    from flows.describe import (
+        check_export_folder,
+        dataset_spec,
+        describe_source,
+        export_folder,
+        format_description,
+    )
+    from pipeline.describe import describe_dataset
+    from pipeline.recordings import load_recordings
+
+    spec = dataset_spec(args.dataset)
+    if args.export is not None:
+        check_export_folder(args.export, spec)
+    recordings = load_recordings(spec)
+    description = describe_dataset(recordings)
+    export = None
+    if args.export is not None:
+        export = export_folder(recordings, args.export, source=describe_source(spec))
+    if args.json:
+        out = description.to_json()
+        if export is not None:
+            out["export"] = export.to_json()
+        print(json.dumps(out, indent=2, allow_nan=False))
+    else:
+        print(format_description(description, export))
     return 0
 
 

@@ -3,7 +3,8 @@
 Every case runs ``eskin sweep`` (in process, and a few as a real subprocess) and must give a
 non-zero exit, exactly one line on stderr naming the culprit (a file, a field, an argument),
 nothing on stdout, and nothing written under the root (a root that did not exist is not
-created).
+created). The ``eskin describe`` cases hold it to the same: nothing written anywhere, an export
+folder that did not exist is not created.
 """
 
 import os
@@ -322,6 +323,7 @@ def assert_refused(capsys, argv: list[str], root: Path, expected: str) -> str:
 def test_the_catalogue_is_large():
     assert len(CASES) + len(ROOT_CASES) >= 25
     assert len({case[0] for case in CASES}) == len(CASES)
+    assert len({case[0] for case in DESCRIBE_CASES}) == len(DESCRIBE_CASES)
 
 
 @pytest.mark.parametrize(("build", "expected"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
@@ -446,3 +448,92 @@ def test_short_recordings_through_the_installed_command(tmp_path, command):
     assert len(lines) == 1 and lines[0].startswith("eskin: error: "), proc.stderr[-3000:]
     assert "a/r0.csv" in lines[0]
     assert not root.exists()
+
+
+# -- eskin describe --------------------------------------------------------------------------------
+
+
+def describe_dataset(tmp: Path, **kwargs) -> list[str]:
+    return ["--dataset", str(dataset(tmp, **kwargs))]
+
+
+def describe_export(tmp: Path, make: Callable[[Path], Path]) -> list[str]:
+    return ["--dataset", str(dataset(tmp)), "--export", str(make(tmp))]
+
+
+# Each case: (id, build(tmp) -> argv after "describe", expected text naming the culprit).
+DESCRIBE_CASES: list[Case] = [
+    ("describe-missing-path", lambda t: ["--dataset", str(t / "gone")], "gone"),
+    ("describe-bare-vibtac12", lambda t: ["--dataset", "vibtac12"], "--dataset vibtac12"),
+    (
+        "describe-not-a-dataset",
+        lambda t: ["--dataset", str(write(t / "plain" / "notes.txt", "x").parent)],
+        "plain",
+    ),
+    (
+        "describe-dataset-nan",
+        lambda t: describe_dataset(t, files={"rough/bad.csv": "0.1\nnan\n0.3\n"}),
+        "rough/bad.csv",
+    ),
+    (
+        "describe-dataset-no-sampling-rate",
+        lambda t: describe_dataset(t, toml='name = "x"\n'),
+        "sampling_rate_hz",
+    ),
+    (
+        "describe-dataset-stray-file",
+        lambda t: describe_dataset(t, files={"rough/notes.txt": "x"}),
+        "rough/notes.txt",
+    ),
+    ("describe-export-not-empty", lambda t: describe_export(t, not_empty), "not empty"),
+    ("describe-export-is-a-file", lambda t: describe_export(t, file_root), "not a directory"),
+    (
+        "describe-export-under-a-missing-folder",
+        lambda t: describe_export(t, lambda u: u / "nowhere" / "out"),
+        "nowhere",
+    ),
+    (
+        "describe-export-inside-the-dataset",
+        lambda t: describe_export(t, lambda u: u / "data" / "copy"),
+        "inside the dataset folder",
+    ),
+    ("describe-unknown-option", lambda t: ["--frobnicate"], "--frobnicate"),
+]
+
+
+@pytest.mark.parametrize(
+    ("build", "expected"), [c[1:] for c in DESCRIBE_CASES], ids=[c[0] for c in DESCRIBE_CASES]
+)
+def test_describe_refuses_bad_input(capsys, tmp_path, build, expected):
+    argv = build(tmp_path)
+    before = tree(tmp_path)
+    code = run_cli(["describe", *argv])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
+    assert expected in lines[0], lines[0]
+    assert tree(tmp_path) == before, "something was written"
+
+
+def test_describe_refuses_an_unwritable_export_folder(capsys, tmp_path, monkeypatch):
+    import flows.describe
+
+    argv = describe_export(tmp_path, lambda t: read_only(t) / "out")
+    if os.geteuid() == 0:  # root ignores mode bits; fail the write as it would for a user
+
+        def denied(*args, **kwargs):
+            raise PermissionError(13, "Permission denied")
+
+        monkeypatch.setattr(flows.describe.tempfile, "mkdtemp", denied)
+    before = tree(tmp_path)
+    try:
+        code = run_cli(["describe", *argv])
+        after = tree(tmp_path)
+    finally:
+        (tmp_path / "ro").chmod(stat.S_IRWXU)
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and "cannot write folder" in lines[0] and "Permission denied" in lines[0]
+    assert after == before
