@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.timing import median_seconds
-from pipeline.coding import frames, resolve_n_windows, window_edges_s
-from pipeline.frontend import fit_front_end
-from pipeline.recordings import load_recordings
-from pipeline.scene import Scene
-from pipeline.simulate import encode
-from pipeline.spikes import SpikeTrains
+from pipeline.chain.coding import frames, resolve_n_windows, window_edges_s
+from pipeline.chain.frontend import fit_front_end
+from pipeline.chain.spikes import SpikeTrains
+from pipeline.design.scene import Scene
+from pipeline.recordings.sources import load_recordings
+from pipeline.run.simulate import encode
 
 
 def paper_trains() -> tuple[SpikeTrains, float, int]:

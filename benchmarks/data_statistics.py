@@ -1,12 +1,12 @@
 """``python -m benchmarks.data_statistics``: the built-in touches beside real ones, statistic by
 statistic.
 
-Prints :func:`pipeline.touch_statistics.touch_statistics` for the VibTac-12 copy (loaded through
-the project's loader: z axis, 10 segments per texture, 200 Hz) and for the built-in dataset (default
-arguments, ``--seed``), beside the real touches' reference (:data:`REAL_TOUCHES`: the value on the
-real 12 x 10 set and the range it is judged by), then the built-in data's range over ``--seeds``
-seeds. A value outside the reference range is marked ``*``. These are the numbers quoted in the
-module docstring of :mod:`pipeline.synthetic`.
+Prints :func:`pipeline.recordings.touch_statistics.touch_statistics` for the VibTac-12 copy (loaded
+through the project's loader: z axis, 10 segments per texture, 200 Hz) and for the built-in dataset
+(default arguments, ``--seed``), beside the real touches' reference (:data:`REAL_TOUCHES`: the value
+on the real 12 x 10 set and the range it is judged by), then the built-in data's range over
+``--seeds`` seeds. A value outside the reference range is marked ``*``. These are the numbers quoted
+in the module docstring of :mod:`pipeline.recordings.synthetic`.
 
 Options: ``--vibtac12 PATH`` (default ``../shared/datasets/vibtac12`` next to the repository; left
 out when absent), ``--seed N`` (of the built-in data, default 0), ``--seeds N`` (seeds ``0 ..
@@ -20,10 +20,15 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.recordings import load_recordings
-from pipeline.scene import DatasetSpec
-from pipeline.synthetic import synthetic_recordings
-from pipeline.touch_statistics import REAL_TOUCHES, Reference, TouchStatistics, touch_statistics
+from pipeline.design.scene import DatasetSpec
+from pipeline.recordings.sources import load_recordings
+from pipeline.recordings.synthetic import synthetic_recordings
+from pipeline.recordings.touch_statistics import (
+    REAL_TOUCHES,
+    Reference,
+    TouchStatistics,
+    touch_statistics,
+)
 
 DEFAULT_VIBTAC12 = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "vibtac12"
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.timing import median_seconds
-from pipeline.frontend import fit_front_end
-from pipeline.readout import level_crossings, real_train, reference_level_crossings
-from pipeline.scene import Effect, Scene
-from pipeline.synthetic import synthetic_recordings
+from pipeline.chain.frontend import fit_front_end
+from pipeline.chain.readout import level_crossings, real_train, reference_level_crossings
+from pipeline.design.scene import Effect, Scene
+from pipeline.recordings.synthetic import synthetic_recordings
 
 FS_HZ = 2000.0
 

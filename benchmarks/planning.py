@@ -31,10 +31,10 @@ from pathlib import Path
 
 from benchmarks.timing import median_seconds
 from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
-from pipeline import fields
-from pipeline.grid import DatasetFacts, Grid, check_scene_fits, load_grid
-from pipeline.scene import MODEL_REVISION, Scene
-from pipeline.stages import RECORDINGS, RESULTS, Level
+from pipeline.design import fields
+from pipeline.design.grid import DatasetFacts, Grid, check_scene_fits, load_grid
+from pipeline.design.scene import MODEL_REVISION, Scene
+from pipeline.run.stages import RECORDINGS, RESULTS, Level
 
 SIZES = (1_000, 10_000, 100_000)
 REPEAT = 3

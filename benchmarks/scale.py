@@ -30,8 +30,8 @@ def measure(name: str) -> dict:
     import torch
 
     from flows.environment import tune_allocator
-    from pipeline.scene import Scene
-    from pipeline.simulate import run_scene
+    from pipeline.design.scene import Scene
+    from pipeline.run.simulate import run_scene
 
     torch.set_num_threads(1)
     tune_allocator()

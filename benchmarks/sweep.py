@@ -35,7 +35,7 @@ import psutil
 
 from flows.server import IDLE_ENV, MARKER, SERVER_DIR_ENV
 from flows.server import stop as stop_server
-from pipeline.stages import RESULTS, SPIKES
+from pipeline.run.stages import RESULTS, SPIKES
 from storage import SweepStore
 
 GRID_ENV = "ESKIN_BENCH_SWEEP_GRID"

@@ -67,8 +67,8 @@ from flows.environment import hermetic_environment, restored_environment
 from flows.planning import checked_grid, plan_sweep
 from flows.progress import completed_points, failure_message
 from flows.scheduling import submit_missing
-from pipeline.scene import Scene
-from pipeline.stages import LEVELS, RESULTS, SPIKES, Rates, Spikes, Stopwatch
+from pipeline.design.scene import Scene
+from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Rates, Spikes, Stopwatch
 from storage import SweepStore
 
 SIZES = (1_000, 10_000, 100_000)
@@ -172,7 +172,7 @@ def stand_in_cross_validation(labels: np.ndarray, model: Any, training: Any) -> 
     shifted by 1 to 5 places (set by the training seed, the repeat and the model), so every
     fold holds recordings and the accuracy differs between training seeds and models.
     """
-    from pipeline.training import CrossValidation
+    from pipeline.chain.training import CrossValidation
 
     n, repeats, folds = len(labels), training.repeats, training.folds
     order = np.arange(n)
@@ -273,7 +273,7 @@ class StandInCompute(WorkerPlugin):
 
     def setup(self, worker: Any) -> None:
         import flows.work  # noqa: F401
-        import pipeline.training  # noqa: F401
+        import pipeline.chain.training  # noqa: F401
 
         install_stand_ins(self.spikes)
         reset_busy_seconds()

@@ -17,10 +17,10 @@ import numpy as np
 import torch
 
 from benchmarks.timing import median_seconds
-from pipeline.grid import load_grid
-from pipeline.scene import Model, Scene
-from pipeline.simulate import encode, prepare, rate_frames
-from pipeline.training import CrossValidation, cross_validate
+from pipeline.chain.training import CrossValidation, cross_validate
+from pipeline.design.grid import load_grid
+from pipeline.design.scene import Model, Scene
+from pipeline.run.simulate import encode, prepare, rate_frames
 
 WORKER_MEMORY_BYTES = 1.5 * 2**30
 """Memory budget of one Dask worker (the README's target for its peak resident memory)."""

@@ -8,8 +8,8 @@
 - Open the results: :func:`open_results` (a dict of cubes by sweep name) or :func:`open_tree`
   (one ``xarray.DataTree``), and :func:`best_points` of a cube.
 - Compare two designs recording by recording: :func:`compare` (a paired difference in accuracy
-  with its 95 % interval and an exact McNemar test); :mod:`pipeline.stats` has the statistics
-  themselves (accuracy intervals, paired comparisons, Holm's correction, trends).
+  with its 95 % interval and an exact McNemar test); :mod:`pipeline.results.stats` has the
+  statistics themselves (accuracy intervals, paired comparisons, Holm's correction, trends).
 - Write the report: :func:`write_run_report`.
 
 Nothing here imports Prefect.
@@ -20,11 +20,11 @@ from flows.progress import SweepFailed
 from flows.report import write_run_report
 from flows.run import run_sweep
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
+from pipeline.design.grid import Grid, load_grid
+from pipeline.design.scene import Scene
 from pipeline.errors import EskinError
-from pipeline.grid import Grid, load_grid
 from pipeline.report.evidence import compare_points as compare
-from pipeline.scene import Scene
-from pipeline.simulate import SceneResult, run_scene
+from pipeline.run.simulate import SceneResult, run_scene
 from storage import open_results, open_tree
 
 __all__ = [

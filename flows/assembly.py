@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from flows.planning import SweepPlan
-from pipeline.stages import RESULTS
+from pipeline.run.stages import RESULTS
 from storage import StoreError, SweepStore
 
 
@@ -31,7 +31,7 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
     CorruptEntryError
         A result's batch fails its checksum.
     """
-    from pipeline.cube import build_cube
+    from pipeline.results.cube import build_cube
 
     store = SweepStore.open(plan.root)
     spec = next(s for s in plan.grid.sweeps if s.name == name)

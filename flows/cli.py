@@ -227,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="HZ",
         help="its frame rate per taxel (default: the recordings' sampling rate)",
     )
-    from pipeline.hardware import EnergyModel
+    from pipeline.results.hardware import EnergyModel
 
     defaults = EnergyModel()
     for option, what, unit in (
@@ -261,9 +261,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from flows.environment import tune_allocator
-    from pipeline.recordings import resolve_dataset_argument
-    from pipeline.scene import Scene
-    from pipeline.simulate import run_scene, stage_names
+    from pipeline.design.scene import Scene
+    from pipeline.recordings.sources import resolve_dataset_argument
+    from pipeline.run.simulate import run_scene, stage_names
 
     tune_allocator()
     scene = Scene.load(args.scene)
@@ -343,8 +343,8 @@ def _describe(args: argparse.Namespace) -> int:
         export_folder,
         format_description,
     )
-    from pipeline.describe import describe_dataset
-    from pipeline.recordings import load_recordings
+    from pipeline.recordings.describe import describe_dataset
+    from pipeline.recordings.sources import load_recordings
 
     spec = dataset_spec(args.dataset)
     if args.export is not None:

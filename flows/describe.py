@@ -1,7 +1,8 @@
 """``eskin describe``: print a dataset's description, and export its recordings as a folder.
 
-The description is :func:`pipeline.describe.describe_dataset`'s; this module only lays it out as
-text and writes the folder dataset that :func:`pipeline.describe.folder_layout` names.
+The description is :func:`pipeline.recordings.describe.describe_dataset`'s; this module only lays it
+out as text and writes the folder dataset that :func:`pipeline.recordings.describe.folder_layout`
+names.
 
 The export is never half-written: the folder is built under a hidden temporary name beside the
 target and renamed into place in one step (a rename onto an existing empty folder replaces it;
@@ -22,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.describe import Comparison, DatasetDescription, folder_layout, typical_text
+from pipeline.design.scene import DatasetKind, DatasetSpec
 from pipeline.errors import EskinError
-from pipeline.recordings import Recordings
-from pipeline.scene import DatasetKind, DatasetSpec
+from pipeline.recordings.describe import Comparison, DatasetDescription, folder_layout, typical_text
+from pipeline.recordings.sources import Recordings
 
 __all__ = ["Export", "ExportError", "check_export_folder", "export_folder", "format_description"]
 
@@ -56,8 +57,8 @@ class Export:
 
 def dataset_spec(argument: str | None) -> DatasetSpec:
     """The recordings ``eskin describe --dataset`` names: the paper scene's when ``None``."""
-    from pipeline.recordings import resolve_dataset_argument
-    from pipeline.scene import Scene
+    from pipeline.design.scene import Scene
+    from pipeline.recordings.sources import resolve_dataset_argument
 
     scene = Scene.paper()
     if argument is not None:
@@ -103,8 +104,8 @@ def export_folder(
 ) -> Export:
     """Write ``recordings`` as a folder dataset at ``target`` (see the module docstring).
 
-    Layout and names: :func:`pipeline.describe.folder_layout`; each recording a float64 1-D
-    ``.npy`` written without pickling.
+    Layout and names: :func:`pipeline.recordings.describe.folder_layout`; each recording a float64
+    1-D ``.npy`` written without pickling.
 
     Raises
     ------

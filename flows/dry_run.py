@@ -2,7 +2,7 @@
 
 :func:`dry_run` counts a grid's cached and missing points in a root (which need not exist) and
 estimates the missing points' cost from the measured seconds of cached points of the same kind
-(:func:`pipeline.grid.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
+(:func:`pipeline.design.grid.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
 --dry-run`` prints.
 """
 
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.grid import Grid, cost_kind
-from pipeline.stages import RESULTS
+from pipeline.design.grid import Grid, cost_kind
+from pipeline.run.stages import RESULTS
 from storage import SweepStore
 
 
@@ -94,9 +94,9 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
 
     The estimate: points of the same *kind* (:func:`cost_kind`) cost about the same. A missing
     point is estimated at the median, over the cached points of this grid of its kind, of the
-    total of their measured stage seconds (:attr:`pipeline.records.ResultEntry.seconds`); a missing
-    point whose kind has no cached point is counted in ``unknown`` and left out. Stage seconds
-    are as measured when each stage ran, so a spike train or a dataset that several points
+    total of their measured stage seconds (:attr:`pipeline.run.records.ResultEntry.seconds`); a
+    missing point whose kind has no cached point is counted in ``unknown`` and left out. Stage
+    seconds are as measured when each stage ran, so a spike train or a dataset that several points
     share counts in each of them: the estimate leans high for points that will share work with
     cached ones. The wall estimate, ``estimated_seconds / workers``, assumes the workers stay
     busy to the end (a sweep with fewer missing points than workers, or one long point, takes

@@ -2,7 +2,7 @@
 
 A command loads its grid once (:func:`load_sweep_grid`) and checks it once against its
 recordings (:func:`check_grid`) before anything is written or Prefect imported; the checked
-:class:`pipeline.grid.Grid` is then handed on, and :func:`plan_sweep` turns it into the
+:class:`pipeline.design.grid.Grid` is then handed on, and :func:`plan_sweep` turns it into the
 :class:`SweepPlan` that every later step takes (scheduling, progress, assembly).
 """
 
@@ -13,11 +13,11 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from pipeline.grid import DatasetFacts, Grid, check_fits, load_grid
-from pipeline.recordings import resolve_dataset_argument
-from pipeline.records import ResultEntry
-from pipeline.scene import DatasetSpec, Scene
-from pipeline.stages import RECORDINGS, RESULTS
+from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid
+from pipeline.design.scene import DatasetSpec, Scene
+from pipeline.recordings.sources import resolve_dataset_argument
+from pipeline.run.records import ResultEntry
+from pipeline.run.stages import RECORDINGS, RESULTS
 from storage import SweepStore
 
 DEFAULT_RUNS_DIR = Path("runs")
@@ -71,11 +71,11 @@ def load_sweep_grid(grid_ref: str | Path, dataset: str | Path | None = None) -> 
     Parameters
     ----------
     grid_ref
-        A built-in grid name or a grid TOML file (:func:`pipeline.grid.load_grid`).
+        A built-in grid name or a grid TOML file (:func:`pipeline.design.grid.load_grid`).
     dataset
         The command line's ``--dataset`` text (``synthetic`` or a dataset folder), resolved with
-        :func:`pipeline.recordings.resolve_dataset_argument`; it replaces the base scene's
-        dataset for every point (:meth:`pipeline.grid.Grid.with_dataset`). None keeps the
+        :func:`pipeline.recordings.sources.resolve_dataset_argument`; it replaces the base scene's
+        dataset for every point (:meth:`pipeline.design.grid.Grid.with_dataset`). None keeps the
         grid's own.
 
     Raises
@@ -117,7 +117,7 @@ def checked_grid(grid: str | Path | Grid, dataset: str | Path | None = None) -> 
     ------
     ValueError
         ``dataset`` given with a Grid (give the Grid its dataset with
-        :meth:`pipeline.grid.Grid.with_dataset`).
+        :meth:`pipeline.design.grid.Grid.with_dataset`).
     EskinError
         As :func:`load_sweep_grid` and :func:`check_grid`.
     """

@@ -5,7 +5,7 @@ claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.figures`) and renders the files of the report
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
 line's frame-readout and energy options become a :class:`~pipeline.report.FrameReadout` and a
-:class:`~pipeline.hardware.EnergyModel` here, checked before anything is read or written.
+:class:`~pipeline.results.hardware.EnergyModel` here, checked before anything is read or written.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from pipeline.errors import EskinError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from pipeline.hardware import EnergyModel
     from pipeline.report import Report
+    from pipeline.results.hardware import EnergyModel
 
 DEFAULT_ADC_BITS = 12
 # The energy options, in the units the command line takes them, and the EnergyModel field (in
@@ -74,7 +74,7 @@ def energy_model(
     EskinError
         A value is not a finite number >= 0; the message names every such option.
     """
-    from pipeline.hardware import EnergyModel
+    from pipeline.results.hardware import EnergyModel
 
     given = dict(
         zip(ENERGY_OPTIONS, (event_energy_pj, adc_fom_fj, link_energy_pj_per_bit), strict=True)
@@ -122,7 +122,7 @@ def write_run_report(
     event_energy_pj, adc_fom_fj, link_energy_pj_per_bit
         The readout power estimate's constants: energy per event (pJ), the ADC's Walden figure
         of merit (fJ per conversion step), energy per link bit (pJ); None takes the default of
-        :class:`pipeline.hardware.EnergyModel`.
+        :class:`pipeline.results.hardware.EnergyModel`.
 
     Raises
     ------
@@ -131,8 +131,8 @@ def write_run_report(
         sweep store, or a store with no cubes.
     """
     from flows.environment import hermetic_environment
-    from pipeline.hardware import MAX_BITS
     from pipeline.numbers import positive_number
+    from pipeline.results.hardware import MAX_BITS
     from storage import SweepStore, open_results
 
     problems = []

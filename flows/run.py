@@ -20,7 +20,7 @@ from flows.cluster import ClusterError, check_workers
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import SweepFailed, completed_points, failure_message, progress_bar
 from flows.scheduling import submit_missing, sweep_client
-from pipeline.grid import Grid
+from pipeline.design.grid import Grid
 
 
 def sweep_summary(
@@ -78,7 +78,7 @@ def run_sweep(
     ----------
     grid
         A built-in grid name (``paper``, ``smoke``), a grid TOML file or a
-        :class:`pipeline.grid.Grid`; loaded (if need be) and checked once.
+        :class:`pipeline.design.grid.Grid`; loaded (if need be) and checked once.
     root
         The run root (default: :func:`flows.planning.default_root`), created if need be.
     client

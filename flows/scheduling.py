@@ -1,6 +1,6 @@
 """Scheduling a plan's missing points on Dask: the cost model, batches of points, their tasks.
 
-Points are ordered by their estimated cost (:func:`pipeline.grid.training_cost`), largest
+Points are ordered by their estimated cost (:func:`pipeline.design.grid.training_cost`), largest
 first, batched into tasks of :func:`flows.work.ensure_entries` (:func:`submit_missing`), and
 each point goes with its cache keys, computed here once, so that workers never hash a scene.
 No cluster starts for a plan with nothing missing (:func:`sweep_client`).
@@ -19,10 +19,10 @@ from typing import Any
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import SweepPlan
-from pipeline import stages
-from pipeline.grid import training_cost
-from pipeline.scene import CanonicalMemo, Scene
-from pipeline.stages import RESULTS, SPIKES, Level
+from pipeline.design.grid import training_cost
+from pipeline.design.scene import CanonicalMemo, Scene
+from pipeline.run import stages
+from pipeline.run.stages import RESULTS, SPIKES, Level
 from storage import SweepStore
 
 #: Tasks per worker thread a sweep's missing points are split into (see
@@ -32,10 +32,10 @@ MAX_POINTS_PER_TASK = 500
 
 
 def point_keys(scene: Scene, memo: CanonicalMemo | None = None) -> dict[str, str]:
-    """The cache key of every level of the registry (:data:`pipeline.stages.LEVELS`, as it is at
+    """The cache key of every level of the registry (:data:`pipeline.run.stages.LEVELS`, as it is at
     the call) for ``scene``, by level name.
 
-    ``memo`` as for :meth:`pipeline.scene.Scene.canonical`: the points of a grid share scene
+    ``memo`` as for :meth:`pipeline.design.scene.Scene.canonical`: the points of a grid share scene
     parts, each written once for all their keys.
     """
     return {level.name: level.key(scene, memo) for level in stages.LEVELS}

@@ -1,6 +1,6 @@
 """Summaries of a scene's run and of a sweep: plain functions the command line prints.
 
-A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.simulate.RunResult`
+A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.run.simulate.RunResult`
 into the JSON-able dict of ``eskin run --json``, :func:`format_summary` prints it as
 ``eskin run`` does, and :func:`format_sweep_summary` prints a sweep's summary (what
 :func:`flows.run.run_sweep` and the ``sweep`` flow return) with the best point per model
@@ -27,7 +27,7 @@ def result_summary(result: Any) -> dict[str, Any]:
     Parameters
     ----------
     result
-        What :func:`pipeline.simulate.run_scene` returned.
+        What :func:`pipeline.run.simulate.run_scene` returned.
 
     Returns
     -------
@@ -75,8 +75,8 @@ def _interval(cv: Any, labels: np.ndarray | None, scene: Any, model: str) -> dic
     predicted = getattr(cv, "predicted", None)
     if predicted is None or labels is None:
         return {}
-    from pipeline.stages import RESULTS, interval_generator
-    from pipeline.stats import accuracy_interval
+    from pipeline.results.stats import accuracy_interval
+    from pipeline.run.stages import RESULTS, interval_generator
 
     rng = interval_generator(RESULTS.key(scene), model)
     interval = accuracy_interval(predicted == labels, labels, rng=rng)

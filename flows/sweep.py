@@ -10,7 +10,7 @@ link artifact to it. :func:`flows.run.run_sweep` does the same without Prefect, 
 client the caller may give.
 
 The command line loads and checks the grid before Prefect starts and hands the checked
-:class:`pipeline.grid.Grid` to the flow, which plans it once and hands the plan to its tasks.
+:class:`pipeline.design.grid.Grid` to the flow, which plans it once and hands the plan to its tasks.
 
 Prefect runs only in this process; the Dask workers run the plain functions of
 :mod:`flows.work` and never call the Prefect API (worker processes that did would each start a
@@ -47,7 +47,7 @@ from flows.progress import (
 )
 from flows.run import log_sweep_run, sweep_summary
 from flows.scheduling import submit_missing, sweep_client
-from pipeline.grid import Grid
+from pipeline.design.grid import Grid
 
 #: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
 REPORT_EVERY_S = 5.0
@@ -142,8 +142,8 @@ def sweep(
     """Sweep a grid into labelled cubes under ``root``.
 
     ``grid`` is a built-in name or a TOML file, loaded and checked here, or a
-    :class:`pipeline.grid.Grid` its caller has checked (:func:`flows.planning.check_grid`), as
-    the command line does before Prefect starts. ``root`` defaults to ``runs/<grid name>``;
+    :class:`pipeline.design.grid.Grid` its caller has checked (:func:`flows.planning.check_grid`),
+    as the command line does before Prefect starts. ``root`` defaults to ``runs/<grid name>``;
     ``address`` (``tcp://HOST:PORT``) uses an existing Dask scheduler instead of a local
     cluster of ``workers`` processes (default: one per available core); ``dataset`` (a folder
     or ``synthetic``) replaces the recordings of a grid given by name or file; ``report``

@@ -1,7 +1,7 @@
 """Work that runs on Dask workers: plain functions, no Prefect.
 
 :func:`ensure_entries` is the one task: it makes sure the run's store holds one level's entries
-for a batch of scenes (a level of :data:`pipeline.stages.LEVELS` that the store keeps), reading
+for a batch of scenes (a level of :data:`pipeline.run.stages.LEVELS` that the store keeps), reading
 what their inputs need from the store and computing only the entries that are missing, inputs
 first. A batch of cheap points costs one Dask task instead of one each, and its entries are
 written together: one batch per kind in the store (:mod:`storage.batches`) each time the task
@@ -30,12 +30,12 @@ from typing import Any
 import numpy as np
 
 from flows.environment import tune_allocator
-from pipeline import stages
-from pipeline.scene import Scene
-from pipeline.stages import Level, Stopwatch
+from pipeline.design.scene import Scene
+from pipeline.run import stages
+from pipeline.run.stages import Level, Stopwatch
 from storage import SweepStore
 
-# pipeline.training (torch, scikit-learn) is imported by the results level when it runs: the
+# pipeline.chain.training (torch, scikit-learn) is imported by the results level when it runs: the
 # coordinator imports this module only to name the function it submits, and never trains.
 
 # Outputs of the in-memory levels kept per worker process, by level and key (they are

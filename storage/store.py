@@ -6,7 +6,7 @@ On-disk layout (every node is a Zarr v3 group or array, written and read through
       store.lock                        the sweep lock (see :meth:`SweepStore.lock`)
       store.zarr/                       group, attrs {"eskin_sweep_store": 2} (the layout)
         <kind>/batch-<hex>/             a batch of entries of one kind (a stored level's name,
-                                        e.g. spikes, results; keys: pipeline.stages.cache_key)
+                                        e.g. spikes, results; keys: pipeline.run.stages.cache_key)
         cubes/<name>/                   one result cube (name: [A-Za-z0-9_-]{1,64})
         <kind>/.partial-batch-<hex>/    a batch being written (or abandoned); never read
       store.zarr-layout-1-<time>/       a store of an older layout, set aside (never read)
@@ -15,12 +15,12 @@ A batch (:mod:`storage.batches`) holds the entries one task wrote at once, stack
 variable, with their keys, attributes and shapes in its group attributes: its files grow with
 its variables, not with its entries, so a sweep of 10,000 cheap points writes well under one
 file per point instead of about sixty. Rate matrices are not kept (see
-:mod:`pipeline.stages`: coding a point's trains takes milliseconds).
+:mod:`pipeline.run.stages`: coding a point's trains takes milliseconds).
 
 Entry variables and attributes are whatever the kind's record declaration says (the stage
-registry, :mod:`pipeline.stages`, declares them per stored level; :mod:`storage.codec` writes and
-reads any declared record). ``cubes/<name>`` is any xarray Dataset, as the caller built it
-(:mod:`pipeline.cube` describes the result cubes); every chunk carries a CRC-32C.
+registry, :mod:`pipeline.run.stages`, declares them per stored level; :mod:`storage.codec` writes
+and reads any declared record). ``cubes/<name>`` is any xarray Dataset, as the caller built it
+(:mod:`pipeline.results.cube` describes the result cubes); every chunk carries a CRC-32C.
 
 A batch's attrs hold ``sha256``: one hex digest per stored array, over its dtype, shape and raw
 bytes, plus ``"@entries"`` over the canonical JSON of its entry list. Cubes carry

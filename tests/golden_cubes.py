@@ -10,8 +10,8 @@ added since are not part of the comparison.
 ``tests/data/golden_grids.npz`` and ``golden_grids.json`` hold, per sweep of the built-in
 ``paper`` and ``smoke`` grids as they were (:data:`GRIDS`, inlined), every data variable and
 coordinate (values, dims, attrs) and the cube's attributes, but the versions of the software,
-as ``pipeline.cube.build_cube`` built them before the stage registry declared what each stage
-stores: from :func:`rich_entries` (which also state the recordings and keep out-of-fold
+as ``pipeline.results.cube.build_cube`` built them before the stage registry declared what each
+stage stores: from :func:`rich_entries` (which also state the recordings and keep out-of-fold
 predictions), with :func:`write_golden` (``attrs=True``). A cube built now must reproduce them
 (:func:`compare_golden`) apart from the names in :data:`RENAMED` and :data:`ADDED`.
 """
@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.grid import Grid
-from pipeline.metrics import SpikeMetrics
-from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
-from pipeline.scene import Scene
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.design.grid import Grid
+from pipeline.design.scene import Scene
+from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
 
 DATA = Path(__file__).parent / "data"
 GOLDEN = DATA / "golden_cubes"
@@ -58,8 +58,8 @@ GRID = {
 FOLD_OFFSETS = np.array([-0.03, 0.01, 0.02, 0.0])
 
 GRIDS_GOLDEN = DATA / "golden_grids"
-# The built-in grids' sweeps as they were (inlined from pipeline/grids/*.toml: a later change of
-# those files must not move the golden file).
+# The built-in grids' sweeps as they were (inlined from pipeline/design/grids/*.toml: a later change
+# of those files must not move the golden file).
 _PAPER_NOISE_V = [0.0025, 0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15]
 GRIDS = {
     "smoke": {

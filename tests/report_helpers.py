@@ -13,11 +13,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pipeline.cube import build_cube
-from pipeline.grid import Grid
-from pipeline.metrics import SpikeMetrics
-from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
-from pipeline.scene import Scene
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.design.grid import Grid
+from pipeline.design.scene import Scene
+from pipeline.results.cube import build_cube
+from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
 
 N_RECORDINGS = 120
 N_FOLDS = 4

@@ -3,8 +3,8 @@ reads and writes entries in batches, through the stage registry's record declara
 
 from typing import Any
 
-from pipeline.records import Record, ResultEntry, SpikeEntry
-from pipeline.stages import RESULTS, SPIKES
+from pipeline.run.records import Record, ResultEntry, SpikeEntry
+from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 
 

@@ -64,7 +64,7 @@ def graph(modules: dict[str, Path]) -> dict[str, set[str]]:
                     for a in node.names
                 ]
             for candidate in candidates:
-                # ``import pipeline.stages`` imports ``pipeline`` too; only the module counts.
+                # ``import pipeline.run.stages`` imports ``pipeline`` too; only the module counts.
                 while candidate and candidate not in modules:
                     candidate = candidate.rpartition(".")[0]
                 if candidate and candidate != name:

@@ -5,8 +5,8 @@ import re
 import tomllib
 from pathlib import Path
 
-from pipeline.grid import Grid
-from pipeline.scene import Scene
+from pipeline.design.grid import Grid
+from pipeline.design.scene import Scene
 
 README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
 TOML_BLOCKS = re.findall(r"```toml\n(.*?)```", README, flags=re.S)

@@ -5,7 +5,7 @@ Stages, each a module with the frozen dataclasses it returns:
 - :mod:`~pipeline.report.paper`: the paper's numbers (claims, Table I), in one place;
 - :mod:`~pipeline.report.panels`: the paper's figures (:class:`Panel`) and the fields that feed
   them;
-- :mod:`~pipeline.report.cubes`: reading result cubes (the layout of :mod:`pipeline.cube`);
+- :mod:`~pipeline.report.cubes`: reading result cubes (the layout of :mod:`pipeline.results.cube`);
 - :mod:`~pipeline.report.evidence`: the run's per-recording results and the paired and trend
   tests on them (fixed seeds);
 - :mod:`~pipeline.report.designs`: the run's distinct designs, their accuracy and costs, the

@@ -8,7 +8,6 @@ from dataclasses import dataclass
 import xarray as xr
 
 from pipeline.errors import EskinError
-from pipeline.hardware import EnergyModel
 from pipeline.report import paper
 from pipeline.report.answer import ModelAnswer, design_answers
 from pipeline.report.claims import (
@@ -37,6 +36,7 @@ from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
+from pipeline.results.hardware import EnergyModel
 
 
 @dataclass(frozen=True)

@@ -7,17 +7,18 @@ For each model, over every distinct design of the run (:mod:`pipeline.report.des
 2. Every other design ``d`` is compared with the best by a paired test on the same recordings
    (:meth:`pipeline.report.evidence.Evidence.compare`: ``accuracy(d) - accuracy(best)``, its 95 %
    interval, exact McNemar p for one repeat). The ``m`` p-values are Holm-corrected over those
-   ``m`` comparisons (:func:`pipeline.stats.holm`). ``d`` is *significantly below* the best when
-   its adjusted p is below ``ALPHA`` (0.05) and its difference is negative.
+   ``m`` comparisons (:func:`pipeline.results.stats.holm`). ``d`` is *significantly below* the best
+   when its adjusted p is below ``ALPHA`` (0.05) and its difference is negative.
 3. The designs not significantly below the best (the best included) are *as accurate as the
    best* as far as this run can tell; among them the cheapest by address-event data rate and the
-   cheapest by estimated readout power (:func:`pipeline.hardware.event_power_w`) are the answer
+   cheapest by estimated readout power (:func:`pipeline.results.hardware.event_power_w`) are the
+   answer
    (ties go to the more accurate, then to the first met). Designs that cannot be compared with the
    best (no per-recording results, or no recording in common) are never chosen.
 
 Each answer is set against the frame-based readout of the same array (``rows * cols`` taxels,
 ``bits`` per sample at ``rate_hz``): its data rate ``n * bits * rate_hz`` and its power
-(:func:`pipeline.hardware.frame_power_w`), as ``frame / event`` ratios.
+(:func:`pipeline.results.hardware.frame_power_w`), as ``frame / event`` ratios.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from pipeline.hardware import EnergyModel
 from pipeline.report import paper
 from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost
 from pipeline.report.evidence import ALPHA, Evidence
@@ -40,7 +40,8 @@ from pipeline.report.text import (
     si,
     times,
 )
-from pipeline.stats import PairedComparison, holm
+from pipeline.results.hardware import EnergyModel
+from pipeline.results.stats import PairedComparison, holm
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Every claim is judged by a paired test on the same recordings
 (:meth:`pipeline.report.evidence.Evidence.compare`, exact McNemar for one repeat, bootstrap
 otherwise) or a trend test (:meth:`~pipeline.report.evidence.Evidence.trend`), at ``ALPHA`` =
 0.05, never by the spread over folds. A claim over several comparisons Holm-corrects their
-p-values (:func:`pipeline.stats.holm`) and says so. The verdicts: *supports*, *does not
+p-values (:func:`pipeline.results.stats.holm`) and says so. The verdicts: *supports*, *does not
 support*, *cannot tell* (no significant difference: the interval includes 0, or no per-recording
 results), per model and sweep, tallied over them.
 
@@ -45,7 +45,7 @@ from pipeline.report.text import (
     pct_interval,
     signed_points,
 )
-from pipeline.stats import PairedComparison, holm
+from pipeline.results.stats import PairedComparison, holm
 
 _METRIC_NAMES = {"ssnr_db": "SSNR", "ste_s2": "STE"}
 _NOT_SIGNIFICANT = "no significant difference (the interval includes 0)"

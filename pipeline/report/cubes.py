@@ -1,4 +1,4 @@
-"""Reading result cubes (the layout of :mod:`pipeline.cube`): swept fields, values, point keys.
+"""Reading result cubes (:mod:`pipeline.results.cube`): swept fields, values, point keys.
 
 A cube's *sweep dimensions* are those of ``accuracy_mean`` but ``model`` (one for a 1-D or zipped
 sweep, two for a product of two axes, ...). Which panel a cube feeds is decided by the scene
@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.cube import field_coordinate
 from pipeline.report.panels import (
     COLS,
     DATASET_KIND,
@@ -26,6 +25,7 @@ from pipeline.report.panels import (
     WINDOW_S,
     Panel,
 )
+from pipeline.results.cube import field_coordinate
 
 
 def swept_fields(cube: xr.Dataset) -> frozenset[str]:
@@ -68,8 +68,8 @@ def field_values(cube: xr.Dataset, field: str) -> np.ndarray | None:
     """The value of scene ``field`` at every point of a cube, shape (sweep shape); None if the
     cube has no coordinate of it (a field left unset).
 
-    The cube's coordinate of ``field`` (:func:`pipeline.cube.field_coordinate`: a swept axis's,
-    or the one named by the dotted field) holds it: along the dimensions where the field
+    The cube's coordinate of ``field`` (:func:`pipeline.results.cube.field_coordinate`: a swept
+    axis's, or the one named by the dotted field) holds it: along the dimensions where the field
     varies, a scalar where every point has the same value.
     """
     name = field_coordinate(cube, field)

@@ -5,8 +5,8 @@ Accuracy of a point for one model is the cube's ``accuracy_mean`` ``a``: the fra
 ``[accuracy_low, accuracy_high]`` (Wilson score for one repeat, stratified bootstrap over
 recordings for several; NaN for points that predate per-recording results) gives the error bars.
 The spread over the ``K`` folds of all repeats (population standard deviation, as in
-:mod:`pipeline.training`), ``s = sqrt((1/K) sum_k (a_k - mean_k a_k)^2)``, is kept as a secondary
-number; nothing is judged by it.
+:mod:`pipeline.chain.training`), ``s = sqrt((1/K) sum_k (a_k - mean_k a_k)^2)``, is kept as a
+secondary number; nothing is judged by it.
 
 Fig. 9's fitted lines are the least-squares lines of ``a`` on SSNR (finite values only) and on
 STE; their ``r`` and ``p`` are the cube's Pearson ``correlation_r`` and ``correlation_p``.

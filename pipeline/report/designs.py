@@ -14,10 +14,11 @@ Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
 * compute seconds: its spike and coding stages plus ``train_m``, as measured when each stage was
   computed (a stage reused from the cache counts at its original cost);
 * readout power ``P = event_rate_hz * E_event + data_rate_bps * E_link`` (W,
-  :func:`pipeline.hardware.event_power_w`, constants of an :class:`~pipeline.hardware.EnergyModel`).
+  :func:`pipeline.results.hardware.event_power_w`, constants of an
+  :class:`~pipeline.results.hardware.EnergyModel`).
 
 The frame-based readout of the same array (:class:`FrameReadout`) sends ``n * bits * rate_hz``
-bit/s for ``n = rows * cols`` taxels and draws :func:`pipeline.hardware.frame_power_w`.
+bit/s for ``n = rows * cols`` taxels and draws :func:`pipeline.results.hardware.frame_power_w`.
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.hardware import EnergyModel, event_power_w, frame_data_rate_bps, frame_power_w
 from pipeline.report.cubes import (
     axis_coordinates,
     describe_coordinate,
@@ -41,6 +41,7 @@ from pipeline.report.cubes import (
 )
 from pipeline.report.panels import COLS, N_WINDOWS, ROWS, WINDOW_S
 from pipeline.report.text import label
+from pipeline.results.hardware import EnergyModel, event_power_w, frame_data_rate_bps, frame_power_w
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,10 @@ share a name are never paired). The run's recordings are the union over all cube
 For a point and a model, ``correct`` is int8 (repeats, n_run_recordings): 1 right, 0 wrong, -1
 no prediction (a recording the point did not hold, a repeat or model it did not run). A paired
 comparison of points ``a`` and ``b`` uses the repeats both ran and, among those, the recordings
-both predicted in every such repeat; then :func:`pipeline.stats.compare_paired` gives
+both predicted in every such repeat; then :func:`pipeline.results.stats.compare_paired` gives
 ``accuracy(a) - accuracy(b)`` on them, its 95 % interval (paired stratified bootstrap over
 recordings) and its p-value (exact McNemar for one repeat, bootstrap otherwise). A trend along
-several points (:func:`pipeline.stats.trend`) uses the recordings all of them predicted.
+several points (:func:`pipeline.results.stats.trend`) uses the recordings all of them predicted.
 
 Seeds: every bootstrap draws from ``numpy.random.default_rng([REPORT_SEED, crc32(part), ...])``
 with the parts the compared result keys and the model (:func:`rng_for`), so a comparison gives
@@ -30,7 +30,7 @@ import xarray as xr
 
 from pipeline.report.cubes import field_values, point_keys, sweep_dims
 from pipeline.report.panels import DATASET_KIND, DATASET_PATH
-from pipeline.stats import PairedComparison, Trend, compare_paired, trend
+from pipeline.results.stats import PairedComparison, Trend, compare_paired, trend
 
 REPORT_SEED = 20_240_531
 """The report's fixed seed: the root of every bootstrap generator (:func:`rng_for`)."""

@@ -28,7 +28,6 @@ from matplotlib.ticker import (
     NullFormatter,
 )
 
-from pipeline.cube import field_attrs
 from pipeline.report import paper
 from pipeline.report.analysis import Report
 from pipeline.report.curves import Curve, MetricFit
@@ -37,6 +36,7 @@ from pipeline.report.fronts import Front
 from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si
+from pipeline.results.cube import field_attrs
 
 PNG_DPI = 150
 YLABEL = "accuracy (%; bars: 95 % interval)"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import enum
 
-from pipeline.scene import scene_field
+from pipeline.design.scene import scene_field
 
 # The scene fields the report reads, by their dotted names (checked against the declarations).
 THRESHOLD_V = scene_field("readout.threshold_v")

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.stats import PairedComparison
+from pipeline.results.stats import PairedComparison
 
 NO_INTERVAL = "no interval"
 NO_INTERVAL_WHY = "no interval: this run predates per-recording results; re-run the sweep"

@@ -5,7 +5,7 @@ compute functions are back afterwards."""
 import pytest
 
 from benchmarks import sweep_scale
-from pipeline import stages
+from pipeline.run import stages
 
 
 def test_grids_have_the_points_asked_for_and_refuse_other_sizes():

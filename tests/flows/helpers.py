@@ -9,7 +9,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.metrics import SpikeMetrics
+from pipeline.chain.metrics import SpikeMetrics
 from storage import open_results
 
 BIN = Path(sys.executable).parent
@@ -40,11 +40,11 @@ METRICS = SpikeMetrics(
 
 def count_grid_loads(patch) -> dict[str, int]:
     """Count the grid loads and dataset checks from now on: calls of
-    :func:`pipeline.grid.load_grid` (as :mod:`flows.planning` calls it) and of
-    :meth:`pipeline.grid.DatasetFacts.describe`, patched with ``patch(owner, name, value)``
+    :func:`pipeline.design.grid.load_grid` (as :mod:`flows.planning` calls it) and of
+    :meth:`pipeline.design.grid.DatasetFacts.describe`, patched with ``patch(owner, name, value)``
     (``monkeypatch.setattr``, or ``setattr`` in a subprocess). Returns the live counts."""
     from flows import planning
-    from pipeline.grid import DatasetFacts
+    from pipeline.design.grid import DatasetFacts
 
     calls = {"load_grid": 0, "describe": 0}
     load, describe = planning.load_grid, DatasetFacts.describe

@@ -87,7 +87,7 @@ def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, clie
     """Dask hands a task whose key it still holds the earlier result: keys must name the root."""
     from distributed import wait
 
-    from pipeline.stages import RESULTS
+    from pipeline.run.stages import RESULTS
     from storage import SweepStore
 
     plans = []

@@ -6,8 +6,8 @@ import pytest
 
 from flows.assembly import assemble_cube
 from flows.planning import SweepPlan
-from pipeline.grid import Grid
-from pipeline.records import RecordingsInfo, ResultEntry
+from pipeline.design.grid import Grid
+from pipeline.run.records import RecordingsInfo, ResultEntry
 from storage import StoreError
 from storage.store import SweepStore
 from tests.flows.helpers import METRICS

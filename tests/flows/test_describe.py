@@ -10,10 +10,10 @@ import pytest
 import flows.describe as describe_module
 from flows.cli import main
 from flows.describe import ExportError, export_folder
-from pipeline.describe import folder_layout
-from pipeline.recordings import Recordings, load_folder, load_recordings, load_vibtac12
-from pipeline.scene import DatasetSpec
-from pipeline.touch_statistics import REAL_TOUCHES
+from pipeline.design.scene import DatasetSpec
+from pipeline.recordings.describe import folder_layout
+from pipeline.recordings.sources import Recordings, load_folder, load_recordings, load_vibtac12
+from pipeline.recordings.touch_statistics import REAL_TOUCHES
 from tests.flows.helpers import eskin, hermetic_env
 
 REAL_VIBTAC12 = next(

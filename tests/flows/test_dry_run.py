@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from flows.dry_run import SweepCounts, dry_run, format_dry_run
-from pipeline.grid import Grid
-from pipeline.records import ResultEntry
-from pipeline.stages import RESULTS
+from pipeline.design.grid import Grid
+from pipeline.run.records import ResultEntry
+from pipeline.run.stages import RESULTS
 from storage import StoreError
 from storage.store import SweepStore
 from tests.flows.helpers import METRICS

@@ -7,9 +7,9 @@ import pytest
 from flows.cli import main
 from flows.report import energy_model, write_report, write_run_report
 from pipeline.errors import EskinError
-from pipeline.hardware import EnergyModel
 from pipeline.report import Panel, build_report
 from pipeline.report.figures import draw_report
+from pipeline.results.hardware import EnergyModel
 from storage import StoreError
 from storage.report import MARKER
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes

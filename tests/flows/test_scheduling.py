@@ -5,10 +5,10 @@ import pytest
 
 from flows import scheduling
 from flows.scheduling import default_points_per_task, point_keys
-from pipeline.coding import MAX_AUTO_WINDOWS
-from pipeline.grid import cost_kind, training_cost
-from pipeline.scene import Scene
-from pipeline.stages import LEVELS
+from pipeline.chain.coding import MAX_AUTO_WINDOWS
+from pipeline.design.grid import cost_kind, training_cost
+from pipeline.design.scene import Scene
+from pipeline.run.stages import LEVELS
 
 
 def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():

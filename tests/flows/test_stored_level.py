@@ -7,13 +7,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import pipeline.stages as stages
+import pipeline.run.stages as stages
 from flows.scheduling import point_keys
 from flows.work import ensure_entries
-from pipeline.coding import resolve_n_windows
-from pipeline.cube import build_cube
-from pipeline.grid import Grid
-from pipeline.records import Record, Variable, read_seconds, seconds_attr
+from pipeline.chain.coding import resolve_n_windows
+from pipeline.design.grid import Grid
+from pipeline.results.cube import build_cube
+from pipeline.run.records import Record, Variable, read_seconds, seconds_attr
 from storage import SweepStore
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import xarray as xr
 
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
-from pipeline.scene import Model, Scene
-from pipeline.training import CrossValidation
+from pipeline.chain.training import CrossValidation
+from pipeline.design.scene import Model, Scene
 
 
 def fake_result(ssnr_db: float, labels=None) -> SimpleNamespace:
@@ -103,9 +103,9 @@ def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
     """With several repeats the interval is a bootstrap: seeded from the design's result key
     and the model, not from where the design sits in a grid, so two sweeps holding it at
     different positions and ``eskin run`` of it give the same interval."""
-    from pipeline.cube import build_cube
-    from pipeline.grid import Grid
-    from pipeline.records import OutOfFold, ResultEntry
+    from pipeline.design.grid import Grid
+    from pipeline.results.cube import build_cube
+    from pipeline.run.records import OutOfFold, ResultEntry
 
     repeats = {"training.repeats": 3}
     grid = Grid.from_dict(
@@ -148,7 +148,7 @@ def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
     other = cubes["wide"].sel(threshold_v=0.07, model="ffnn")
     assert (other["accuracy_low"].item(), other["accuracy_high"].item()) != interval
     # ... as the same design would at another grid position, were it seeded by position.
-    from pipeline.stats import accuracy_interval
+    from pipeline.results.stats import accuracy_interval
 
     by_position = [
         accuracy_interval(predicted == labels, labels, rng=np.random.default_rng([0, i, 0]))

@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from flows.cli import main
-from pipeline.stages import SPIKES
+from pipeline.run.stages import SPIKES
 from storage import SweepStore, open_results
 from storage.batches import BATCH_PREFIX, read_batch_keys
 from tests.flows.helpers import eskin, hermetic_env

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.metrics import SpikeMetrics
-from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry
-from pipeline.stages import RESULTS
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.stages import RESULTS
 from storage import SweepStore
 from tests.store_helpers import read_result, write_result
 
@@ -31,7 +31,7 @@ N_ENTRIES = 400
 WRITER = textwrap.dedent(
     """
     import os, sys, time
-    from pipeline.stages import RESULTS
+    from pipeline.run.stages import RESULTS
     from storage import SweepStore
     from tests.reliability.test_batched_write import batch_entries
 

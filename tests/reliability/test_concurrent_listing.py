@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.stages import SPIKES
+from pipeline.run.stages import SPIKES
 from storage import SweepStore
 from tests.flows.helpers import live_tree
 

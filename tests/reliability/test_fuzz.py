@@ -12,11 +12,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from pipeline.coding import rate_code
+from pipeline.chain.coding import rate_code
+from pipeline.chain.readout import level_crossings, real_train
+from pipeline.design.grid import Grid, load_grid
+from pipeline.design.scene import Scene
 from pipeline.errors import SceneError, SimulationError
-from pipeline.grid import Grid, load_grid
-from pipeline.readout import level_crossings, real_train
-from pipeline.scene import Scene
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

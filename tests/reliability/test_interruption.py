@@ -217,8 +217,8 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     """Flip bytes in one point's cached result and truncate its spike train, then re-run."""
     import shutil
 
-    from pipeline.grid import load_grid
-    from pipeline.stages import RESULTS, SPIKES, cache_key
+    from pipeline.design.grid import load_grid
+    from pipeline.run.stages import RESULTS, SPIKES, cache_key
 
     _, _, env = smoke_sweep
     root = tmp_path / "run"

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from flows.planning import plan_sweep
-from pipeline.grid import load_grid
-from pipeline.metrics import SpikeMetrics
-from pipeline.records import ResultEntry
-from pipeline.stages import RESULTS
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.design.grid import load_grid
+from pipeline.run.records import ResultEntry
+from pipeline.run.stages import RESULTS
 from storage import SweepStore
 from tests.store_helpers import write_result
 

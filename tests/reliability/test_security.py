@@ -13,9 +13,9 @@ from flows import server
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import default_root
+from pipeline.design.grid import Grid, load_grid
+from pipeline.design.scene import Scene
 from pipeline.errors import SceneError
-from pipeline.grid import Grid, load_grid
-from pipeline.scene import Scene
 from storage import SweepStore
 
 REPO = Path(__file__).resolve().parents[2]

@@ -6,8 +6,8 @@ from importlib import metadata
 
 import xarray as xr
 
-from pipeline.cube import build_cube
-from pipeline.records import RecordingsInfo
+from pipeline.results.cube import build_cube
+from pipeline.run.records import RecordingsInfo
 from storage.store import SweepStore
 from tests import golden_cubes as golden
 

@@ -25,12 +25,12 @@ from hypothesis import strategies as st
 import storage
 import storage.index
 import storage.store as store_module
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.chain.spikes import Encoded, SpikeTrains
+from pipeline.design.scene import Model
 from pipeline.errors import EskinError
-from pipeline.metrics import SpikeMetrics
-from pipeline.records import OutOfFold, RecordingsInfo, ResultEntry, SpikeEntry
-from pipeline.scene import Model
-from pipeline.spikes import Encoded, SpikeTrains
-from pipeline.stages import RESULTS, SPIKES
+from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry, SpikeEntry
+from pipeline.run.stages import RESULTS, SPIKES
 from storage import (
     CorruptEntryError,
     StoreBusyError,
@@ -220,7 +220,11 @@ def test_storage_knows_no_stage():
     edges = graph(project_modules())
     for module, targets in edges.items():
         if module.split(".")[0] == "storage":
-            assert not targets & {"pipeline.stages", "pipeline.records", "pipeline.cube"}, module
+            assert not targets & {
+                "pipeline.run.stages",
+                "pipeline.run.records",
+                "pipeline.results.cube",
+            }, module
 
 
 def test_layout_is_a_marked_zarr_v3_group_without_consolidated_metadata(tmp_path):

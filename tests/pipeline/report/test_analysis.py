@@ -6,13 +6,13 @@ import re
 
 import pytest
 
+from pipeline.design.grid import load_grid
 from pipeline.errors import EskinError
-from pipeline.grid import load_grid
-from pipeline.records import RecordingsInfo
 from pipeline.report import FrameReadout, Panel, build_report
 from pipeline.report.document import report_files
 from pipeline.report.figures import draw_report
-from pipeline.stages import cache_key
+from pipeline.run.records import RecordingsInfo
+from pipeline.run.stages import cache_key
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes, paper_like_accuracy
 
 

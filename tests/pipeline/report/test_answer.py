@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from pipeline.hardware import EnergyModel, frame_data_rate_bps
 from pipeline.report import FrameReadout, build_report
 from pipeline.report.answer import answer_rows, answer_sentences
 from pipeline.report.document import report_blocks
 from pipeline.report.render import render_markdown
-from pipeline.stats import holm
+from pipeline.results.hardware import EnergyModel, frame_data_rate_bps
+from pipeline.results.stats import holm
 from tests.report_helpers import N_RECORDINGS, make_cubes
 
 THRESHOLDS = {0.04: 0.89, 0.05: 0.80, 0.09: 0.90, 0.15: 0.88, 0.3: 0.60}

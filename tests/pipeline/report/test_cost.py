@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pipeline.hardware import EnergyModel
 from pipeline.report import Panel, build_report
 from pipeline.report.cost import pareto_front, time_to_accuracy
 from pipeline.report.designs import Cost, cost
+from pipeline.results.hardware import EnergyModel
 from tests.report_helpers import make_cubes
 
 

@@ -9,12 +9,12 @@ import math
 
 import pytest
 
-from pipeline.hardware import EnergyModel, frame_power_w
 from pipeline.report import FrameReadout, build_report
 from pipeline.report.designs import Cost
 from pipeline.report.document import report_blocks
 from pipeline.report.figures import front_figure
 from pipeline.report.render import render_markdown
+from pipeline.results.hardware import EnergyModel, frame_power_w
 from tests.pipeline.report.test_answer import SWEEPS, by_threshold
 from tests.report_helpers import make_cubes
 

@@ -3,12 +3,12 @@ numbers; facts the cubes do not state are unknown, never guessed."""
 
 import pytest
 
-from pipeline.records import RecordingsInfo
 from pipeline.report import build_report, sampling_rate_hz
 from pipeline.report import paper as paper_numbers
 from pipeline.report.document import report_blocks
 from pipeline.report.render import render_markdown
 from pipeline.report.tables import TABLE_COLUMNS, table_rows
+from pipeline.run.records import RecordingsInfo
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 # The paper's Table I, as ../shared/PAPER.md gives it: reference, sensors, data rate, accuracy.

@@ -1,0 +1,219 @@
+r"""Spike-train metrics: SSNR, STE, equivalent resolution, event and data rates.
+
+Spike signal-to-noise ratio, per train, from the TRUE and REAL spike counts::
+
+    ssnr_db = 20 * log10(N_true / |N_real - N_true|)
+
+* ``N_real == N_true`` (including both 0): ``+inf`` (no count error).
+* ``N_true == 0 < N_real``: ``-inf`` (the limit of the formula: all spikes are noise).
+
+Over a dataset the counts are pooled (:func:`pooled_ssnr_db`):
+``20 * log10(sum N_true / sum |N_real - N_true|)``, which is ``+inf`` only when every train is
+exact and never NaN.
+
+Spike timing error, per train, as the paper writes it::
+
+    ste_s2 = sum_i (dt_i - mean(dt))**2 / N_real * (N_real - N_true)
+
+with ``dt_i`` the time from TRUE spike ``i`` to the nearest REAL spike. Its quirks, kept on
+purpose: it is 0 whenever the counts agree however far the spikes moved, and it is negative when
+the REAL train has fewer spikes. The sign-safe variant uses ``|N_real - N_true|``. Edge cases:
+
+* ``N_true == 0``: no TRUE spike to time, both variants give 0.
+* ``N_real == 0 < N_true``: no nearest REAL spike; the paper variant gives ``-inf`` (its sign),
+  the sign-safe one ``+inf``.
+
+Over a dataset the STE is the mean over trains (``+-inf`` propagates; no NaN can arise because a
+variant's infinities all have one sign).
+
+Equivalent bit resolution: ``log2(full_scale_v / threshold_v)`` (0.09 V of 1 V: 3.47 bits).
+
+Event rate of the array: spikes per second summed over taxels, averaged over recordings. Data
+rate with address-event representation: each event carries the taxel address and its polarity,
+``ceil(log2(n_taxels)) + 1`` bits (1 bit for a single taxel); time is implicit in the
+asynchronous bus.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numba
+import numpy as np
+
+from pipeline.chain.spikes import SpikeTrains
+
+
+def _about(units: str, long_name: str) -> dict[str, str]:
+    """Field metadata: CF ``units`` and a prose name, declared once for stores and cubes."""
+    return {"units": units, "long_name": long_name}
+
+
+@dataclass(frozen=True, eq=False)
+class SpikeMetrics:
+    """Scene-level spike metrics; see :mod:`pipeline.chain.metrics` for definitions and edge cases.
+
+    Each field's ``metadata`` holds its ``units`` and ``long_name``.
+    """
+
+    ssnr_db: float = field(metadata=_about("dB", "spike signal-to-noise ratio, pooled counts"))
+    ste_s2: float = field(metadata=_about("s^2", "spike timing error, mean over trains"))
+    ste_sign_safe_s2: float = field(
+        metadata=_about("s^2", "sign-safe spike timing error, mean over trains")
+    )
+    event_rate_hz: float = field(metadata=_about("Hz", "array events per second"))
+    data_rate_bps: float = field(metadata=_about("bit/s", "address-event data rate"))
+    equivalent_bits: float = field(
+        metadata=_about("bit", "equivalent resolution log2(full_scale_v / threshold_v)")
+    )
+
+
+SteVariant = Literal["paper", "sign_safe"]
+
+
+def ssnr_db(n_true: np.ndarray | int, n_real: np.ndarray | int) -> np.ndarray:
+    """Per-train SSNR in dB (float64, same shape as the inputs); see the module docstring."""
+    n_true = np.asarray(n_true, dtype=np.float64)
+    return _ssnr_from_error(n_true, np.abs(np.asarray(n_real, dtype=np.float64) - n_true))
+
+
+def pooled_ssnr_db(n_true: np.ndarray, n_real: np.ndarray) -> float:
+    """SSNR of a set of trains with counts pooled: ``+inf`` only if every train is exact."""
+    n_true = np.asarray(n_true, dtype=np.int64)
+    error = np.abs(np.asarray(n_real, dtype=np.int64) - n_true).sum()
+    return float(_ssnr_from_error(np.float64(n_true.sum()), np.float64(error)))
+
+
+def _ssnr_from_error(n_true: np.ndarray, error: np.ndarray) -> np.ndarray:
+    exact = error == 0
+    with np.errstate(divide="ignore"):
+        return np.where(exact, np.inf, 20.0 * np.log10(n_true / np.where(exact, 1.0, error)))
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_gaps(true_t, real_t, out):  # pragma: no cover - compiled
+    """``out[i]`` = distance from ``true_t[i]`` to the nearest of the sorted ``real_t``."""
+    j = 0
+    n_real = real_t.shape[0]
+    for i in range(true_t.shape[0]):
+        t = true_t[i]
+        while j + 1 < n_real and real_t[j + 1] <= t:
+            j += 1
+        best = abs(t - real_t[j])
+        if j + 1 < n_real:
+            best = min(best, abs(real_t[j + 1] - t))
+        out[i] = best
+
+
+@numba.njit(cache=True, nogil=True)
+def _ste_kernel(true_t, real_t, sign_safe):  # pragma: no cover - compiled
+    n_true = true_t.shape[0]
+    n_real = real_t.shape[0]
+    if n_true == 0:
+        return 0.0
+    if n_real == 0:
+        return np.inf if sign_safe else -np.inf
+    gaps = np.empty(n_true)
+    _nearest_gaps(true_t, real_t, gaps)
+    spread = np.sum((gaps - gaps.mean()) ** 2)
+    difference = abs(n_real - n_true) if sign_safe else n_real - n_true
+    return spread / n_real * difference
+
+
+def ste_s2(true_times_s: np.ndarray, real_times_s: np.ndarray, variant: SteVariant = "paper"):
+    """STE of one train pair in s^2 (float); both trains sorted, float64 seconds."""
+    true_t = np.ascontiguousarray(true_times_s, dtype=np.float64)
+    real_t = np.ascontiguousarray(real_times_s, dtype=np.float64)
+    return float(_ste_kernel(true_t, real_t, variant == "sign_safe"))
+
+
+@numba.njit(cache=True, nogil=True)
+def _ste_trains(true_t, true_count, real_t, real_count, sign_safe, out):  # pragma: no cover
+    a = 0
+    b = 0
+    for k in range(true_count.shape[0]):
+        out[k] = _ste_kernel(
+            true_t[a : a + true_count[k]], real_t[b : b + real_count[k]], sign_safe
+        )
+        a += true_count[k]
+        b += real_count[k]
+
+
+def ste_per_train(
+    true: SpikeTrains, real: SpikeTrains, variant: SteVariant = "paper"
+) -> np.ndarray:
+    """float64 (n_recordings, n_taxels): STE of every train pair."""
+    out = np.empty(true.count.size, dtype=np.float64)
+    _ste_trains(
+        true.times_s,
+        true.count.ravel(),
+        real.times_s,
+        real.count.ravel(),
+        variant == "sign_safe",
+        out,
+    )
+    return out.reshape(true.count.shape)
+
+
+def equivalent_bits(full_scale_v: float, threshold_v: float) -> float:
+    """``log2(full_scale_v / threshold_v)``: the resolution of an ADC with this step."""
+    return math.log2(full_scale_v / threshold_v)
+
+
+def event_rate_hz(trains: SpikeTrains) -> float:
+    """Spikes per second of the whole array, averaged over recordings."""
+    per_recording = trains.count.sum(axis=1) / trains.duration_s
+    return float(per_recording.mean())
+
+
+def bits_per_event(n_taxels: int) -> int:
+    """Address-event size: ``ceil(log2(n_taxels))`` address bits plus one polarity bit."""
+    return math.ceil(math.log2(n_taxels)) + 1 if n_taxels > 1 else 1
+
+
+def data_rate_bps(trains: SpikeTrains) -> float:
+    """Bits per second of the array's address-event stream."""
+    return event_rate_hz(trains) * bits_per_event(trains.n_taxels)
+
+
+CORRELATION_METHODS = ("pearson", "spearman")
+
+
+def correlate_with_accuracy(metric: np.ndarray, accuracy: np.ndarray) -> dict[str, tuple]:
+    """Pearson and Spearman correlation of a spike metric with accuracy across sweep points.
+
+    Points whose metric is not finite (an SSNR of +inf where REAL equals TRUE) are left out: a
+    rank or a line through infinity means nothing. With fewer than 3 usable points, or a
+    constant input, the correlation is undefined and reported as NaN with its reason.
+
+    Parameters
+    ----------
+    metric, accuracy : float64 (n_points,)
+        One value per sweep point (accuracy averaged over folds).
+
+    Returns
+    -------
+    dict
+        ``{method: (r, p_value, n_used, note)}`` for ``pearson`` and ``spearman``.
+    """
+    from scipy import stats
+
+    metric = np.asarray(metric, dtype=np.float64)
+    accuracy = np.asarray(accuracy, dtype=np.float64)
+    usable = np.isfinite(metric) & np.isfinite(accuracy)
+    x, y = metric[usable], accuracy[usable]
+    note = ""
+    if len(x) < 3:
+        note = f"undefined: {len(x)} points with a finite metric (3 needed)"
+    elif np.ptp(x) == 0 or np.ptp(y) == 0:
+        note = "undefined: constant input"
+    if note:
+        return {method: (math.nan, math.nan, len(x), note) for method in CORRELATION_METHODS}
+    pearson = stats.pearsonr(x, y)
+    spearman = stats.spearmanr(x, y)
+    return {
+        "pearson": (float(pearson.statistic), float(pearson.pvalue), len(x), ""),
+        "spearman": (float(spearman.statistic), float(spearman.pvalue), len(x), ""),
+    }

@@ -1,0 +1,119 @@
+"""A taxel array from one recorded channel, by fractional time shifts.
+
+A texture scanned at speed ``v`` (mm/s) along the unit direction ``(d_x, d_y)`` reaches taxel
+``(i, j)`` of a grid with pitch ``p`` (mm) after the delay
+
+    tau_ij = (i * d_y + j * d_x) * p / v          [s]
+
+so taxel ``(i, j)`` sees ``x(t - tau_ij)``. All taxels share one output time axis
+``t_n = tau_max + n / fs`` (re-zeroed so spike times start at 0): the part of the recording
+that the most delayed taxel has not yet seen is cut, never zero-filled or wrapped around.
+Between samples the signal is the straight line through them (the readout is continuous-time),
+so a fractional delay is a linear interpolation; a delay of a whole number of samples is an exact
+copy.
+
+Taxels with equal delays (e.g. the columns of a grid scanned along y) see the same signal; it is
+stored once (:class:`TaxelSignals` keeps one row per distinct delay and an index per taxel).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.design.scene import ArraySpec
+
+# A delay within this many samples of a whole number is that whole number: decimal pitches and
+# speeds (0.05 s * 2 kHz = 100.00000000000001) must not turn an exact shift into an interpolation.
+_WHOLE_SAMPLE_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class TaxelSignals:
+    """Signals of every taxel of one recording on a common time axis.
+
+    Attributes
+    ----------
+    signals : float64 (n_distinct, n_samples)
+        One row per distinct delay, in increasing order of delay.
+    taxel_row : int64 (n_taxels,)
+        Row of ``signals`` that each taxel (raster order) sees.
+    """
+
+    signals: np.ndarray
+    taxel_row: np.ndarray
+
+    @property
+    def n_taxels(self) -> int:
+        return len(self.taxel_row)
+
+    @property
+    def n_samples(self) -> int:
+        return self.signals.shape[1]
+
+    def taxel(self, index: int) -> np.ndarray:
+        """float64 (n_samples,): the signal taxel ``index`` sees."""
+        return self.signals[self.taxel_row[index]]
+
+
+def taxel_delays_s(array: ArraySpec) -> np.ndarray:
+    """float64 (rows * cols,): delay of each taxel in raster order, seconds, all >= 0."""
+    d_x, d_y = array.direction.vector
+    i, j = np.meshgrid(np.arange(array.rows), np.arange(array.cols), indexing="ij")
+    return ((i * d_y + j * d_x) * array.pitch_mm / array.speed_mm_s).ravel().astype(np.float64)
+
+
+def cut_samples(delays_s: np.ndarray, fs_hz: float) -> int:
+    """Samples cut from the start of the common axis: ``ceil(max delay * fs)`` (whole-aware)."""
+    shift = float(np.max(delays_s) - np.min(delays_s)) * fs_hz
+    nearest = round(shift)
+    return nearest if abs(shift - nearest) <= _WHOLE_SAMPLE_TOLERANCE else int(np.ceil(shift))
+
+
+def taxel_signals(signal: np.ndarray, fs_hz: float, delays_s: np.ndarray) -> TaxelSignals:
+    """Delay one channel to every taxel of the array.
+
+    Parameters
+    ----------
+    signal : float64 (n,)
+        The recorded channel (volts, after the front end).
+    fs_hz : float
+        Sampling rate.
+    delays_s : float64 (n_taxels,)
+        Per-taxel delays, e.g. from :func:`taxel_delays_s`.
+
+    Returns
+    -------
+    TaxelSignals
+        ``n - cut_samples(delays_s, fs_hz)`` samples per taxel. A single taxel, or all delays
+        equal, returns the signal itself (no copy, no interpolation).
+
+    Raises
+    ------
+    ValueError
+        If the delays leave fewer than 2 samples.
+    """
+    signal = np.asarray(signal, dtype=np.float64)
+    distinct, taxel_row = np.unique(delays_s, return_inverse=True)
+    if len(distinct) == 1:
+        return TaxelSignals(signal[np.newaxis, :], np.zeros(len(delays_s), dtype=np.int64))
+    n_out = len(signal) - cut_samples(delays_s, fs_hz)
+    if n_out < 2:
+        raise ValueError(
+            f"taxel delays up to {np.max(delays_s):.4g} s leave {max(n_out, 0)} samples of a "
+            f"{len(signal)}-sample recording"
+        )
+    # Row k of the output reads the input from fractional index n + (tau_max - tau_k) * fs.
+    offsets = (distinct.max() - distinct) * fs_hz
+    rows = np.empty((len(distinct), n_out), dtype=np.float64)
+    for k, offset in enumerate(offsets):
+        whole = round(offset)
+        if abs(offset - whole) <= _WHOLE_SAMPLE_TOLERANCE:
+            rows[k] = signal[whole : whole + n_out]
+            continue
+        q = int(np.floor(offset))
+        frac = offset - q
+        np.multiply(signal[q : q + n_out], 1.0 - frac, out=rows[k])
+        rows[k] += frac * signal[q + 1 : q + 1 + n_out]
+    return TaxelSignals(rows, taxel_row.astype(np.int64))

@@ -1,0 +1,688 @@
+"""Grids: a base scene plus named sweeps over scene fields.
+
+A *sweep* varies one or more scene fields (its *axes*) around the base scene. Axes combine as a
+Cartesian product (``mode = "product"``, the default) or element by element (``mode = "zip"``,
+all axes the same length, one cube dimension named after the first axis). A sweep may also fix
+other fields for all its points (``set``) and ask for the correlation of spike metrics with
+accuracy along it (``correlate``), and carry a free-text ``title`` saying what it is for, which
+its result cube keeps as its ``title`` attribute. A grid's points are the union of its sweeps'
+points; points that are the same scene (equal result cache keys) are computed once.
+
+TOML layout::
+
+    name = "mine"
+    base = "paper"                       # a built-in scene name, a scene file, or a [base] table
+
+    [sweeps.threshold]
+    title = "Fig. 7a"                    # free text, kept as the cube's ``title`` attribute
+    axes = { "readout.threshold_v" = [0.03, 0.09, 0.2] }
+
+    [sweeps.noise]
+    mode = "zip"
+    set = { "array.rows" = 1, "array.cols" = 1 }
+    correlate = true
+
+    [sweeps.noise.axes]
+    "readout.effects.amplifier_noise.sigma_v" = [0.0, 0.01]
+    "readout.effects.comparator_noise.sigma_v" = [0.0, 0.01]
+
+A relative ``dataset.path`` in the base scene (a file or a ``[base]`` table) is taken from the
+folder of the file that names it. Grid and sweep names are letters, digits, ``_`` and ``-``
+only: they become folder names (``runs/<grid>``, ``cubes/<sweep>``) and so cannot leave the
+run root.
+
+A cube dimension is named after the last part of its field (``threshold_v``); where two axes of a
+sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).
+
+Everything that can be checked without the recordings is checked when the grid loads, and every
+problem is reported at once: unknown fields, empty axes, duplicate values, zipped axes of unequal
+length, and values a scene refuses. :func:`check_fits` then checks the points against the
+recordings (windows longer than a recording, arrays whose delays eat it, classes smaller than
+the folds) before any work starts, naming the shortest recording; :func:`check_scene_fits` is
+the same check for one scene (``eskin run``).
+
+Expanding and checking a grid costs a few tens of microseconds per point, linear in the points:
+a sweep's scenes are built by :class:`pipeline.design.scene.SceneVariants` (each scene part
+validated once per distinct combination of the swept values in it, and shared by the points that
+have it), a grid builds its points and their result keys once, and :func:`check_fits` checks each
+distinct combination of recordings, array, coding and folds once.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import enum
+import functools
+import itertools
+import json
+import math
+import tomllib
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pipeline.chain.coding import MAX_AUTO_WINDOWS, whole_windows
+from pipeline.chain.taxels import cut_samples, taxel_delays_s
+from pipeline.design import fields
+from pipeline.design.scene import (
+    ArraySpec,
+    CanonicalMemo,
+    CodingSpec,
+    DatasetKind,
+    DatasetSpec,
+    Scene,
+    SceneVariants,
+    with_dataset_path_from,
+)
+from pipeline.errors import SceneError
+from pipeline.run.stages import cache_key
+
+if TYPE_CHECKING:
+    from pipeline.recordings.sources import Recordings
+
+NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
+
+
+class SweepMode(enum.StrEnum):
+    """How a sweep combines its axes."""
+
+    PRODUCT = "product"
+    ZIP = "zip"
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """One swept scene field: dotted ``field`` path, cube dimension name ``dim``, ``values``."""
+
+    field: str
+    dim: str
+    values: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A named sweep: its axes, how they combine, fixed fields, whether to correlate, a title."""
+
+    name: str
+    axes: tuple[SweepAxis, ...]
+    mode: SweepMode = SweepMode.PRODUCT
+    fixed: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    correlate: bool = False
+    title: str = ""
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        """Cube dimensions (without ``model`` and ``fold``)."""
+        if self.mode == SweepMode.ZIP:
+            return (self.axes[0].dim,)
+        return tuple(axis.dim for axis in self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        if self.mode == SweepMode.ZIP:
+            return (len(self.axes[0].values),)
+        return tuple(len(axis.values) for axis in self.axes)
+
+    def index_values(self) -> list[tuple[tuple[int, ...], dict[str, Any]]]:
+        """Every point as ``(index in the cube, {field: value})``, in C order."""
+        if self.mode == SweepMode.ZIP:
+            return [
+                ((i,), {axis.field: axis.values[i] for axis in self.axes})
+                for i in range(len(self.axes[0].values))
+            ]
+        ranges = [range(len(axis.values)) for axis in self.axes]
+        return [
+            (index, {axis.field: axis.values[i] for axis, i in zip(self.axes, index, strict=True)})
+            for index in itertools.product(*ranges)
+        ]
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One point of a sweep: where it sits in the cube and the scene it simulates.
+
+    ``key`` is the scene's result cache key (``cache_key(scene, "results")``), computed once
+    when the point is made; ``memo`` (not kept) is as for :meth:`Scene.canonical`, for points
+    made by the many that share scene parts.
+    """
+
+    sweep: str
+    index: tuple[int, ...]
+    scene: Scene
+    memo: dataclasses.InitVar[CanonicalMemo | None] = None
+    key: str = dataclasses.field(init=False, compare=False, repr=False)
+
+    def __post_init__(self, memo: CanonicalMemo | None) -> None:
+        object.__setattr__(self, "key", cache_key(self.scene, "results", memo))
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A base scene and its sweeps; build with :func:`load_grid` or :meth:`from_dict`."""
+
+    name: str
+    base: Scene
+    sweeps: tuple[Sweep, ...]
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], source: str = "<dict>", base_dir: Path | None = None
+    ) -> Grid:
+        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem."""
+        problems: list[str] = []
+        grid = _read_grid(data, source, base_dir or Path.cwd(), problems)
+        if problems:
+            raise SceneError(problems, source, kind="grid")
+        return grid
+
+    def points(self) -> list[GridPoint]:
+        """Every point of every sweep (a point shared by two sweeps appears in both)."""
+        return list(self._points)
+
+    def points_of(self, sweep: Sweep) -> list[GridPoint]:
+        """The points of ``sweep``, as :func:`sweep_points` makes them.
+
+        For one of this grid's own sweep objects they are those of :meth:`points`, built once
+        per grid; for any other sweep they are made now.
+        """
+        start = 0
+        for own in self.sweeps:
+            count = math.prod(own.shape)
+            if own is sweep:
+                return list(self._points[start : start + count])
+            start += count
+        return sweep_points(self.base, sweep)
+
+    @functools.cached_property
+    def _points(self) -> tuple[GridPoint, ...]:
+        # Built once per grid: checking, planning and counting a sweep all walk its points.
+        return tuple(point for sweep in self.sweeps for point in sweep_points(self.base, sweep))
+
+    def unique_points(self) -> dict[str, Scene]:
+        """Distinct scenes by result key, in first-seen order."""
+        unique: dict[str, Scene] = {}
+        for point in self._points:
+            unique.setdefault(point.key, point.scene)
+        return unique
+
+    def with_dataset(self, fields: Mapping[str, Any]) -> Grid:
+        """This grid with the base scene's ``dataset`` table replaced, so every point uses it.
+
+        Parameters
+        ----------
+        fields
+            A scene ``dataset`` table, e.g. ``{"kind": "folder", "path": "/data/mine"}`` as
+            :func:`pipeline.recordings.sources.resolve_dataset_argument` returns it. A relative
+            ``path`` is taken from the current directory. If ``kind`` is the base's own (or
+            missing), the base's other dataset settings stay (a synthetic dataset's size, a
+            VibTac-12 axis and segments) and ``fields`` override them; a different ``kind``
+            replaces the whole table, as one kind's settings mean nothing to another (a
+            folder dataset refuses a ``sampling_rate_hz`` it does not have).
+
+        Returns
+        -------
+        Grid
+            Same name and sweeps; its base (and so the provenance of its cubes, which records
+            the base scene) names the new dataset.
+
+        Raises
+        ------
+        SceneError
+            A sweep sets or sweeps a ``dataset.*`` field itself (the override would silently
+            lose to it at some points and not at others), naming each such sweep and field;
+            or ``fields`` is not a valid dataset table.
+        """
+        problems = [
+            f"sweeps.{sweep.name}.{part}: {field!r} sets the dataset itself, so the dataset "
+            "cannot be replaced for the whole grid (drop the field from the sweep, or the "
+            "dataset override)"
+            for sweep in self.sweeps
+            for part, fields_of_sweep in (
+                ("set", list(sweep.fixed)),
+                ("axes", [axis.field for axis in sweep.axes]),
+            )
+            for field in fields_of_sweep
+            if field.split(".")[0] == "dataset"
+        ]
+        if problems:
+            raise SceneError(problems, repr(self.name), "grid")
+        data = self.base.to_dict()
+        new = dict(fields)
+        same_kind = new.get("kind", data["dataset"]["kind"]) == data["dataset"]["kind"]
+        data["dataset"] = {**data["dataset"], **new} if same_kind else new
+        data = with_dataset_path_from(data, Path.cwd())
+        base = Scene.from_dict(data, source=f"scene {self.base.name!r} with dataset {new}")
+        return dataclasses.replace(self, base=base)
+
+    def describe(self) -> dict[str, Any]:
+        """A JSON-able description (for provenance in cube attrs)."""
+        return {
+            "name": self.name,
+            "base": self.base.to_dict(),
+            "sweeps": {
+                s.name: {
+                    "mode": s.mode.value,
+                    "set": dict(s.fixed),
+                    "axes": {a.field: list(a.values) for a in s.axes},
+                    "correlate": s.correlate,
+                    "title": s.title,
+                }
+                for s in self.sweeps
+            },
+        }
+
+
+def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
+    """The scenes of one sweep (already validated when the grid loaded).
+
+    Each point's scene is ``base.replace(**sweep.fixed).replace(**values)`` with the point's
+    ``values``, built as :class:`pipeline.design.scene.SceneVariants` builds it: each scene part is
+    validated once per distinct combination of the swept values in it, and the points share
+    equal parts, whose canonical forms their keys write once.
+    """
+    fixed = base.replace(**sweep.fixed) if sweep.fixed else base
+    variants = _variants(fixed, sweep)
+    memo: CanonicalMemo = {}
+    points = []
+    for index, indices in _positions(sweep):
+        scene = variants.scene(indices)
+        points.append(GridPoint(sweep.name, index, scene, memo))
+    return points
+
+
+def _variants(fixed: Scene, sweep: Sweep) -> SceneVariants:
+    return SceneVariants(fixed, [(axis.field, axis.values) for axis in sweep.axes])
+
+
+def _positions(sweep: Sweep) -> Iterator[tuple[tuple[int, ...], tuple[int, ...]]]:
+    """Every point as ``(index in the cube, index into each axis's values)``, in C order (as
+    :meth:`Sweep.index_values`)."""
+    if sweep.mode == SweepMode.ZIP:
+        n_axes = len(sweep.axes)
+        for i in range(len(sweep.axes[0].values)):
+            yield (i,), (i,) * n_axes
+        return
+    for index in itertools.product(*(range(len(axis.values)) for axis in sweep.axes)):
+        yield index, index
+
+
+def training_cost(scene: Scene) -> int:
+    """A point's relative cost: the product of the fields declared to scale it
+    (:attr:`pipeline.design.fields.Cost.SIZE`: taxel rows and columns, windows, models trained).
+
+    Training dominates a point, and its cost grows with the frame size (taxels x windows) per
+    model; ``auto`` windows count as the most they can be, a list as its length. Only the order
+    in which points run depends on it, never a result.
+    """
+    _, sizes = fields.cost_parts(scene)
+    return math.prod(_size(value) for value in sizes)
+
+
+def _size(value: Any) -> int:
+    if value == "auto":
+        return MAX_AUTO_WINDOWS
+    return len(value) if isinstance(value, tuple | list) else int(value)
+
+
+def cost_kind(scene: Scene) -> str:
+    """What a point's cost depends on: its plain form without the fields declared free of cost
+    (:attr:`pipeline.design.fields.Cost.FREE`: the threshold, the effects' parameter values, every
+    seed) and without its name, as canonical JSON. The names of the effects that run stay; what
+    is left (dataset, taxels, windows, models, epochs, folds, ...) decides how long encoding and
+    training take, so points of one kind cost about the same."""
+    form, _ = fields.cost_parts(scene)
+    return json.dumps(form, sort_keys=True, separators=(",", ":"))
+
+
+def builtin_grid_names() -> tuple[str, ...]:
+    files = resources.files("pipeline.design.grids").iterdir()
+    return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
+
+
+def load_grid(name_or_path: str | Path) -> Grid:
+    """A built-in grid by name (``paper``, ``smoke``) or a grid TOML file by path."""
+    text = str(name_or_path)
+    if text in builtin_grid_names():
+        content = (
+            resources.files("pipeline.design.grids").joinpath(f"{text}.toml").read_text("utf-8")
+        )
+        data = tomllib.loads(content)
+        data.setdefault("name", text)
+        return Grid.from_dict(data, source=f"built-in {text!r}")
+    path = Path(text)
+    try:
+        content = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        known = ", ".join(builtin_grid_names())
+        raise SceneError(
+            [f"cannot read file: {exc.strerror} (built-in grids: {known})"], str(path), "grid"
+        ) from None
+    except UnicodeDecodeError as exc:
+        raise SceneError([f"not UTF-8 text (byte {exc.start})"], str(path), "grid") from None
+    try:
+        data = tomllib.loads(content)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError([f"not valid TOML: {exc}"], str(path), "grid") from None
+    data.setdefault("name", path.stem)
+    return Grid.from_dict(data, source=str(path), base_dir=path.parent)
+
+
+@dataclass(frozen=True)
+class DatasetFacts:
+    """What :func:`check_scene_fits` needs to know of a dataset; build it with :meth:`of`.
+
+    Attributes
+    ----------
+    fs_hz : float
+        Sampling rate (Hz).
+    min_samples : int
+        Samples of the shortest recording.
+    min_class_size : int
+        Recordings of the smallest class.
+    shortest : str
+        Name of the shortest recording (the first of equally short ones) as
+        :attr:`pipeline.recordings.sources.Recordings.names` gives it: ``"<class>/<file name>"`` for
+        a folder dataset (its path relative to the dataset folder), ``"Texture3/segment07"``,
+        ``"<class>/rec03"``; empty if unknown.
+    dataset : str
+        Name of the dataset (:attr:`pipeline.recordings.sources.Recordings.name`); empty if unknown.
+    smallest_class : str
+        Name of the smallest class (the first of equally small ones); empty if unknown.
+    """
+
+    fs_hz: float
+    min_samples: int
+    min_class_size: int
+    shortest: str = ""
+    dataset: str = ""
+    smallest_class: str = ""
+
+    @classmethod
+    def of(cls, recordings: Recordings) -> DatasetFacts:
+        """The facts of loaded recordings."""
+        lengths = recordings.lengths
+        shortest = int(np.argmin(lengths))
+        sizes = np.bincount(recordings.labels, minlength=len(recordings.class_names))
+        smallest = int(np.argmin(sizes))
+        return cls(
+            fs_hz=recordings.fs_hz,
+            min_samples=int(lengths[shortest]),
+            min_class_size=int(sizes[smallest]),
+            shortest=recordings.names[shortest],
+            dataset=recordings.name,
+            smallest_class=recordings.class_names[smallest],
+        )
+
+    @classmethod
+    def describe(cls, spec: DatasetSpec) -> DatasetFacts:
+        """The facts of the recordings ``spec`` names; the built-in ones are not generated.
+
+        Raises
+        ------
+        DatasetError
+            As :func:`pipeline.recordings.sources.load_recordings`.
+        """
+        from pipeline.recordings.sources import load_recordings, synthetic_arguments
+        from pipeline.recordings.synthetic import synthetic_layout
+
+        if DatasetKind(spec.kind) is not DatasetKind.SYNTHETIC:
+            return cls.of(load_recordings(spec))
+
+        layout = synthetic_layout(**synthetic_arguments(spec))
+        return cls(
+            fs_hz=layout.fs_hz,
+            min_samples=layout.n_samples,
+            min_class_size=spec.recordings_per_class,
+            shortest=layout.names[0],
+            dataset="synthetic",
+            smallest_class=layout.class_names[0],
+        )
+
+    def shortest_recording(self) -> str:
+        """``"the shortest recording, <name> of dataset '<dataset>' (<n> samples)"``."""
+        named = f", {self.shortest}" if self.shortest else ""
+        of = f" of dataset {self.dataset!r}" if self.dataset else ""
+        return f"the shortest recording{named}{of} ({self.min_samples} samples)"
+
+
+def scene_misfits(scene: Scene, facts: DatasetFacts) -> list[tuple[str, str]]:
+    """Every way ``scene`` does not fit its recordings, as ``(scene field, problem)`` pairs.
+
+    A scene fits when its taxel delays leave at least 2 samples of the shortest recording, the
+    remaining duration holds at least one window (and a fixed ``coding.n_windows``), and every
+    class has at least ``training.folds`` recordings: the same conditions the simulation needs.
+    Each problem names the shortest recording where it is the culprit. Empty if the scene fits.
+    """
+    return _misfits(scene.array, scene.coding, scene.training.folds, facts)
+
+
+def _misfits(
+    array: ArraySpec, coding: CodingSpec, folds: int, facts: DatasetFacts
+) -> list[tuple[str, str]]:
+    """:func:`scene_misfits` of a scene with this ``array``, ``coding`` and ``training.folds``:
+    all it depends on, so that a grid checks each distinct combination once."""
+    problems: list[tuple[str, str]] = []
+    cut = cut_samples(taxel_delays_s(array), facts.fs_hz)
+    remaining = facts.min_samples - cut
+    if remaining < 2:
+        problems.append(
+            (
+                "array",
+                f"the delays of a {array.rows}x{array.cols} array (pitch {array.pitch_mm:g} mm "
+                f"at {array.speed_mm_s:g} mm/s: {cut / facts.fs_hz:.3g} s, {cut} samples at "
+                f"{facts.fs_hz:g} Hz) use up {facts.shortest_recording()}; at least "
+                f"{cut + 2} samples are needed",
+            )
+        )
+    else:
+        usable_s = (remaining - 1) / facts.fs_hz  # as SpikeTrains.duration_s
+        fit = whole_windows(usable_s, coding.window_s)
+        wanted = coding.n_windows
+        if fit < 1 or (wanted != "auto" and wanted > fit):
+            n = 1 if wanted == "auto" else wanted
+            field = "coding.window_s" if fit < 1 else "coding.n_windows"
+            problems.append(
+                (
+                    field,
+                    f"{n} window(s) of {coding.window_s} s do not fit "
+                    f"{facts.shortest_recording()}: {usable_s:.3g} s after taxel delays "
+                    f"hold {fit}",
+                )
+            )
+    if facts.min_class_size < folds:
+        problems.append(
+            (
+                "training.folds",
+                f"{folds} folds need at least that many recordings per class; "
+                + (f"class {facts.smallest_class!r}" if facts.smallest_class else "a class")
+                + f" has fewer ({facts.min_class_size})",
+            )
+        )
+    return problems
+
+
+def check_scene_fits(scene: Scene, facts: DatasetFacts) -> None:
+    """Raise :class:`SceneError` listing every misfit of ``scene`` (:func:`scene_misfits`)."""
+    problems = scene_misfits(scene, facts)
+    if problems:
+        raise SceneError([f"{field}: {text}" for field, text in problems], repr(scene.name))
+
+
+def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
+    """Check every point against its recordings; raise :class:`SceneError` listing all misfits.
+
+    Parameters
+    ----------
+    facts
+        For each dataset of the grid, keyed by ``cache_key(scene, "recordings")``.
+    """
+    # Points sharing a problem (every threshold of a too-short dataset, say) are listed once.
+    places: dict[str, list[str]] = {}
+    recordings: dict[DatasetSpec, str] = {}
+    misfits: dict[tuple[str, ArraySpec, CodingSpec, int], list[str]] = {}
+    for point in grid.points():
+        scene = point.scene
+        key = recordings.get(scene.dataset)
+        if key is None:  # the recordings key is a function of the dataset alone
+            key = recordings[scene.dataset] = cache_key(scene, "recordings")
+        combination = (key, scene.array, scene.coding, scene.training.folds)
+        texts = misfits.get(combination)
+        if texts is None:
+            texts = misfits[combination] = [
+                text for _, text in _misfits(*combination[1:], facts[key])
+            ]
+        if texts:
+            where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
+            for text in texts:
+                places.setdefault(text, []).append(where)
+    problems = [
+        ", ".join(wheres[:3])
+        + (f" and {len(wheres) - 3} more" if len(wheres) > 3 else "")
+        + f": {text}"
+        for text, wheres in places.items()
+    ]
+    if problems:
+        raise SceneError(problems, repr(grid.name), "grid")
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading and validation
+
+
+def _read_grid(data: Any, source: str, base_dir: Path, problems: list[str]) -> Grid:
+    if not isinstance(data, Mapping):
+        problems.append(f"grid: must be a table, got {type(data).__name__}")
+        return Grid("grid", Scene(), ())
+    for key in data:
+        if key not in ("name", "base", "sweeps"):
+            problems.append(f"{key}: unknown key (known: name, base, sweeps)")
+    name = data.get("name", "grid")
+    if not _valid_name(name):
+        problems.append(f"name: {name!r} is not a valid grid name ({NAME_PATTERN})")
+        name = "grid"
+    base = _read_base(data.get("base", "paper"), base_dir, problems)
+    sweeps_data = data.get("sweeps", {})
+    if not isinstance(sweeps_data, Mapping) or not sweeps_data:
+        problems.append("sweeps: a grid needs at least one [sweeps.<name>] table")
+        sweeps_data = {}
+    sweeps = []
+    for sweep_name, sweep_data in sweeps_data.items():
+        sweep = _read_sweep(sweep_name, sweep_data, base, problems)
+        if sweep is not None:
+            sweeps.append(sweep)
+    return Grid(name, base, tuple(sweeps))
+
+
+def _read_base(value: Any, base_dir: Path, problems: list[str]) -> Scene:
+    try:
+        if isinstance(value, Mapping):
+            return Scene.from_dict(with_dataset_path_from(value, base_dir), source="base")
+        if isinstance(value, str):
+            path = base_dir / value
+            return Scene.from_toml(path) if path.suffix == ".toml" else Scene.load(value)
+        problems.append(f"base: expected a scene name, a file or a table, got {value!r}")
+    except SceneError as exc:
+        problems.append(f"base: {exc}")
+    return Scene()
+
+
+def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep | None:
+    where = f"sweeps.{name}"
+    if not _valid_name(name):
+        problems.append(f"{where}: not a valid sweep name ({NAME_PATTERN})")
+        return None
+    if not isinstance(data, Mapping):
+        problems.append(f"{where}: must be a table")
+        return None
+    known = ("axes", "mode", "set", "correlate", "title")
+    for key in data:
+        if key not in known:
+            problems.append(f"{where}.{key}: unknown key (known: {', '.join(known)})")
+    count = len(problems)
+    try:
+        mode = SweepMode(data.get("mode", "product"))
+    except ValueError:
+        problems.append(f"{where}.mode: {data.get('mode')!r} is not 'product' or 'zip'")
+        mode = SweepMode.PRODUCT
+    fixed = data.get("set", {})
+    if not isinstance(fixed, Mapping):
+        problems.append(f"{where}.set: must be a table of field = value")
+        fixed = {}
+    for field in fixed:
+        _check_field(field, f"{where}.set", problems)
+    correlate = data.get("correlate", False)
+    if not isinstance(correlate, bool):
+        problems.append(f"{where}.correlate: expected true or false, got {correlate!r}")
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        problems.append(f"{where}.title: expected a string, got {title!r}")
+    axes_data = data.get("axes")
+    if not isinstance(axes_data, Mapping) or not axes_data:
+        problems.append(f"{where}.axes: a sweep needs at least one axis (field = [values])")
+        return None
+    axes = []
+    for field, values in axes_data.items():
+        here = f"{where}.axes.{field}"
+        _check_field(field, f"{where}.axes", problems)
+        if field in fixed:
+            problems.append(f"{here}: also fixed in {where}.set")
+        if not isinstance(values, list) or not values:
+            problems.append(f"{here}: must be a non-empty list of values")
+            continue
+        counts = collections.Counter(json.dumps(v, sort_keys=True) for v in values)
+        duplicates = sorted(v for v, n in counts.items() if n > 1)
+        if duplicates:
+            problems.append(f"{here}: duplicate values {', '.join(duplicates)}")
+        axes.append((field, tuple(values)))
+    if mode == SweepMode.ZIP and len({len(v) for _, v in axes}) > 1:
+        lengths = ", ".join(f"{f} has {len(v)}" for f, v in axes)
+        problems.append(f"{where}.axes: zipped axes need equal lengths ({lengths})")
+    if len(problems) > count:
+        return None
+    sweep = Sweep(name, _name_dims(axes), mode, dict(fixed), bool(correlate), title)
+    try:
+        fixed_base = base.replace(**sweep.fixed) if sweep.fixed else base
+    except SceneError as exc:
+        problems.append(f"{where}.set: {'; '.join(exc.problems)}")
+        return None
+    # Each scene part is validated once per combination of the values in it, not per point.
+    variants = _variants(fixed_base, sweep)
+    for _, indices in _positions(sweep):
+        refused = variants.problems(indices)
+        if refused:
+            at = ", ".join(
+                f"{axis.field} = {axis.values[i]!r}"
+                for axis, i in zip(sweep.axes, indices, strict=True)
+            )
+            problems.append(f"{where} at {at}: {'; '.join(refused)}")
+    return sweep
+
+
+def _name_dims(axes: Sequence[tuple[str, tuple[Any, ...]]]) -> tuple[SweepAxis, ...]:
+    lasts = [field.split(".")[-1] for field, _ in axes]
+    named = []
+    for (field, values), last in zip(axes, lasts, strict=True):
+        dim = last if lasts.count(last) == 1 else "_".join(field.split(".")[-2:])
+        named.append(SweepAxis(field, dim, values))
+    return tuple(named)
+
+
+def _check_field(field: str, where: str, problems: list[str]) -> None:
+    """A dotted path must name a scene field (or an effect, or an effect's parameter)."""
+    try:
+        fields.resolve(Scene, field)
+    except fields.UnknownField as exc:
+        problems.append(f"{where}: {exc.text}")
+
+
+def _valid_name(name: Any) -> bool:
+    return (
+        isinstance(name, str)
+        and 0 < len(name) <= 64
+        and all(c.isascii() and (c.isalnum() or c in "_-") for c in name)
+    )

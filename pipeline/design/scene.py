@@ -1,0 +1,640 @@
+"""Scenes: frozen, validated descriptions of one simulated situation.
+
+A scene has five parts (``dataset``, ``array``, ``readout``, ``coding``, ``training``) and a
+``seed``. It loads from a dict or a TOML file, rejects unknown keys and out-of-range values with a
+message naming every offending field at once, and has a canonical form (sorted keys, units in the
+field names) from which cache keys are hashed.
+
+Every field is declared once, on its dataclass (:func:`pipeline.design.fields.param`): type,
+default, units, accepted range, description, whether its default is neutral and what it does to a
+point's cost. Reading and validation, the canonical form, dotted paths, result cubes' coordinate
+labels and the listing of fields (:func:`scene_fields`) follow from those declarations. The
+canonical form leaves out a field at a neutral default, so a field added with a neutral default that
+reproduces what was simulated before it existed changes no existing cache key.
+
+Readout *effects* are a mapping from effect name to parameters. An effect that is not named is not
+simulated and is not part of any cache key; an ideal scene names none. The scene seed enters the
+spike-train key only when a named effect draws random numbers.
+
+Cache keys (:func:`pipeline.run.stages.cache_key`) hash exactly the fields a stage depends on; which
+fields those are is declared with the stages themselves, in :mod:`pipeline.run.stages`::
+
+    recordings : dataset
+    spikes     : dataset, array, readout (+ seed if a random effect is named)
+    rates      : spikes fields + coding
+    results    : rates fields + training
+
+Many scenes that differ in a few fields (a grid's points) are built by :class:`SceneVariants`,
+which reads each part once per distinct combination of the values in it and shares the part
+between the scenes. The canonical form is written part by part (the JSON of a dict with sorted
+keys is its items' JSON in key order), so a memo writes a shared part once for all its scenes.
+"""
+
+from __future__ import annotations
+
+import enum
+import functools
+import json
+import math
+import operator
+import tomllib
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal
+
+from pipeline.design import fields
+from pipeline.design.fields import Cost, NonEmpty, Range, Seed, param, part
+from pipeline.errors import SceneError
+
+MAX_TAXELS_PER_SIDE = 256
+
+_POSITIVE = Range(0, low_open=True)
+_NONNEGATIVE = Range(0)
+
+
+class DatasetKind(enum.StrEnum):
+    """Where recordings come from."""
+
+    SYNTHETIC = "synthetic"
+    VIBTAC12 = "vibtac12"
+    FOLDER = "folder"
+
+
+class Axis(enum.StrEnum):
+    """Accelerometer axis of the VibTac-12 recordings."""
+
+    X = "x"
+    Y = "y"
+    Z = "z"
+
+
+class ScanDirection(enum.StrEnum):
+    """Scan direction ``(d_x, d_y)`` across the taxel grid."""
+
+    Y = "y"  # along rows: taxel (i, j) is delayed by i * pitch / speed (the paper's Fig. 4)
+    X = "x"  # along columns
+    XY = "xy"  # diagonal, unit vector (1, 1) / sqrt(2)
+
+    @property
+    def vector(self) -> tuple[float, float]:
+        """``(d_x, d_y)``."""
+        return {"y": (0.0, 1.0), "x": (1.0, 0.0), "xy": (math.sqrt(0.5), math.sqrt(0.5))}[
+            self.value
+        ]
+
+
+class Polarity(enum.StrEnum):
+    """How ON and OFF spikes enter the rate code."""
+
+    MERGED = "merged"  # one count per window, both polarities (the paper)
+    SPLIT = "split"  # two channels: +1 spikes, then -1 spikes
+
+
+class Model(enum.StrEnum):
+    """Classifiers."""
+
+    FFNN = "ffnn"
+    CNN = "cnn"
+
+
+class Effect(enum.StrEnum):
+    """Non-ideal readout effects, in the order they act on the signal."""
+
+    AMPLIFIER_OFFSET = "amplifier_offset"
+    AMPLIFIER_NOISE = "amplifier_noise"
+    SATURATION = "saturation"
+    COMPARATOR_OFFSET = "comparator_offset"
+    COMPARATOR_NOISE = "comparator_noise"
+    THRESHOLD_MISMATCH = "threshold_mismatch"
+
+
+# ---------------------------------------------------------------------------------------------
+# Effect parameters: their values do not change what a point costs, only which effects run.
+
+
+@dataclass(frozen=True)
+class AmplifierOffset:
+    """Static input offset per taxel, ``N(0, sigma_v)`` V; matters through saturation."""
+
+    sigma_v: float = param(
+        0.01,
+        "V",
+        "standard deviation of the amplifier offset per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
+    )
+
+
+@dataclass(frozen=True)
+class AmplifierNoise:
+    """White Gaussian noise on every sample, ``sigma_v`` V rms."""
+
+    sigma_v: float = param(
+        0.005, "V", "rms amplifier noise per sample", within=_NONNEGATIVE, cost=Cost.FREE
+    )
+
+
+@dataclass(frozen=True)
+class Saturation:
+    """Clip the amplified signal at the rails ``+-rail_v``; ``None`` means half the full scale."""
+
+    rail_v: float | None = param(
+        None, "V", "saturation rail of the amplified signal", within=_POSITIVE, cost=Cost.FREE
+    )
+
+
+@dataclass(frozen=True)
+class ComparatorOffset:
+    """Static offsets of the UP and DOWN comparators per taxel, each ``N(0, sigma_v)`` V."""
+
+    sigma_v: float = param(
+        0.005,
+        "V",
+        "standard deviation of the comparator offsets per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
+    )
+
+
+@dataclass(frozen=True)
+class ComparatorNoise:
+    """Gaussian noise on each comparator decision (per sample), ``sigma_v`` V rms."""
+
+    sigma_v: float = param(
+        0.005, "V", "rms comparator noise per decision", within=_NONNEGATIVE, cost=Cost.FREE
+    )
+
+
+@dataclass(frozen=True)
+class ThresholdMismatch:
+    """Fixed-pattern threshold per taxel, ``threshold_v * (1 + sigma_rel * z)``, ``z ~ N(0, 1)``.
+
+    A draw that would push a threshold below ``floor_rel * threshold_v`` (zero or negative
+    included) is clipped to that floor: a comparator cannot resolve a smaller step.
+    """
+
+    sigma_rel: float = param(
+        0.05,
+        "1",
+        "relative standard deviation of the threshold per taxel",
+        within=_NONNEGATIVE,
+        cost=Cost.FREE,
+    )
+    floor_rel: float = param(
+        0.1,
+        "1",
+        "lowest threshold per taxel, relative to threshold_v",
+        within=Range(0, 1, low_open=True),
+        cost=Cost.FREE,
+    )
+
+
+EFFECT_TYPES: dict[Effect, type] = {
+    Effect.AMPLIFIER_OFFSET: AmplifierOffset,
+    Effect.AMPLIFIER_NOISE: AmplifierNoise,
+    Effect.SATURATION: Saturation,
+    Effect.COMPARATOR_OFFSET: ComparatorOffset,
+    Effect.COMPARATOR_NOISE: ComparatorNoise,
+    Effect.THRESHOLD_MISMATCH: ThresholdMismatch,
+}
+RANDOM_EFFECTS = frozenset(EFFECT_TYPES) - {Effect.SATURATION}
+
+
+# ---------------------------------------------------------------------------------------------
+# Scene parts
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """Which recordings, and how they are cut.
+
+    ``kind="synthetic"`` is the embedded default (``seed``, ``recordings_per_class``,
+    ``duration_s``); ``vibtac12`` reads the X/Y/Z CSVs in ``path`` (``axis``, ``segments``,
+    ``sampling_rate_hz``, default 200 Hz); ``folder`` reads ``path/dataset.toml``.
+    """
+
+    kind: DatasetKind = param(DatasetKind.SYNTHETIC, "1", "source of the recordings")
+    path: str | None = param(None, "1", "folder of the recordings")
+    sampling_rate_hz: float | None = param(
+        None, "Hz", "sampling rate of the VibTac-12 recordings", within=_POSITIVE
+    )
+    axis: Axis = param(Axis.Z, "1", "accelerometer axis of the VibTac-12 recordings")
+    segments: int = param(
+        10, "1", "segments cut from each VibTac-12 recording", within=Range(1, 1000)
+    )
+    seed: Seed = param(0, "1", "seed of the built-in recordings", cost=Cost.FREE)
+    recordings_per_class: int = param(
+        10, "1", "built-in recordings per class", within=Range(1, 10_000)
+    )
+    duration_s: float = param(
+        5.0, "s", "duration of each built-in recording", within=Range(0.1, 36_000)
+    )
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the fields refuse together: a dataset read from files needs its path."""
+        if self.kind in (DatasetKind.VIBTAC12, DatasetKind.FOLDER) and not self.path:
+            yield "path", f"required for kind {self.kind.value!r}"
+
+
+_SIDE = Range(1, MAX_TAXELS_PER_SIDE)
+
+
+@dataclass(frozen=True)
+class ArraySpec:
+    """Taxel grid ``rows x cols`` at ``pitch_mm``, scanned at ``speed_mm_s`` along ``direction``."""
+
+    rows: int = param(3, "1", "taxel rows of the array", within=_SIDE, cost=Cost.SIZE)
+    cols: int = param(3, "1", "taxel columns of the array", within=_SIDE, cost=Cost.SIZE)
+    pitch_mm: float = param(1.0, "mm", "distance between neighbouring taxels", within=_POSITIVE)
+    speed_mm_s: float = param(20.0, "mm/s", "scan speed across the array", within=_POSITIVE)
+    direction: ScanDirection = param(ScanDirection.Y, "1", "scan direction across the taxel grid")
+
+    @property
+    def n_taxels(self) -> int:
+        return self.rows * self.cols
+
+
+@dataclass(frozen=True)
+class ReadoutSpec:
+    """Level-crossing readout: ``threshold_v`` of a ``full_scale_v`` range, and effects."""
+
+    threshold_v: float = param(
+        0.09,
+        "V",
+        "comparator threshold (level-crossing step)",
+        within=_POSITIVE,
+        cost=Cost.FREE,
+    )
+    full_scale_v: float = param(1.0, "V", "full-scale input range of the readout", within=_POSITIVE)
+    effects: Mapping[Effect, Any] = param(
+        units="1",
+        long_name="non-ideal readout effects and their parameters",
+        default_factory=dict,
+        entries=EFFECT_TYPES,
+    )
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the fields refuse together: the threshold must be below the full scale."""
+        if self.threshold_v >= self.full_scale_v:
+            yield (
+                "threshold_v",
+                f"{self.threshold_v!r} V is not below full_scale_v = {self.full_scale_v!r} V",
+            )
+
+    @property
+    def is_ideal(self) -> bool:
+        return not self.effects
+
+    @property
+    def is_random(self) -> bool:
+        return any(e in RANDOM_EFFECTS for e in self.effects)
+
+    @property
+    def equivalent_bits(self) -> float:
+        return math.log2(self.full_scale_v / self.threshold_v)
+
+
+@dataclass(frozen=True)
+class CodingSpec:
+    """Rate coding: ``n_windows`` windows of ``window_s``; ``"auto"`` fits the recordings."""
+
+    window_s: float = param(0.1, "s", "rate-coding window length", within=Range(1e-6, 3600))
+    n_windows: int | Literal["auto"] = param(
+        "auto",
+        "1",
+        "rate-coding windows per recording",
+        within=Range(1, 100_000, also=("auto",)),
+        cost=Cost.SIZE,
+    )
+    polarity: Polarity = param(Polarity.MERGED, "1", "how ON and OFF spikes enter the rate code")
+
+
+@dataclass(frozen=True)
+class TrainingSpec:
+    """Classifiers and stratified k-fold cross-validation."""
+
+    models: tuple[Model, ...] = param(
+        (Model.FFNN, Model.CNN), "1", "classifiers trained", within=NonEmpty(), cost=Cost.SIZE
+    )
+    epochs: int = param(100, "1", "training epochs", within=Range(1, 100_000))
+    learning_rate: float = param(
+        1e-3, "1", "Adam learning rate", within=Range(0, 10, low_open=True)
+    )
+    hidden_units: int = param(100, "1", "hidden units of the FFNN", within=Range(1, 100_000))
+    batch_size: int = param(16, "1", "training batch size", within=Range(1, 1_000_000))
+    folds: int = param(10, "1", "cross-validation folds", within=Range(2, 1000))
+    repeats: int = param(
+        1,
+        "1",
+        "cross-validation repeats, each a fresh stratified split",
+        within=Range(1, 100),
+    )
+    seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One simulated situation. Build with :meth:`from_dict`, :meth:`from_toml` or :meth:`paper`."""
+
+    name: str = param("scene", "1", "scene name", label=True)
+    seed: Seed = param(0, "1", "scene seed (random readout effects)", cost=Cost.FREE)
+    dataset: DatasetSpec = part(DatasetSpec)
+    array: ArraySpec = part(ArraySpec)
+    readout: ReadoutSpec = part(ReadoutSpec)
+    coding: CodingSpec = part(CodingSpec)
+    training: TrainingSpec = part(TrainingSpec)
+
+    # -- construction ---------------------------------------------------------------------------
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>") -> Scene:
+        """Validate ``data`` (the TOML layout) and build a scene; raise :class:`SceneError`."""
+        problems: list[str] = []
+        scene = fields.read(cls, data, "", problems)
+        if problems:
+            raise SceneError(problems, source)
+        return scene
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Scene:
+        """Load a scene from a TOML file."""
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise SceneError([f"cannot read file: {exc.strerror}"], str(path)) from None
+        except UnicodeDecodeError as exc:
+            raise SceneError([f"not UTF-8 text (byte {exc.start})"], str(path)) from None
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise SceneError([f"not valid TOML: {exc}"], str(path)) from None
+        data.setdefault("name", path.stem)
+        return cls.from_dict(with_dataset_path_from(data, path.parent), source=str(path))
+
+    @classmethod
+    def builtin(cls, name: str) -> Scene:
+        """A scene shipped with the package (``paper``, ``smoke``)."""
+        names = builtin_scene_names()
+        if name not in names:
+            raise SceneError([f"no built-in scene {name!r} (built-in: {', '.join(names)})"], name)
+        text = resources.files("pipeline.design.scenes").joinpath(f"{name}.toml").read_text("utf-8")
+        data = tomllib.loads(text)
+        data.setdefault("name", name)
+        return cls.from_dict(data, source=f"built-in scene {name!r}")
+
+    @classmethod
+    def paper(cls) -> Scene:
+        """The paper's operating point: 3x3 taxels, 0.09 V of 1 V, 0.1 s x 40 windows, FFNN+CNN."""
+        return cls.builtin("paper")
+
+    @classmethod
+    def load(cls, name_or_path: str) -> Scene:
+        """A built-in scene by name, or a TOML file by path."""
+        if name_or_path in builtin_scene_names():
+            return cls.builtin(name_or_path)
+        return cls.from_toml(name_or_path)
+
+    def replace(self, **changes: Any) -> Scene:
+        """A copy with dotted fields replaced (``{"readout.threshold_v": 0.05}``), re-validated."""
+        data = self.to_dict()
+        for dotted, value in changes.items():
+            fields.put(data, dotted, value)
+        return type(self).from_dict(data, source=f"scene {self.name!r} with {sorted(changes)}")
+
+    # -- canonical form -------------------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict in the TOML layout (enums as strings, tuples as lists)."""
+        return fields.plain(self)
+
+    def canonical(
+        self, parts: tuple[str, ...] | None = None, memo: CanonicalMemo | None = None
+    ) -> str:
+        """Stable JSON of the scene (or of ``parts``: top-level parts such as ``"readout"``, or
+        dotted fields of one such as ``"readout.full_scale_v"``), sorted, units in names; a
+        field that is ``None`` or at a neutral default (:func:`pipeline.design.fields.param`) is
+        left out, so that a field added with such a default changes no existing key.
+
+        ``memo`` holds the canonical form of part objects already written: give the same dict
+        for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
+        each part is written once. The text does not depend on it.
+        """
+        # The JSON of a dict with sorted keys is its items' JSON in key order, so each part can
+        # be written (and remembered) on its own: the text is that of the whole selection.
+        items = []
+        plan = _canonical_plan(type(self), None if parts is None else tuple(parts))
+        for top, paths in plan:
+            value = getattr(self, top)
+            if paths is None:
+                slot = fields.slot_named(type(self))[top]
+                if slot.part is None and fields.left_out(slot, value, canonical=True):
+                    continue
+                text = _canonical_part(value, memo)
+            else:
+                data = {top: fields.plain(value, canonical=True)}
+                text = _canonical_json(fields.select(data, paths).get(top, {}))
+            items.append(f'"{top}":{text}')
+        return "{" + ",".join(items) + "}"
+
+
+#: Canonical memo: the canonical JSON of a part object by its ``id``, with the object itself,
+#: which keeps it alive so that its ``id`` is not reused while the memo holds it.
+CanonicalMemo = dict[int, tuple[Any, str]]
+
+
+def _canonical_json(data: Any) -> str:
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def _canonical_part(value: Any, memo: CanonicalMemo | None) -> str:
+    """The canonical JSON of one top-level part, from ``memo`` if it was written before."""
+    if memo is None:
+        return _canonical_json(fields.plain(value, canonical=True))
+    found = memo.get(id(value))
+    if found is None:
+        found = memo[id(value)] = (value, _canonical_json(fields.plain(value, canonical=True)))
+    return found[1]
+
+
+def canonical_parts(cls: type[Scene]) -> tuple[str, ...]:
+    """The top-level fields a canonical form of a ``cls`` holds: every field but labels."""
+    return tuple(
+        slot.name for slot in fields.slots(cls) if slot.declared is None or not slot.declared.label
+    )
+
+
+@functools.lru_cache(maxsize=64)
+def _canonical_plan(
+    cls: type[Scene], parts: tuple[str, ...] | None
+) -> tuple[tuple[str, tuple[str, ...] | None], ...]:
+    """The top-level parts ``parts`` (all if None) selects, sorted, each whole (None) or with
+    its dotted fields; raises ``KeyError`` for a part that is not in the canonical form."""
+    known = canonical_parts(cls)
+    whole: set[str] = set()
+    dotted: dict[str, list[str]] = {}
+    for path in known if parts is None else parts:
+        top = path.split(".", 1)[0]
+        if top not in known:
+            raise KeyError(top)
+        if top == path:
+            whole.add(top)
+        else:
+            dotted.setdefault(top, []).append(path)
+    return tuple(
+        (top, None if top in whole else tuple(dotted[top])) for top in sorted(whole | dotted.keys())
+    )
+
+
+#: Revision of what the stages compute for a given scene. Bump it with any change that alters a
+#: stage's output for the same fields (a different random stream, a fixed bug, a new training
+#: step), so that stores made before the change are recomputed instead of mixed with new points.
+#: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
+#: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
+#: follow the statistics measured on real texture recordings.
+MODEL_REVISION = 4
+
+
+def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:
+    """``data`` with a relative ``dataset.path`` made absolute against ``folder``.
+
+    A scene file's dataset path means the same folder whatever directory the command runs in:
+    a relative path is taken from the folder of the file that names it (``~`` is expanded).
+    Anything but a string path is left for validation to report.
+    """
+    dataset = data.get("dataset")
+    if not isinstance(dataset, Mapping) or not isinstance(dataset.get("path"), str):
+        return data
+    if not dataset["path"]:
+        return data
+    path = Path(dataset["path"]).expanduser()
+    if not path.is_absolute():
+        path = Path(folder).absolute() / path
+    return {**data, "dataset": {**dataset, "path": str(path)}}
+
+
+def scene_field(path: str) -> str:
+    """Dotted ``path`` (``"readout.threshold_v"``) once checked against the declarations, so that
+    code naming a field by its path fails when it loads, not when a cube lacks the field.
+
+    Raises
+    ------
+    pipeline.design.fields.UnknownField
+        ``path`` names no scene field.
+    """
+    fields.resolve(Scene, path)
+    return path
+
+
+def scene_fields() -> list[fields.FieldInfo]:
+    """Every scene field with its type, default, units, range and description, effects'
+    parameters included (:func:`pipeline.design.fields.listing`), for ``--help`` and the docs."""
+    return fields.listing(Scene)
+
+
+def builtin_scene_names() -> tuple[str, ...]:
+    files = resources.files("pipeline.design.scenes").iterdir()
+    return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
+
+
+# ---------------------------------------------------------------------------------------------
+# Many variants of one scene
+
+
+class SceneVariants:
+    """Copies of one scene with the same dotted fields replaced, each field from its own list.
+
+    ``variants.scene(indices)`` is ``scene.replace(**{field: values[i] ...})`` over ``axes``
+    and ``indices``: the same scene, or a :class:`SceneError` with the same problems, but each
+    scene part (``dataset``, ``array``, ...) is read and validated once per distinct
+    combination of the value indices of the fields in it (a part no field is in, once), and
+    the scenes share their parts. A grid whose fields take a few values each thus validates a
+    few parts, not every point, and its scenes' canonical forms can be written once per part
+    (:meth:`Scene.canonical` with a memo).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene the variants start from.
+    axes : sequence of (str, sequence)
+        Dotted scene fields (``"readout.threshold_v"``), each with its values. A field must
+        start with a top-level scene field (``dataset``, ..., ``name``, ``seed``).
+
+    Raises
+    ------
+    ValueError
+        A field does not start with a top-level scene field.
+    """
+
+    def __init__(self, scene: Scene, axes: Sequence[tuple[str, Sequence[Any]]]):
+        self._cls = type(scene)
+        self._data = scene.to_dict()
+        self._fields = [name for name, _ in axes]
+        self._values = [values for _, values in axes]
+        self.source = f"scene {scene.name!r} with {sorted(self._fields)}"
+        tops = [name.split(".")[0] for name in self._fields]
+        order = [slot.name for slot in fields.read_order(self._cls)]
+        unknown = sorted(set(tops) - set(order))
+        if unknown:
+            raise ValueError(f"not top-level scene fields: {', '.join(unknown)}")
+        self._positions = {top: tuple(i for i, t in enumerate(tops) if t == top) for top in order}
+        # The memo key of a part: the indices of the values in it (none for an untouched part).
+        self._part_indices = [
+            (top, operator.itemgetter(*positions) if positions else lambda _: ())
+            for top, positions in self._positions.items()
+        ]
+        self._parts: dict[tuple[str, Any], tuple[Any, list[str]]] = {}
+
+    def problems(self, indices: Sequence[int]) -> list[str]:
+        """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
+        problems: list[str] = []
+        for top, part_indices in self._part_indices:
+            problems += self._part(top, part_indices(indices), indices)[1]
+        return problems
+
+    def scene(self, indices: Sequence[int]) -> Scene:
+        """The scene with each field set to ``values[indices[axis]]``.
+
+        Raises
+        ------
+        SceneError
+            The values the scene refuses, exactly as :meth:`Scene.replace` says.
+        """
+        parts: dict[str, Any] = {}
+        problems: list[str] = []
+        for top, part_indices in self._part_indices:
+            value, found = self._part(top, part_indices(indices), indices)
+            parts[top] = value
+            problems += found
+        if problems:
+            raise SceneError(problems, self.source)
+        return self._cls(**parts)
+
+    def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
+        found = self._parts.get((top, part_indices))
+        if found is None:
+            positions = self._positions[top]
+            changes = [(self._fields[i], self._values[i][indices[i]]) for i in positions]
+            found = self._parts[top, part_indices] = self._read(top, changes)
+        return found
+
+    def _read(self, top: str, changes: list[tuple[str, Any]]) -> tuple[Any, list[str]]:
+        """Part ``top`` with ``changes`` made as :meth:`Scene.replace` makes them, and what the
+        reader found wrong with it."""
+        data = {top: _copy_plain(self._data.get(top))}
+        for dotted, value in changes:
+            fields.put(data, dotted, value)
+        problems: list[str] = []
+        part = fields.read_slot(fields.slot_named(self._cls)[top], data[top], top, problems)
+        return part, problems
+
+
+def _copy_plain(value: Any) -> Any:
+    """A copy of a plain nested dict/list, so that changing it leaves the original alone."""
+    if isinstance(value, dict):
+        return {k: _copy_plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_copy_plain(v) for v in value]
+    return value

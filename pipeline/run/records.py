@@ -1,0 +1,469 @@
+"""Stored records: what each stored level (:mod:`pipeline.run.stages`) keeps of one scene.
+
+A level whose output the sweep store keeps declares a :class:`Record`: its variables (name,
+entry-level dims, dtype, units, long name; a variable may be optional), its entry type and three
+functions: ``make`` turns the level's output (and what the levels before it made) into its
+entry, ``encode`` turns an entry into named arrays plus JSON attributes, ``decode`` turns them back.
+The store (:mod:`storage`) writes and reads any declared record by its declaration alone: it casts
+each array to the declared dtype, checks its dims, refuses undeclared or missing variables and
+JSON attributes that are not finite, and knows no record by name.
+
+This module holds the declaration types and the entries of the two stored levels, ``spikes``
+(:class:`SpikeEntry`) and ``results`` (:class:`ResultEntry`), with their codecs.
+
+Variables of the spike entry: ``true_times_s`` float64 (true_event) s, ``true_polarity`` int8
+(true_event) +-1, ``true_start``/``true_count`` int64 (recording, taxel): train ``(r, t)`` is
+``true_times_s[true_start[r, t] : true_start[r, t] + true_count[r, t]]``; the same four with
+``real_`` on ``real_event`` unless attribute ``ideal`` is true (an ideal readout: REAL *is* TRUE,
+stored once, and decoded so that ``real is true``); ``duration_s`` float64 (recording) s, shared
+by TRUE and REAL; ``metrics`` float64 (metric), one value per
+:class:`~pipeline.chain.metrics.SpikeMetrics` field in its order (they may be +-inf or NaN, which
+JSON attributes cannot hold).
+
+Variables of the result entry: ``accuracy`` float64 (model, repeat, fold) with the strings
+``model``; ``n_windows_used`` int64 () the number of rate-coding windows the point used (``auto``
+resolved); where the writer kept them, the out-of-fold predictions: ``predicted`` int64 (model,
+repeat, recording), ``test_fold`` int64 (repeat, recording), ``labels`` int64 (recording) and
+the strings ``recording``; and ``metrics`` as for spikes. Attributes ``dataset_name``,
+``class_names`` and ``sampling_rate_hz`` where the writer stated them.
+
+Every entry's attributes hold ``seconds`` (step name -> wall seconds, finite floats).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pipeline.chain.metrics import SpikeMetrics
+from pipeline.chain.spikes import Encoded, SpikeTrains, train_starts
+
+__all__ = [
+    "OutOfFold",
+    "Record",
+    "RecordingsInfo",
+    "ResultEntry",
+    "SpikeEntry",
+    "Variable",
+]
+
+#: Arrays and JSON attributes of one entry, as :attr:`Record.encode` gives and
+#: :attr:`Record.decode` takes them.
+Values = dict[str, np.ndarray]
+Attrs = dict[str, Any]
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One stored variable of a record.
+
+    Attributes
+    ----------
+    name : str
+        Its name in the entry (and in the store).
+    dims : tuple of str
+        Entry-level dimension names (``()`` for a scalar).
+    dtype : str
+        A numpy dtype name (``"float64"``, ``"int8"``) or ``"str"`` for strings.
+    units, long_name : str
+        CF ``units`` ("1" for dimensionless numbers and labels) and a prose description.
+    optional : bool
+        Whether an entry may lack it.
+    """
+
+    name: str
+    dims: tuple[str, ...]
+    dtype: str
+    units: str
+    long_name: str
+    optional: bool = False
+
+    def attrs(self) -> dict[str, str]:
+        """``units`` and ``long_name``."""
+        return {"units": self.units, "long_name": self.long_name}
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    """What a stored level keeps of one scene: see the module docstring.
+
+    Attributes
+    ----------
+    name : str
+        The level's name: the kind of its entries in the store.
+    entry_type : type
+        The type of its entries; every entry has ``seconds`` (dict[str, float]).
+    variables : tuple of Variable
+        Every variable an entry may hold.
+    make : callable
+        ``make(output, seconds, made) -> entry``: the level's output as its entry, given the
+        seconds the entry accounts for and ``made(level_name)``, the output (or entry) of an
+        upstream level of the same scene.
+    encode : callable
+        ``encode(entry) -> (values, attrs)``: named arrays (the declared variables; optional
+        ones may be left out) and JSON attributes; raises ValueError for inconsistent entries.
+    decode : callable
+        ``decode(values, attrs) -> entry``: the inverse, given arrays already checked against
+        the declaration (strings as ``<U``); raises for inconsistent ones.
+    """
+
+    name: str
+    entry_type: type
+    variables: tuple[Variable, ...]
+    make: Callable[[Any, dict[str, float], Callable[[str], Any]], Any]
+    encode: Callable[[Any], tuple[Values, Attrs]]
+    decode: Callable[[Mapping[str, np.ndarray], Mapping[str, Any]], Any]
+
+    def variable(self, name: str) -> Variable:
+        """The declared variable ``name``."""
+        for variable in self.variables:
+            if variable.name == name:
+                return variable
+        raise KeyError(f"record {self.name!r} declares no variable {name!r}")
+
+
+# ---------------------------------------------------------------------------------------------
+# Entries
+
+
+@dataclass(frozen=True)
+class RecordingsInfo:
+    """What a point's result says of the recordings it was computed on; None where unknown.
+
+    Attributes
+    ----------
+    dataset_name : str or None
+        :attr:`pipeline.recordings.sources.Recordings.name`.
+    class_names : tuple[str, ...] or None
+        Class names, in label order.
+    sampling_rate_hz : float or None
+        Sampling rate of the recordings (Hz).
+    """
+
+    dataset_name: str | None = None
+    class_names: tuple[str, ...] | None = None
+    sampling_rate_hz: float | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class OutOfFold:
+    """Every recording's out-of-fold prediction of one point, per model and repeat.
+
+    Attributes
+    ----------
+    recording_names : tuple[str, ...]
+        ``n`` distinct recording names (:attr:`pipeline.recordings.sources.Recordings.names`).
+    labels : int64 (n,)
+        Class index of each recording.
+    predicted : dict[str, int64 (repeats, n)]
+        Model name -> the class index each recording got from the fold that tested it.
+    test_fold : int64 (repeats, n)
+        The fold that tested each recording, per repeat (the same for every model).
+    """
+
+    recording_names: tuple[str, ...]
+    labels: np.ndarray
+    predicted: Mapping[str, np.ndarray]
+    test_fold: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.recording_names)
+        labels = np.asarray(self.labels)
+        test_fold = np.asarray(self.test_fold)
+        problems = []
+        if len(set(self.recording_names)) != n:
+            problems.append("recording names repeat")
+        if labels.shape != (n,):
+            problems.append(f"labels {labels.shape} do not match {n} recordings")
+        if test_fold.ndim != 2 or test_fold.shape[1] != n:
+            problems.append(f"test_fold {test_fold.shape} is not (repeats, {n})")
+        for model, values in self.predicted.items():
+            if np.shape(values) != test_fold.shape:
+                problems.append(f"predicted[{model!r}] {np.shape(values)} != {test_fold.shape}")
+        if problems:
+            raise ValueError("out-of-fold predictions: " + "; ".join(problems))
+
+
+@dataclass(frozen=True, eq=False)
+class SpikeEntry:
+    """Stored output of the ``spikes`` level.
+
+    Attributes
+    ----------
+    encoded : Encoded
+        TRUE and REAL trains; ``encoded.real is encoded.true`` for an ideal readout (kept so).
+        Both share ``duration_s`` float64 (n_recordings,) s.
+    metrics : SpikeMetrics
+        Scene-level metrics; any field may be +-inf or NaN and round trips bit for bit.
+    seconds : dict[str, float]
+        Wall seconds per step (finite), e.g. ``{"taxels": 1.0, "readout": 2.5}``.
+    """
+
+    encoded: Encoded
+    metrics: SpikeMetrics
+    seconds: dict[str, float]
+
+
+@dataclass(frozen=True, eq=False)
+class ResultEntry:
+    """Everything a result cube needs of one point: accuracy, spike metrics, step seconds.
+
+    Attributes
+    ----------
+    fold_accuracy : dict[str, np.ndarray]
+        Model name (e.g. ``"ffnn"``) -> float64 (repeats, folds) accuracy in [0, 1] (a 1-D
+        ``(folds,)`` array is one repeat); every model has the same shape; insertion order is
+        kept.
+    seconds : dict[str, float]
+        Wall seconds of every step of the point (finite), as measured when each was computed,
+        e.g. ``{"load": 0.3, ..., "coding": 0.01, "train_ffnn": 1.2, "train_cnn": 5.0}``.
+    metrics : SpikeMetrics
+        The point's spike metrics (copied from its spike entry, so a cube reads results only).
+    recordings : RecordingsInfo or None
+        What the point was computed on (dataset name, class names, sampling rate), for the
+        cube's attributes; None in entries written before results stated it.
+    out_of_fold : OutOfFold or None
+        Every recording's out-of-fold prediction per model and repeat (models as in
+        ``fold_accuracy``), for paired comparisons; None in entries written before results kept
+        them.
+    n_windows_used : int or None
+        The number of rate-coding windows the point used (``coding.n_windows = "auto"``
+        resolved for its recordings); None in entries written before results stated it.
+    """
+
+    fold_accuracy: dict[str, np.ndarray]
+    seconds: dict[str, float]
+    metrics: SpikeMetrics
+    recordings: RecordingsInfo | None = None
+    out_of_fold: OutOfFold | None = None
+    n_windows_used: int | None = None
+
+
+# ---------------------------------------------------------------------------------------------
+# Codecs of the two stored entries
+
+_METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
+METRICS_VARIABLE = Variable(
+    "metrics", ("metric",), "float64", "1", "spike metrics in SpikeMetrics field order"
+)
+
+
+def train_variables(prefix: str, optional: bool = False) -> tuple[Variable, ...]:
+    """The four variables of one set of ragged trains (``true`` or ``real``)."""
+    event = (f"{prefix}_event",)
+    grid = ("recording", "taxel")
+    what = prefix.upper()
+    return (
+        Variable(f"{prefix}_times_s", event, "float64", "s", f"{what} spike times", optional),
+        Variable(f"{prefix}_polarity", event, "int8", "1", f"{what} spike polarity", optional),
+        Variable(f"{prefix}_start", grid, "int64", "1", f"first {what} event", optional),
+        Variable(f"{prefix}_count", grid, "int64", "1", f"{what} spikes per train", optional),
+    )
+
+
+def encode_spike_entry(entry: SpikeEntry) -> tuple[Values, Attrs]:
+    """A spike entry's arrays and attributes, checked for consistency."""
+    encoded = entry.encoded
+    ideal = encoded.real is encoded.true
+    values = _train_values("true", encoded.true)
+    duration = np.asarray(encoded.true.duration_s)
+    n_recordings, _ = values["true_count"].shape
+    if duration.shape != (n_recordings,):
+        raise ValueError(f"duration_s: shape {duration.shape}, expected ({n_recordings},)")
+    if not ideal:
+        values |= _train_values("real", encoded.real)
+        if values["real_count"].shape != values["true_count"].shape:
+            raise ValueError("REAL and TRUE trains differ in (recording, taxel) shape")
+        real_duration = np.asarray(encoded.real.duration_s, dtype=np.float64)
+        if real_duration.tobytes() != np.asarray(duration, dtype=np.float64).tobytes():
+            raise ValueError("REAL and TRUE trains differ in duration_s")
+    values["duration_s"] = duration
+    values["metrics"] = _metric_values(entry.metrics)
+    return values, {"ideal": ideal, "seconds": seconds_attr(entry.seconds)}
+
+
+def decode_spike_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> SpikeEntry:
+    duration = values["duration_s"]
+    true = _read_trains(values, "true", duration)
+    ideal = attrs["ideal"]
+    if not isinstance(ideal, bool):
+        raise TypeError("attribute 'ideal' is not a bool")
+    real = true if ideal else _read_trains(values, "real", duration)
+    return SpikeEntry(Encoded(true, real), _read_metrics(values), read_seconds(attrs))
+
+
+def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
+    """A result entry's arrays and attributes, checked for consistency."""
+    if not entry.fold_accuracy:
+        raise ValueError("fold_accuracy: no model")
+    models = [str(model) for model in entry.fold_accuracy]
+    rows = [np.atleast_2d(np.asarray(values)) for values in entry.fold_accuracy.values()]
+    if any(row.ndim != 2 or row.shape != rows[0].shape for row in rows):
+        shapes = {m: r.shape for m, r in zip(models, rows, strict=True)}
+        raise ValueError(
+            f"fold_accuracy: every model needs the same (repeats, folds) shape: {shapes}"
+        )
+    values: Values = {
+        "accuracy": np.stack(rows),
+        "model": np.array(models, dtype=str),
+        **_out_of_fold_values(entry.out_of_fold, models, rows[0].shape[0]),
+        "metrics": _metric_values(entry.metrics),
+    }
+    if entry.n_windows_used is not None:
+        values["n_windows_used"] = np.asarray(entry.n_windows_used)
+    attrs = {"seconds": seconds_attr(entry.seconds), **_recordings_attrs(entry.recordings)}
+    return values, attrs
+
+
+def decode_result_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> ResultEntry:
+    accuracy = values["accuracy"]
+    models = values["model"].tolist()
+    if len(models) != accuracy.shape[0]:
+        raise ValueError("model coordinate does not match accuracy")
+    n_windows = values.get("n_windows_used")
+    return ResultEntry(
+        {m: accuracy[i] for i, m in enumerate(models)},
+        read_seconds(attrs),
+        _read_metrics(values),
+        _read_recordings(attrs),
+        _read_out_of_fold(values, models),
+        None if n_windows is None else int(n_windows),
+    )
+
+
+def _train_values(prefix: str, trains: SpikeTrains) -> Values:
+    """Flat arrays of one set of ragged trains, checked for consistency."""
+    times, polarity = np.asarray(trains.times_s), np.asarray(trains.polarity)
+    count = np.asarray(trains.count)
+    if count.ndim != 2:
+        raise ValueError(f"{prefix} count: {count.ndim} dimensions, expected (recording, taxel)")
+    if times.ndim != 1 or polarity.shape != times.shape:
+        raise ValueError(f"{prefix} times_s and polarity must be 1-D of equal length")
+    if (count < 0).any() or int(count.sum()) != times.size:
+        raise ValueError(f"{prefix} count: must be >= 0 and sum to the {times.size} events")
+    return {
+        f"{prefix}_times_s": times,
+        f"{prefix}_polarity": polarity,
+        f"{prefix}_start": train_starts(count),
+        f"{prefix}_count": count,
+    }
+
+
+def _read_trains(
+    values: Mapping[str, np.ndarray], prefix: str, duration: np.ndarray
+) -> SpikeTrains:
+    times, polarity = values[f"{prefix}_times_s"], values[f"{prefix}_polarity"]
+    count, start = values[f"{prefix}_count"], values[f"{prefix}_start"]
+    flat = count.ravel()
+    if (flat < 0).any() or int(flat.sum()) != times.size:
+        raise ValueError(f"{prefix}_count does not match {prefix}_times_s")
+    if not np.array_equal(start, train_starts(count)):
+        raise ValueError(f"{prefix}_start is not the running sum of {prefix}_count")
+    return SpikeTrains(times_s=times, polarity=polarity, count=count, duration_s=duration)
+
+
+def seconds_attr(seconds: Mapping[str, float]) -> dict[str, float]:
+    """Step seconds as an entry attribute; refused unless finite (JSON cannot hold others)."""
+    out = {str(stage): float(value) for stage, value in seconds.items()}
+    bad = [stage for stage, value in out.items() if not math.isfinite(value)]
+    if bad:
+        raise ValueError(f"seconds: not finite for {bad} (JSON attributes cannot hold them)")
+    return out
+
+
+def read_seconds(attrs: Mapping[str, Any]) -> dict[str, float]:
+    seconds = attrs["seconds"]
+    if not isinstance(seconds, dict):
+        raise TypeError("attribute 'seconds' is not a mapping")
+    return {str(stage): float(value) for stage, value in seconds.items()}
+
+
+def _metric_values(metrics: SpikeMetrics) -> np.ndarray:
+    """The metrics as one float64 array (attributes are JSON, which cannot hold +-inf)."""
+    return np.array([np.asarray(getattr(metrics, name)) for name in _METRICS])
+
+
+def _read_metrics(values: Mapping[str, np.ndarray]) -> SpikeMetrics:
+    metrics = values["metrics"]
+    if metrics.shape != (len(_METRICS),):
+        raise ValueError(f"metrics: {metrics.shape[0]} values, expected {len(_METRICS)}")
+    return SpikeMetrics(*(float(value) for value in metrics))
+
+
+def _out_of_fold_values(out_of_fold: OutOfFold | None, models: list[str], repeats: int) -> Values:
+    """The arrays of a result's out-of-fold predictions; none when it kept none."""
+    if out_of_fold is None:
+        return {}
+    if list(out_of_fold.predicted) != models:
+        raise ValueError(
+            f"out_of_fold: predictions of {list(out_of_fold.predicted)}, accuracy of {models}"
+        )
+    test_fold = np.asarray(out_of_fold.test_fold)
+    if test_fold.shape[0] != repeats:
+        raise ValueError(f"out_of_fold: {test_fold.shape[0]} repeats, accuracy has {repeats}")
+    return {
+        "predicted": np.stack([np.asarray(v) for v in out_of_fold.predicted.values()]),
+        "test_fold": test_fold,
+        "labels": np.asarray(out_of_fold.labels),
+        "recording": np.array(out_of_fold.recording_names, dtype=str),
+    }
+
+
+def _read_out_of_fold(values: Mapping[str, np.ndarray], models: list[str]) -> OutOfFold | None:
+    """The out-of-fold predictions of a result entry; None for an entry that kept none."""
+    if "predicted" not in values:
+        return None
+    predicted = values["predicted"]
+    if predicted.shape[0] != len(models):
+        raise ValueError("model coordinate does not match predicted")
+    return OutOfFold(
+        recording_names=tuple(values["recording"].tolist()),
+        labels=values["labels"],
+        predicted={m: predicted[i] for i, m in enumerate(models)},
+        test_fold=values["test_fold"],
+    )
+
+
+def _recordings_attrs(info: RecordingsInfo | None) -> Attrs:
+    """A result's recordings facts as entry attributes; a fact not known is not written."""
+    if info is None:
+        return {}
+    attrs: Attrs = {}
+    if info.dataset_name is not None:
+        attrs["dataset_name"] = str(info.dataset_name)
+    if info.class_names is not None:
+        names = list(info.class_names)
+        if not all(isinstance(name, str) for name in names):
+            raise ValueError("recordings.class_names: every name must be a str")
+        attrs["class_names"] = names
+    if info.sampling_rate_hz is not None:
+        rate = float(info.sampling_rate_hz)
+        if not (math.isfinite(rate) and rate > 0):
+            raise ValueError(f"recordings.sampling_rate_hz: {rate!r} is not a rate > 0")
+        attrs["sampling_rate_hz"] = rate
+    return attrs
+
+
+def _read_recordings(attrs: Mapping[str, Any]) -> RecordingsInfo | None:
+    """The recordings facts of a result entry; None for an entry that states none (older)."""
+    name, names, rate = (attrs.get(k) for k in ("dataset_name", "class_names", "sampling_rate_hz"))
+    if name is None and names is None and rate is None:
+        return None
+    if name is not None and not isinstance(name, str):
+        raise TypeError("attribute 'dataset_name' is not a str")
+    if names is not None and (
+        not isinstance(names, list) or not all(isinstance(n, str) for n in names)
+    ):
+        raise TypeError("attribute 'class_names' is not a list of str")
+    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, int | float)):
+        raise TypeError("attribute 'sampling_rate_hz' is not a number")
+    return RecordingsInfo(
+        dataset_name=name,
+        class_names=None if names is None else tuple(names),
+        sampling_rate_hz=None if rate is None else float(rate),
+    )

@@ -1,0 +1,666 @@
+"""The stage registry: every level of a scene's simulation, declared once, in data-flow order.
+
+Data flows one way::
+
+    recordings -> taxel signals -> spike trains -> rate matrices -> accuracy
+
+and :data:`LEVELS` holds one :class:`Level` per kept result of that flow:
+
+==============  ========================================  =====================  =================
+level           reads (scene parts)                       after (levels)         timed steps
+==============  ========================================  =====================  =================
+``recordings``  ``dataset``                               --                     ``load``
+``front_end``   ``readout.full_scale_v``                  recordings             ``front_end``
+``spikes``      ``array``, ``readout``, ``seed`` (only    recordings, front_end  ``taxels``,
+                when a named effect draws random numbers)                        ``readout``,
+                                                                                 ``metrics``
+``rates``       ``coding``                                spikes, recordings     ``coding``
+``results``     ``training``                              rates                  ``train_<model>``
+==============  ========================================  =====================  =================
+
+Taxel signals are made inside ``spikes``, one recording at a time, and never kept (they are as
+large as the recordings times the taxels). ``recordings``, ``front_end`` and ``rates`` live in
+memory (a Dask worker keeps a few of each); ``spikes`` and ``results`` are the cache levels,
+whose outputs the sweep store keeps as entries of the same names. Rate matrices are not kept:
+coding a point's trains takes milliseconds, while its matrix is as large as its trains, and a
+sweep of many points would pay for them in files and bytes more than it saves in time. Spike
+trains are kept: encoding a high-density array takes seconds, and every window length and
+training seed of a sweep reuses one train.
+
+A level's cache key (:meth:`Level.key`, :func:`cache_key`) hashes
+:data:`pipeline.design.scene.MODEL_REVISION`, the level's name and the canonical form of the parts
+it and every level before it read: ``recordings`` hashes ``dataset``; ``spikes`` ``dataset``,
+``array``, ``readout`` (and ``seed`` if a named effect draws random numbers); ``rates`` those
+and ``coding``; ``results`` those and ``training``. Its compute function is called with exactly
+those parts, by keyword (the last name of each: ``dataset``, ``full_scale_v``, ``seed``, ...),
+the outputs of the levels it runs after (by level name) and a :class:`Stopwatch` ``watch``,
+never with the whole scene: it cannot use a field its key leaves out.
+A part read only under a condition (the seed) is passed as None when the condition fails.
+
+A stored level's entry holds the seconds of its own steps, of every stored level upstream of it
+(their entries' seconds) and of the in-memory levels upstream of it that no such stored level
+covers: a result entry holds every step of its point, which is all a cube reads.
+
+Adding a stage: write its compute function (keyword-only arguments as above; it times each of
+its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
+levels it needs. To keep its output in the sweep store, give it a
+:class:`~pipeline.run.records.Record`: its variables (dims, dtypes, units), its entry type, and how
+its output becomes that entry and back. The levels after a stored level get its output in a run
+and its entry in a sweep, so they read only what both hold. :func:`pipeline.run.simulate.run_scene`,
+the cache keys, the store's batches, the sweep's work on Dask workers and the stages of a
+cube's ``seconds`` follow from the registry.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pipeline.chain.coding import frames, resolve_n_windows
+from pipeline.chain.frontend import FrontEnd, fit_front_end
+from pipeline.chain.metrics import (
+    SpikeMetrics,
+    data_rate_bps,
+    equivalent_bits,
+    event_rate_hz,
+    pooled_ssnr_db,
+    ste_per_train,
+)
+from pipeline.chain.readout import level_crossings, real_train
+from pipeline.chain.spikes import Encoded, SpikeTrains
+from pipeline.chain.taxels import taxel_delays_s, taxel_signals
+from pipeline.design import fields
+from pipeline.design import scene as scene_module
+from pipeline.design.scene import (
+    ArraySpec,
+    CanonicalMemo,
+    CodingSpec,
+    DatasetSpec,
+    Model,
+    ReadoutSpec,
+    Scene,
+    TrainingSpec,
+)
+from pipeline.recordings.sources import Recordings, load_recordings
+from pipeline.run.records import (
+    METRICS_VARIABLE,
+    OutOfFold,
+    Record,
+    RecordingsInfo,
+    ResultEntry,
+    SpikeEntry,
+    Variable,
+    decode_result_entry,
+    decode_spike_entry,
+    encode_result_entry,
+    encode_spike_entry,
+    train_variables,
+)
+
+if TYPE_CHECKING:
+    from pipeline.chain.training import CrossValidation
+
+# pipeline.chain.training (torch, scikit-learn) is imported by the results level only when it runs:
+# the sweep's coordinator imports this registry (cache keys, cube stages) and never trains.
+
+__all__ = [
+    "FRONT_END",
+    "LEVELS",
+    "RATES",
+    "RECORDINGS",
+    "RESULTS",
+    "SPIKES",
+    "Level",
+    "Rates",
+    "Read",
+    "Spikes",
+    "Stopwatch",
+    "cache_key",
+    "interval_generator",
+    "level_named",
+    "stage_fields",
+    "steps_of",
+    "steps_through",
+    "stored_levels",
+]
+
+
+class Stopwatch:
+    """Accumulates wall seconds per step and reports each step the first time it starts."""
+
+    def __init__(self, on_stage: Callable[[str], None] | None):
+        self.seconds: dict[str, float] = {}
+        self.on_stage = on_stage
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        if self.on_stage is not None and name not in self.seconds:
+            self.on_stage(name)
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - start
+
+
+# ---------------------------------------------------------------------------------------------
+# Outputs
+
+
+@dataclass(frozen=True, eq=False)
+class Spikes:
+    """Output of the ``spikes`` level (its stored :class:`~pipeline.run.records.SpikeEntry` has the
+    same fields).
+
+    Attributes
+    ----------
+    encoded : Encoded
+        TRUE and REAL trains of every taxel of every recording; ``real is true`` for an ideal
+        readout.
+    metrics : SpikeMetrics
+        Scene-level SSNR, STE, rates and resolution.
+    """
+
+    encoded: Encoded
+    metrics: SpikeMetrics
+
+
+@dataclass(frozen=True, eq=False)
+class Rates:
+    """Output of the ``rates`` level, kept in memory by the workers (not in the store).
+
+    Attributes
+    ----------
+    counts : int64 (n_recordings, channels, n_taxels, n_windows)
+        REAL spikes per window.
+    dropped : int64 (n_recordings, n_taxels)
+        REAL spikes outside every window.
+    labels : int64 (n_recordings,)
+        Class index of each recording, into ``class_names``.
+    class_names : tuple[str, ...]
+        Class names.
+    """
+
+    counts: np.ndarray
+    dropped: np.ndarray
+    labels: np.ndarray
+    class_names: tuple[str, ...]
+
+
+# ---------------------------------------------------------------------------------------------
+# Compute functions: one per level, keyword-only, given exactly what their level declares
+
+
+def load(*, dataset: DatasetSpec, watch: Stopwatch) -> Recordings:
+    """Read or generate the recordings."""
+    with watch.stage("load"):
+        return load_recordings(dataset)
+
+
+def fit(*, recordings: Recordings, full_scale_v: float, watch: Stopwatch) -> FrontEnd:
+    """Fit one dataset-wide scaling to ``full_scale_v`` (:mod:`pipeline.chain.frontend`)."""
+    with watch.stage("front_end"):
+        return fit_front_end(recordings, full_scale_v)
+
+
+def encode_trains(
+    recordings: Recordings,
+    front_end: FrontEnd,
+    array: ArraySpec,
+    readout: ReadoutSpec,
+    seed: int | None,
+    watch: Stopwatch,
+) -> Encoded:
+    """TRUE and REAL spike trains of every taxel of every recording (steps ``taxels``, ``readout``).
+
+    Taxels that see the same signal share one TRUE train; an ideal readout returns the TRUE
+    trains as the REAL ones without encoding again. ``seed`` seeds the readout's random effects
+    (None if it names none).
+    """
+    delays = taxel_delays_s(array)
+    fs = recordings.fs_hz
+    theta = readout.threshold_v
+    true_trains, real_trains, durations = [], [], []
+    for index, signal in enumerate(recordings.signals):
+        with watch.stage("taxels"):
+            taxels = taxel_signals(front_end.apply(signal), fs, delays)
+        with watch.stage("readout"):
+            per_row = [level_crossings(row, fs, theta) for row in taxels.signals]
+            true = [per_row[row] for row in taxels.taxel_row]
+            true_trains.extend(true)
+            durations.append((taxels.n_samples - 1) / fs)
+            if readout.is_ideal:
+                continue
+            real_trains.extend(
+                real_train(
+                    taxels.taxel(taxel),
+                    fs,
+                    readout,
+                    seed=seed,
+                    taxel=taxel,
+                    recording=index,
+                )
+                for taxel in range(taxels.n_taxels)
+            )
+    n_taxels = array.n_taxels
+    true_set = SpikeTrains.concatenate(true_trains, n_taxels, np.asarray(durations))
+    if readout.is_ideal:
+        return Encoded(true_set, true_set)
+    return Encoded(true_set, SpikeTrains.concatenate(real_trains, n_taxels, true_set.duration_s))
+
+
+def spike_metrics(encoded: Encoded, readout: ReadoutSpec) -> SpikeMetrics:
+    """Scene-level SSNR (pooled), STE (mean over trains), rates and resolution."""
+    return SpikeMetrics(
+        ssnr_db=pooled_ssnr_db(encoded.true.count, encoded.real.count),
+        ste_s2=float(ste_per_train(encoded.true, encoded.real, "paper").mean()),
+        ste_sign_safe_s2=float(ste_per_train(encoded.true, encoded.real, "sign_safe").mean()),
+        event_rate_hz=event_rate_hz(encoded.real),
+        data_rate_bps=data_rate_bps(encoded.real),
+        equivalent_bits=equivalent_bits(readout.full_scale_v, readout.threshold_v),
+    )
+
+
+def encode_spikes(
+    *,
+    recordings: Recordings,
+    front_end: FrontEnd,
+    array: ArraySpec,
+    readout: ReadoutSpec,
+    seed: int | None,
+    watch: Stopwatch,
+) -> Spikes:
+    """Encode every taxel of every recording, then measure the trains (step ``metrics``)."""
+    encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
+    with watch.stage("metrics"):
+        return Spikes(encoded, spike_metrics(encoded, readout))
+
+
+def rate_frames(real: SpikeTrains, coding: CodingSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Rate-coded frames of the REAL trains: ``counts`` int64 (n_rec, C, taxels, windows), and
+    ``dropped`` int64 (n_rec, taxels); the number of windows is resolved for these recordings."""
+    n_windows = resolve_n_windows(coding, real.duration_s)
+    return frames(real, coding.window_s, n_windows, coding.polarity)
+
+
+def code_rates(
+    *, spikes: Spikes, recordings: Recordings, coding: CodingSpec, watch: Stopwatch
+) -> Rates:
+    """Rate-code the REAL trains (step ``coding``), labelled by the recordings' classes."""
+    with watch.stage("coding"):
+        counts, dropped = rate_frames(spikes.encoded.real, coding)
+    return Rates(counts, dropped, recordings.labels, recordings.class_names)
+
+
+def classify(
+    *, rates: Rates, training: TrainingSpec, watch: Stopwatch
+) -> dict[Model, CrossValidation]:
+    """Cross-validate every model ``training`` names on the same frames (steps ``train_<m>``)."""
+    from pipeline.chain.training import cross_validate
+
+    accuracy = {}
+    for model in training.models:
+        with watch.stage(f"train_{model.value}"):
+            accuracy[model] = cross_validate(
+                rates.counts, rates.labels, model, training, class_names=rates.class_names
+            )
+    return accuracy
+
+
+# ---------------------------------------------------------------------------------------------
+# The registry
+
+
+def _draws_random_numbers(scene: Scene) -> bool:
+    return scene.readout.is_random
+
+
+@dataclass(frozen=True)
+class Read:
+    """One scene part a level reads.
+
+    Attributes
+    ----------
+    path : str
+        A top-level scene part (``"dataset"``, ``"seed"``) or one field of one (dotted,
+        ``"readout.full_scale_v"``); the compute function gets it as its last name.
+    when : callable, optional
+        Read (passed, and hashed into the key) only for scenes where ``when(scene)`` holds;
+        otherwise passed as None.
+    """
+
+    path: str
+    when: Callable[[Scene], bool] | None = None
+
+    @property
+    def argument(self) -> str:
+        return self.path.rsplit(".", 1)[-1]
+
+    def applies(self, scene: Scene) -> bool:
+        return self.when is None or self.when(scene)
+
+    def value(self, scene: Scene) -> Any:
+        return fields.get(scene, self.path) if self.applies(scene) else None
+
+
+@dataclass(frozen=True, eq=False)
+class Level:
+    """One level of the data flow: what it reads, what it runs after, how it is computed.
+
+    Attributes
+    ----------
+    name : str
+        Names its output: the argument later levels get it as, the tag of its cache key and,
+        for a stored level, its entry kind in the sweep store (``record.name``).
+    reads : tuple of Read
+        The scene parts its compute function reads.
+    after : tuple of Level
+        The levels whose outputs its compute function takes, each declared before it.
+    compute : callable
+        ``compute(**outputs_of_after, **parts_read, watch=stopwatch) -> output``.
+    steps : tuple of str
+        The steps it times, in order; ``{model}`` stands for each model the scene trains.
+    record : Record or None
+        What the sweep store keeps of its output (a cache level); None: workers keep its output
+        in memory.
+    """
+
+    name: str
+    reads: tuple[Read, ...]
+    after: tuple[Level, ...]
+    compute: Callable[..., Any]
+    steps: tuple[str, ...]
+    record: Record | None = None
+
+    def __repr__(self) -> str:
+        return f"Level({self.name!r})"
+
+    @property
+    def stored(self) -> bool:
+        """Whether the sweep store keeps its output."""
+        return self.record is not None
+
+    def upstream(self) -> tuple[Level, ...]:
+        """Every level this one needs, directly or through others, each once, inputs first."""
+        return self._upstream
+
+    @functools.cached_property
+    def _upstream(self) -> tuple[Level, ...]:
+        found: dict[str, Level] = {}
+        for before in self.after:
+            for level in (*before.upstream(), before):
+                found.setdefault(level.name, level)
+        return tuple(found.values())
+
+    @functools.cached_property
+    def _all_reads(self) -> tuple[Read, ...]:
+        return tuple(read for level in (*self.upstream(), self) for read in level.reads)
+
+    @functools.cached_property
+    def _parts_by_condition(self) -> dict[tuple[bool, ...], tuple[str, ...]]:
+        # The parts depend on the scene only through which conditional reads apply: computed
+        # once per such combination, as a grid asks for the keys of many scenes.
+        return {}
+
+    def key_parts(self, scene: Scene) -> tuple[str, ...]:
+        """The scene parts this level's output depends on: what it and its upstream read.
+
+        A field whose whole part is read too is left to the part (``readout.full_scale_v``
+        within ``readout``).
+        """
+        reads = self._all_reads
+        applies = tuple(read.applies(scene) for read in reads if read.when is not None)
+        parts = self._parts_by_condition.get(applies)
+        if parts is None:
+            conditions = iter(applies)
+            paths: dict[str, None] = {}
+            for read in reads:
+                if read.when is None or next(conditions):
+                    paths.setdefault(read.path, None)
+            parts = tuple(p for p in paths if not any(p.startswith(f"{q}.") for q in paths))
+            self._parts_by_condition[applies] = parts
+        return parts
+
+    def key(self, scene: Scene, memo: CanonicalMemo | None = None) -> str:
+        """SHA-256 (hex, 32 chars) of :data:`pipeline.design.scene.MODEL_REVISION`, the level's name
+        and the canonical form of exactly :meth:`key_parts`; ``memo`` as for
+        :meth:`pipeline.design.scene.Scene.canonical` (the key does not depend on it)."""
+        canonical = scene.canonical(self.key_parts(scene), memo)
+        text = f"r{scene_module.MODEL_REVISION}:{self.name}:" + canonical
+        return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+    def step_names(self, scene: Scene) -> tuple[str, ...]:
+        """The steps this level times for ``scene``, in order."""
+        return self.steps_for([m.value for m in scene.training.models])
+
+    def steps_for(self, models: Sequence[str]) -> tuple[str, ...]:
+        """The steps this level times for a scene training ``models`` (names), in order."""
+        return tuple(
+            name
+            for step in self.steps
+            for name in ([step.format(model=m) for m in models] if "{model}" in step else [step])
+        )
+
+    def run(self, scene: Scene, outputs: Mapping[str, Any], watch: Stopwatch) -> Any:
+        """Compute this level's output for ``scene`` from the ``outputs`` of its inputs (by
+        level name; other entries are ignored), timing its steps on ``watch``.
+
+        Raises
+        ------
+        RuntimeError
+            The compute function timed other steps than the level declares (a programming
+            error: a cube would miss them).
+        """
+        arguments = {before.name: outputs[before.name] for before in self.after}
+        for read in self.reads:
+            arguments[read.argument] = read.value(scene)
+        timed_before = set(watch.seconds)
+        output = self.compute(**arguments, watch=watch)
+        timed = set(watch.seconds) - timed_before
+        declared = set(self.step_names(scene))
+        if timed != declared:
+            raise RuntimeError(
+                f"level {self.name!r} timed steps {sorted(timed)}, declared {sorted(declared)}"
+            )
+        return output
+
+
+# ---------------------------------------------------------------------------------------------
+# How the stored levels' outputs become entries (see pipeline.run.records for their codecs)
+
+
+def _spike_entry(
+    output: Spikes, seconds: dict[str, float], made: Callable[[str], Any]
+) -> SpikeEntry:
+    return SpikeEntry(output.encoded, output.metrics, seconds)
+
+
+def _result_entry(
+    accuracy: dict[Model, CrossValidation],
+    seconds: dict[str, float],
+    made: Callable[[str], Any],
+) -> ResultEntry:
+    """A point's result: all a cube reads of it, so it also carries its spike metrics, what its
+    recordings were and the number of windows its frames had."""
+    recordings = made(RECORDINGS.name)
+    return ResultEntry(
+        fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
+        seconds=seconds,
+        metrics=made(SPIKES.name).metrics,
+        recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
+        out_of_fold=OutOfFold(
+            recording_names=tuple(recordings.names),
+            labels=recordings.labels,
+            predicted={model.value: cv.predicted for model, cv in accuracy.items()},
+            test_fold=next(iter(accuracy.values())).test_fold,
+        ),
+        n_windows_used=int(made(RATES.name).counts.shape[-1]),
+    )
+
+
+RECORDINGS = Level(
+    name="recordings",
+    reads=(Read("dataset"),),
+    after=(),
+    compute=load,
+    steps=("load",),
+)
+FRONT_END = Level(
+    name="front_end",
+    reads=(Read("readout.full_scale_v"),),
+    after=(RECORDINGS,),
+    compute=fit,
+    steps=("front_end",),
+)
+SPIKES = Level(
+    name="spikes",
+    reads=(Read("array"), Read("readout"), Read("seed", when=_draws_random_numbers)),
+    after=(RECORDINGS, FRONT_END),
+    compute=encode_spikes,
+    steps=("taxels", "readout", "metrics"),
+    record=Record(
+        name="spikes",
+        entry_type=SpikeEntry,
+        variables=(
+            *train_variables("true"),
+            *train_variables("real", optional=True),
+            Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
+            METRICS_VARIABLE,
+        ),
+        make=_spike_entry,
+        encode=encode_spike_entry,
+        decode=decode_spike_entry,
+    ),
+)
+RATES = Level(
+    name="rates",
+    reads=(Read("coding"),),
+    after=(SPIKES, RECORDINGS),
+    compute=code_rates,
+    steps=("coding",),
+)
+RESULTS = Level(
+    name="results",
+    reads=(Read("training"),),
+    after=(RATES,),
+    compute=classify,
+    steps=("train_{model}",),
+    record=Record(
+        name="results",
+        entry_type=ResultEntry,
+        variables=(
+            Variable("accuracy", ("model", "repeat", "fold"), "float64", "1", "fold accuracy"),
+            Variable("model", ("model",), "str", "1", "classifier"),
+            Variable(
+                "n_windows_used",
+                (),
+                "int64",
+                "1",
+                "rate-coding windows the point used (coding.n_windows resolved)",
+                optional=True,
+            ),
+            Variable(
+                "predicted",
+                ("model", "repeat", "recording"),
+                "int64",
+                "1",
+                "out-of-fold predicted class",
+                optional=True,
+            ),
+            Variable(
+                "test_fold", ("repeat", "recording"), "int64", "1", "testing fold", optional=True
+            ),
+            Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
+            Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
+            METRICS_VARIABLE,
+        ),
+        make=_result_entry,
+        encode=encode_result_entry,
+        decode=decode_result_entry,
+    ),
+)
+
+
+def _checked(*levels: Level) -> tuple[Level, ...]:
+    """The registry, refused at import if a level could not run in this order."""
+    names: set[str] = set()
+    steps: set[str] = set()
+    for level in levels:
+        problems = []
+        if level.name in names:
+            problems.append("its name is taken")
+        if level.record is not None and level.record.name != level.name:
+            problems.append(f"its record is named {level.record.name!r}")
+        problems += [
+            f"runs after {b.name!r}, declared later" for b in level.after if b.name not in names
+        ]
+        arguments = [b.name for b in level.after] + [r.argument for r in level.reads]
+        if len(set(arguments)) != len(arguments) or "watch" in arguments:
+            problems.append(f"its compute arguments clash: {arguments}")
+        if steps & set(level.steps):
+            problems.append(f"steps {sorted(steps & set(level.steps))} are timed by another level")
+        if problems:
+            raise ValueError(f"stage registry: level {level.name!r}: {'; '.join(problems)}")
+        names.add(level.name)
+        steps.update(level.steps)
+    return levels
+
+
+#: Every level, in data-flow order (each after the levels it needs).
+LEVELS: tuple[Level, ...] = _checked(RECORDINGS, FRONT_END, SPIKES, RATES, RESULTS)
+
+
+def level_named(name: str) -> Level:
+    """The level of :data:`LEVELS` called ``name``."""
+    for level in LEVELS:
+        if level.name == name:
+            return level
+    known = ", ".join(level.name for level in LEVELS)
+    raise ValueError(f"no stage {name!r} (known: {known})")
+
+
+def stored_levels() -> tuple[Level, ...]:
+    """The levels of :data:`LEVELS` whose outputs the sweep store keeps, in order."""
+    return tuple(level for level in LEVELS if level.stored)
+
+
+def steps_of(models: Sequence[str]) -> tuple[str, ...]:
+    """Every step of :data:`LEVELS`, in order, for scenes training ``models`` (names, in the
+    order given): the ``stage`` coordinate of a cube."""
+    return tuple(step for level in LEVELS for step in level.steps_for(models))
+
+
+def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:
+    """The scene parts the output of ``stage`` depends on (:meth:`Level.key_parts`)."""
+    return level_named(stage).key_parts(scene)
+
+
+def cache_key(scene: Scene, stage: str, memo: CanonicalMemo | None = None) -> str:
+    """The cache key of ``stage``'s output for ``scene`` (:meth:`Level.key`)."""
+    return level_named(stage).key(scene, memo)
+
+
+def interval_generator(result_key: str, model: str) -> np.random.Generator:
+    """The generator of the bootstrap interval of ``model``'s accuracy at the point whose result
+    key is ``result_key``: seeded from the key and the model's name alone, so that a design gets
+    one interval wherever it is computed (any sweep, any grid position, ``eskin run``)."""
+    return np.random.default_rng([int(result_key, 16), *model.encode()])
+
+
+def steps_through(name: str) -> tuple[str, ...]:
+    """The steps of level ``name`` and of every level it needs, in data-flow order.
+
+    Only for levels whose steps do not depend on the scene (no ``{model}``).
+    """
+    level = level_named(name)
+    steps = tuple(step for each in (*level.upstream(), level) for step in each.steps)
+    if any("{model}" in step for step in steps):
+        raise ValueError(f"the steps of stage {name!r} depend on the scene's models")
+    return steps

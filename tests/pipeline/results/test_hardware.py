@@ -1,0 +1,221 @@
+"""Tests of the energy model: frame data rate, readout powers and the model's constants."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.results.hardware import (
+    MAX_BITS,
+    EnergyModel,
+    energy_per_decision_j,
+    event_power_w,
+    frame_data_rate_bps,
+    frame_power_w,
+)
+
+# Round constants so that every expected value below is plain arithmetic.
+MODEL = EnergyModel(event_energy_j=2e-11, adc_fom_j_per_step=5e-15, link_energy_j_per_bit=1e-12)
+
+
+def test_frame_data_rate_is_taxels_times_rate_times_bits():
+    # Table I's ref. [16]: 10-bit frames at 9.6 kHz; 9 taxels.
+    got = frame_data_rate_bps(9, 9600.0, 10)
+    assert got == 864_000.0
+    assert type(got) is float
+
+
+def test_frame_data_rate_of_integers_is_float_and_does_not_wrap():
+    assert type(frame_data_rate_bps(np.int64(9), np.int64(100), np.int64(10))) is float
+    got = frame_data_rate_bps(np.array([2**40]), np.array([2**30]), np.array([60]))
+    assert got.dtype == np.float64
+    assert got[0] == pytest.approx(2.0**70 * 60, rel=1e-12)
+
+
+def test_event_power_by_hand():
+    # 50 events/s of a 9-taxel array: 5 bits per event, 250 bit/s.
+    # 50 * 20 pJ + 250 * 1 pJ = 1000 pJ/s + 250 pJ/s = 1.25 nW.
+    got = event_power_w(50.0, 250.0, MODEL)
+    assert got == pytest.approx(1.25e-9, rel=1e-12)
+    assert type(got) is float
+
+
+def test_frame_power_by_hand():
+    # 4 taxels x 1 kHz x (5 fJ * 2**8 + 8 bit * 1 pJ) = 4000 * (1.28 pJ + 8 pJ) = 37.12 nW.
+    got = frame_power_w(4, 1000.0, 8, MODEL)
+    assert got == pytest.approx(37.12e-9, rel=1e-12)
+
+
+def test_frame_power_accepts_fractional_bits():
+    # 1 taxel x 1 Hz x (5 fJ * 2**3.5 + 3.5 pJ)
+    got = frame_power_w(1, 1.0, 3.5, MODEL)
+    assert got == pytest.approx(5e-15 * 2**3.5 + 3.5e-12, rel=1e-12)
+
+
+def test_default_model_is_used_when_none_is_given():
+    assert event_power_w(1.0, 0.0) == EnergyModel().event_energy_j
+    assert frame_power_w(1, 1.0, 0) == EnergyModel().adc_fom_j_per_step
+
+
+def test_energy_per_decision_is_power_times_observation():
+    assert energy_per_decision_j(2e-9, 4.0) == pytest.approx(8e-9, rel=1e-12)
+
+
+def test_functions_broadcast_over_numpy_arrays():
+    rates = np.array([0.0, 10.0, 100.0])
+    np.testing.assert_allclose(
+        event_power_w(rates, 5 * rates, MODEL), rates * 2e-11 + 5 * rates * 1e-12, rtol=1e-12
+    )
+    taxels = np.array([[1], [4]])
+    bits = np.array([4, 8])
+    power = frame_power_w(taxels, 100.0, bits, MODEL)
+    expected = taxels * 100.0 * (5e-15 * 2.0**bits + bits * 1e-12)
+    assert power.shape == (2, 2)
+    np.testing.assert_allclose(power, expected, rtol=1e-12)
+    np.testing.assert_array_equal(frame_data_rate_bps(taxels, 100.0, bits), taxels * 100.0 * bits)
+
+
+def test_lists_are_taken_as_arrays():
+    np.testing.assert_array_equal(frame_data_rate_bps([1, 2], 10, 3), [30.0, 60.0])
+
+
+def test_data_arrays_keep_their_coordinates():
+    threshold_v = [0.05, 0.09, 0.2]
+    events = xr.DataArray(
+        [100.0, 50.0, 10.0], dims="threshold_v", coords={"threshold_v": threshold_v}
+    )
+    power = event_power_w(events, events * 5, MODEL)
+    assert isinstance(power, xr.DataArray)
+    assert power.dims == ("threshold_v",)
+    np.testing.assert_array_equal(power["threshold_v"], threshold_v)
+    np.testing.assert_allclose(power, events.values * 2.5e-11, rtol=1e-12)
+
+    bits = xr.DataArray([4.0, 8.0], dims="bits", coords={"bits": [4.0, 8.0]})
+    frame = frame_power_w(9, 9600.0, bits, MODEL)
+    assert frame.dims == ("bits",)
+    np.testing.assert_allclose(
+        frame, 9 * 9600.0 * (5e-15 * 2.0**bits.values + bits.values * 1e-12), rtol=1e-12
+    )
+    ratio = frame / power
+    assert ratio.dims == ("bits", "threshold_v")
+
+    energy = energy_per_decision_j(power, xr.DataArray(4.0))
+    np.testing.assert_array_equal(energy["threshold_v"], threshold_v)
+
+
+def test_zero_rates_give_zero_power_not_nan():
+    assert event_power_w(0.0, 0.0, MODEL) == 0.0
+    assert frame_power_w(0, 1000.0, MAX_BITS, MODEL) == 0.0
+    assert frame_power_w(9, 0.0, MAX_BITS, MODEL) == 0.0
+    assert frame_data_rate_bps(9, 1000.0, 0) == 0.0
+    assert energy_per_decision_j(0.0, 4.0) == 0.0
+    zeros = frame_power_w(np.zeros(3), np.zeros(3), np.full(3, MAX_BITS), MODEL)
+    np.testing.assert_array_equal(zeros, np.zeros(3))
+
+
+def test_a_zero_model_costs_nothing():
+    zero = EnergyModel(0.0, 0.0, 0.0)
+    assert event_power_w(10.0, 50.0, zero) == 0.0
+    assert frame_power_w(9, 1000.0, 10, zero) == 0.0
+
+
+CALLS = {
+    "n_taxels": lambda v: frame_power_w(v, 1.0, 8),
+    "sampling_rate_hz": lambda v: frame_data_rate_bps(1, v, 8),
+    "bits": lambda v: frame_power_w(1, 1.0, v),
+    "event_rate_hz": lambda v: event_power_w(v, 1.0),
+    "data_rate_bps": lambda v: event_power_w(1.0, v),
+    "power_w": lambda v: energy_per_decision_j(v, 1.0),
+    "observation_s": lambda v: energy_per_decision_j(1.0, v),
+}
+
+
+@pytest.mark.parametrize("name", list(CALLS))
+@pytest.mark.parametrize("value", [-0.5, -1e-300, math.nan, math.inf])
+def test_bad_numbers_are_refused_naming_the_argument(name, value):
+    with pytest.raises(ValueError, match=rf"^{name} must be finite and >= 0, got {value!r}"):
+        CALLS[name](value)
+
+
+@pytest.mark.parametrize("name", list(CALLS))
+def test_one_bad_element_of_an_array_is_refused(name):
+    with pytest.raises(ValueError, match=rf"^{name} .* got -2\.0 \(1 of 3 values\)"):
+        CALLS[name](np.array([1.0, -2.0, 3.0]))
+    with pytest.raises(ValueError, match=rf"^{name} .* got nan"):
+        CALLS[name](xr.DataArray([1.0, math.nan], dims="x"))
+
+
+@pytest.mark.parametrize("value", [True, "8", None, np.array([1 + 1j])])
+def test_non_numbers_are_refused(value):
+    with pytest.raises(ValueError, match=r"^bits must be a number or an array of numbers"):
+        frame_data_rate_bps(1, 1.0, value)
+
+
+def test_bits_above_the_maximum_are_refused():
+    one_joule_per_step = EnergyModel(0, 1.0, 0)
+    assert frame_power_w(1, 1.0, MAX_BITS, one_joule_per_step) == 2.0**MAX_BITS
+    integer_bits = np.array([MAX_BITS - 1, MAX_BITS])  # 2**bits would wrap in int64
+    np.testing.assert_array_equal(
+        frame_power_w(1, 1.0, integer_bits, one_joule_per_step), [2.0**63, 2.0**64]
+    )
+    with pytest.raises(ValueError, match=rf"^bits must be at most {MAX_BITS}, got 65\.0"):
+        frame_power_w(1, 1.0, [8, MAX_BITS + 1])
+
+
+def test_model_must_be_an_energy_model():
+    with pytest.raises(TypeError, match="model must be an EnergyModel, got dict"):
+        event_power_w(1.0, 1.0, {"event_energy_j": 1e-12})
+
+
+FIELDS = [f.name for f in fields(EnergyModel)]
+
+
+@pytest.mark.parametrize("name", FIELDS)
+@pytest.mark.parametrize("value", [-1e-12, math.nan, math.inf, "1e-12", True, None])
+def test_model_constants_are_validated_naming_field_and_value(name, value):
+    with pytest.raises(
+        ValueError,
+        match=rf"^EnergyModel\.{name} must be a finite number >= 0, got {value!r}$",
+    ):
+        EnergyModel(**{name: value})
+
+
+def test_defaults_are_finite_and_positive():
+    model = EnergyModel()
+    for name in FIELDS:
+        value = getattr(model, name)
+        assert isinstance(value, float)
+        assert math.isfinite(value)
+        assert value > 0
+
+
+def test_default_assumptions_state_each_value_and_source():
+    sentences = EnergyModel().assumptions()
+    assert len(sentences) == len(FIELDS)
+    assert sentences[0].startswith("event_energy_j = 10 pJ per event (energy of ")
+    assert sentences[1].startswith("adc_fom_j_per_step = 10 fJ per conversion step (Walden ")
+    assert sentences[2].startswith("link_energy_j_per_bit = 1 pJ per bit (energy per bit ")
+    assert "neuromorphic" in sentences[0]
+    assert "Murmann" in sentences[1]
+    assert "serial links" in sentences[2]
+    assert all("): an order-of-magnitude assumption from " in s for s in sentences)
+    assert all(s.endswith(".") and ". " not in s.replace("B. ", "") for s in sentences)
+
+
+def test_user_values_are_named_with_the_default_beside_them():
+    sentences = EnergyModel(
+        event_energy_j=2.5e-11, adc_fom_j_per_step=0.0, link_energy_j_per_bit=3e-9
+    ).assumptions()
+    assert sentences[0].startswith("event_energy_j = 25 pJ per event (")
+    assert (
+        "): set by the user; the default, 10 pJ per event, is an order-of-magnitude "
+        in (sentences[0])
+    )
+    assert sentences[1].startswith("adc_fom_j_per_step = 0 J per conversion step (")
+    assert "the default, 10 fJ per conversion step, is" in sentences[1]
+    assert sentences[2].startswith("link_energy_j_per_bit = 3 nJ per bit (")
+    assert "the default, 1 pJ per bit, is" in sentences[2]

@@ -1,0 +1,255 @@
+"""The stage registry: keys of earlier stores stay valid, a key follows exactly what its level
+reads, and a scene run reports exactly the registry's steps."""
+
+import enum
+import inspect
+from dataclasses import dataclass
+
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from pipeline.design import fields
+from pipeline.design.fields import param, part
+from pipeline.design.scene import ReadoutSpec, Scene
+from pipeline.run.simulate import run_scene, stage_names
+from pipeline.run.stages import (
+    FRONT_END,
+    LEVELS,
+    RECORDINGS,
+    SPIKES,
+    Level,
+    Read,
+    Stopwatch,
+    _checked,
+    cache_key,
+    level_named,
+    steps_through,
+)
+
+SMOKE = Scene.builtin("smoke")
+PAPER = Scene.paper()
+NOISY = SMOKE.replace(
+    seed=5, **{"readout.effects": {"amplifier_noise": {"sigma_v": 0.01}, "saturation": {}}}
+)
+SATURATING = PAPER.replace(
+    **{"readout.effects": {"saturation": {"rail_v": 0.4}}, "coding.polarity": "split"}
+)
+
+# The keys of stores made at this MODEL_REVISION (4): a change of code that alters them without a
+# revision bump would recompute every store made so far instead of reusing it.
+EARLIER_KEYS = {
+    "smoke": (
+        SMOKE,
+        {
+            "recordings": "df8af45b626a70f0dbeb2fc18251b580",
+            "spikes": "9c8a25dcb87620e2d1bf4b7c362fc675",
+            "rates": "a9f9b276e01efaf41cd5d628a1028150",
+            "results": "c31e6ef474f7df2fbdd070f571b68dd8",
+        },
+    ),
+    "paper": (
+        PAPER,
+        {
+            "recordings": "dd5088c9b0c69287f853e69f491f8ea7",
+            "spikes": "da3cf67b10e20d56192e816913205be6",
+            "rates": "4936e29a6141174d46de9b8787700c04",
+            "results": "6ce563713a2f6b3bd584b03e3fc9e12d",
+        },
+    ),
+    "noisy": (
+        NOISY,
+        {
+            "recordings": "df8af45b626a70f0dbeb2fc18251b580",
+            "spikes": "bbedd5a82ba6696eb6bb212c27e2d3ab",
+            "rates": "4e4004ffb5859925df4208406f6c56bd",
+            "results": "e5a9e27977170cb1afcab9e2e861a1bf",
+        },
+    ),
+    "saturating": (
+        SATURATING,
+        {
+            "recordings": "dd5088c9b0c69287f853e69f491f8ea7",
+            "spikes": "55ce240ec748ba2eb98a00dfdc7d3efc",
+            "rates": "0e8b55229dbfe4705b6c5025874a7d1d",
+            "results": "f75858f0ed243477d9d1677c0b9816f3",
+        },
+    ),
+}
+
+
+@pytest.mark.parametrize("name", EARLIER_KEYS)
+def test_keys_of_earlier_stores_stay_valid(name):
+    scene, keys = EARLIER_KEYS[name]
+    assert {stage: level_named(stage).key(scene) for stage in keys} == keys
+    assert {stage: cache_key(scene, stage) for stage in keys} == keys
+
+
+class Encoder(enum.StrEnum):
+    """A test-only option: today's level-crossing encoder and another one."""
+
+    LCS = "lcs"
+    DECAYING = "decaying"
+
+
+@dataclass(frozen=True)
+class ReadoutWithEncoder(ReadoutSpec):
+    """The readout with a field added in this test alone, whose default is what the readout
+    does today, declared neutral."""
+
+    encoder: Encoder = param(Encoder.LCS, "1", "encoder architecture", neutral=True)
+
+
+@dataclass(frozen=True)
+class SceneWithEncoder(Scene):
+    readout: ReadoutWithEncoder = part(ReadoutWithEncoder)
+
+
+@dataclass(frozen=True)
+class ReadoutWithKeyedEncoder(ReadoutSpec):
+    """The same field, its default not declared neutral."""
+
+    encoder: Encoder = param(Encoder.LCS, "1", "encoder architecture")
+
+
+@dataclass(frozen=True)
+class SceneWithKeyedEncoder(Scene):
+    readout: ReadoutWithKeyedEncoder = part(ReadoutWithKeyedEncoder)
+
+
+@pytest.mark.parametrize("name", EARLIER_KEYS)
+def test_a_new_field_at_its_neutral_default_leaves_every_key_unchanged(name):
+    scene, keys = EARLIER_KEYS[name]
+    extended = SceneWithEncoder.from_dict(scene.to_dict())
+    assert extended.readout.encoder is Encoder.LCS
+    assert extended.to_dict()["readout"]["encoder"] == "lcs"  # a field like any other
+    assert {stage: level_named(stage).key(extended) for stage in keys} == keys
+    assert {stage: cache_key(extended, stage) for stage in keys} == keys
+    # Another value is part of the key of every level that reads the readout.
+    other = extended.replace(**{"readout.encoder": "decaying"})
+    assert isinstance(other, SceneWithEncoder) and other.readout.encoder is Encoder.DECAYING
+    changed = {stage for stage in keys if level_named(stage).key(other) != keys[stage]}
+    assert changed == {"spikes", "rates", "results"}
+    # Named at its default, the field is still left out: the key is that of the scene.
+    named = other.replace(**{"readout.encoder": "lcs"})
+    assert {stage: level_named(stage).key(named) for stage in keys} == keys
+
+
+def test_a_new_field_not_declared_neutral_changes_the_keys_that_read_it():
+    scene, keys = EARLIER_KEYS["paper"]
+    extended = SceneWithKeyedEncoder.from_dict(scene.to_dict())
+    changed = {stage for stage in keys if level_named(stage).key(extended) != keys[stage]}
+    assert changed == {"spikes", "rates", "results"}
+
+
+# Which levels read each scene part, stated independently of the registry.
+READ_BY = {
+    "dataset": {"recordings", "front_end", "spikes", "rates", "results"},
+    "array": {"spikes", "rates", "results"},
+    "readout": {"spikes", "rates", "results"},
+    "coding": {"rates", "results"},
+    "training": {"results"},
+    "name": set(),
+}
+FIELDS = {
+    "dataset.duration_s": st.floats(0.5, 20.0),
+    "dataset.seed": st.integers(0, 2**40),
+    "array.rows": st.integers(1, 8),
+    "array.pitch_mm": st.floats(0.1, 5.0),
+    "readout.threshold_v": st.floats(0.01, 0.5),
+    "readout.full_scale_v": st.floats(0.6, 5.0),
+    "coding.window_s": st.floats(0.01, 1.0),
+    "coding.polarity": st.sampled_from(["merged", "split"]),
+    "training.epochs": st.integers(1, 500),
+    "training.seed": st.integers(0, 2**40),
+    "seed": st.integers(0, 2**40),
+    "name": st.text(min_size=1, max_size=8),
+}
+
+
+def _readers(scene: Scene, field: str) -> set[str]:
+    """The levels whose key must change with ``field``."""
+    if field == "seed":  # the scene seed only seeds random readout effects
+        return {"spikes", "rates", "results"} if scene.readout.is_random else set()
+    if field == "readout.full_scale_v":  # the front end scales to the full scale
+        return READ_BY["readout"] | {"front_end"}
+    return READ_BY[field.split(".")[0]]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    base=st.sampled_from([SMOKE, NOISY, SATURATING]),
+    field_and_value=st.sampled_from(sorted(FIELDS)).flatmap(
+        lambda field: st.tuples(st.just(field), FIELDS[field])
+    ),
+)
+def test_a_key_changes_exactly_when_a_field_its_level_reads_changes(base, field_and_value):
+    field, value = field_and_value
+    assume(fields.get(base.to_dict(), field) != value)
+    changed = base.replace(**{field: value})
+    differs = {level.name for level in LEVELS if level.key(changed) != level.key(base)}
+    assert differs == _readers(base, field)
+
+
+def test_a_compute_function_takes_only_what_its_level_declares():
+    for level in LEVELS:
+        parameters = inspect.signature(level.compute).parameters
+        declared = {b.name for b in level.after} | {r.argument for r in level.reads} | {"watch"}
+        assert set(parameters) == declared, level.name
+        assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in parameters.values())
+
+
+def test_the_seed_is_passed_only_when_a_random_effect_is_named():
+    seed = next(read for read in SPIKES.reads if read.path == "seed")
+    assert seed.value(SMOKE.replace(seed=3)) is None
+    assert seed.value(NOISY) == 5
+    assert "seed" not in SPIKES.key_parts(SATURATING)
+
+
+def test_spike_steps_are_those_of_the_levels_up_to_the_spike_trains():
+    assert steps_through("spikes") == ("load", "front_end", "taxels", "readout", "metrics")
+    with pytest.raises(ValueError, match="models"):
+        steps_through("results")
+
+
+def test_stage_names_follow_the_registry_and_the_models():
+    scene = SMOKE.replace(**{"training.models": ["cnn"]})
+    assert stage_names(scene) == (
+        "load",
+        "front_end",
+        "taxels",
+        "readout",
+        "metrics",
+        "coding",
+        "train_cnn",
+    )
+
+
+def test_run_scene_times_exactly_the_stage_names():
+    scene = SMOKE.replace(
+        **{
+            "dataset.recordings_per_class": 2,
+            "dataset.duration_s": 1.0,
+            "training.epochs": 1,
+            "training.folds": 2,
+        }
+    )
+    started = []
+    result = run_scene(scene, on_stage=started.append)
+    assert tuple(result.timings_s) == stage_names(scene) == tuple(started)
+    assert set(result.accuracy) == set(scene.training.models)
+
+
+def test_a_level_that_times_an_undeclared_step_fails():
+    def compute(*, dataset, watch):
+        with watch.stage("elsewhere"):
+            return dataset
+
+    level = Level("odd", (Read("dataset"),), (), compute, ("load",))
+    with pytest.raises(RuntimeError, match="elsewhere"):
+        level.run(SMOKE, {}, Stopwatch(None))
+
+
+def test_the_registry_refuses_a_level_before_its_inputs():
+    with pytest.raises(ValueError, match="runs after 'recordings'"):
+        _checked(FRONT_END, RECORDINGS)
