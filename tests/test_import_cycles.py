@@ -133,3 +133,14 @@ def test_function_local_imports_count_and_type_checking_ones_do_not(tmp_path):
     )
     found = {node.module for node in imports(ast.parse(source)) if isinstance(node, ast.ImportFrom)}
     assert found == {"typing", "pipeline.c"}
+
+
+def test_the_walk_reaches_every_sub_package():
+    names = project_modules().keys()
+    assert {
+        "pipeline.design.scene",
+        "pipeline.design.scenes",
+        "pipeline.recordings.sources",
+    } <= names
+    assert {"pipeline.chain.readout", "pipeline.run.stages", "pipeline.results.cube"} <= names
+    assert {"pipeline.report.analysis", "storage.store", "flows.planning"} <= names
