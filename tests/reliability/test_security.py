@@ -82,9 +82,11 @@ def test_no_code_path_unpickles_data():
 def test_the_store_reads_only_zarr_v3_which_has_no_pickle_codec(tmp_path):
     import zarr
 
-    from storage.store import _OPEN_ZARR
+    from storage import batches, cube_files
 
-    assert _OPEN_ZARR["zarr_format"] == 3
+    # Both readers of the store (entry batches and cubes) open Zarr v3 only.
+    assert batches._OPEN_ZARR["zarr_format"] == 3
+    assert cube_files._OPEN_ZARR["zarr_format"] == 3
     # A Zarr v2 store (whose object codecs may pickle) is not opened at all.
     zarr.open_group(str(tmp_path / "old" / "store.zarr"), mode="w", zarr_format=2)
     with pytest.raises(Exception, match="not a sweep store"):
