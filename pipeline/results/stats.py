@@ -66,7 +66,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.special
-import scipy.stats
 
 #: The ``method`` of an :class:`Interval` from the Wilson score (one repeat).
 WILSON_METHOD = "Wilson score"
@@ -332,6 +331,10 @@ def compare_paired(
     low, high = _contain(difference, *_percentile(boot, confidence))
     interval = f"stratified paired bootstrap over recordings ({resamples} resamples, percentile)"
     if repeats == 1:
+        # Imported here, not with the module: scipy.stats takes about a second to import, and
+        # building a sweep's cubes (Wilson intervals, bootstraps) needs none of it.
+        import scipy.stats
+
         discordant = only_a + only_b
         p_value = (
             1.0

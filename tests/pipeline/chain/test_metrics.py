@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pipeline.chain.metrics import (
     bits_per_event,
@@ -115,6 +117,40 @@ def test_correlations_match_scipy_and_skip_infinite_points():
     assert (r, p, n, note) == pytest.approx((expected.statistic, expected.pvalue, 5, ""))
     assert result["spearman"][0] == pytest.approx(stats.spearmanr(metric[1:], accuracy[1:])[0])
     assert r > 0.9
+
+
+# Values from a few levels (ties, as swept accuracies have), or spread over magnitudes.
+correlated_values = st.one_of(
+    st.lists(st.sampled_from([0.0, 0.25, 0.5, 1.0, 3.0]), min_size=3, max_size=40),
+    st.lists(st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False), min_size=3, max_size=40),
+)
+
+
+@given(correlated_values, st.data())
+def test_correlations_are_scipys_to_the_bit(metric, data):
+    from scipy import stats
+
+    n = len(metric)
+    accuracy = data.draw(
+        st.one_of(
+            st.lists(st.integers(0, 12).map(lambda k: k / 12), min_size=n, max_size=n),
+            st.just([2.0 * m + 1.0 for m in metric]),  # a perfect correlation
+            st.just([-m for m in metric]),
+        )
+    )
+    metric, accuracy = np.array(metric), np.array(accuracy)
+    result = correlate_with_accuracy(metric, accuracy)
+    if np.ptp(metric) == 0 or np.ptp(accuracy) == 0:
+        assert "constant" in result["pearson"][3]
+        return
+    for method, expected in (
+        ("pearson", stats.pearsonr(metric, accuracy)),
+        ("spearman", stats.spearmanr(metric, accuracy)),
+    ):
+        r, p, n_used, note = result[method]
+        assert (n_used, note) == (n, "")
+        assert np.float64(r).tobytes() == np.float64(expected.statistic).tobytes(), method
+        assert np.float64(p).tobytes() == np.float64(expected.pvalue).tobytes(), method
 
 
 def test_correlations_are_undefined_not_errors_for_too_few_or_constant_points():

@@ -3,6 +3,8 @@
 import dataclasses
 import json
 import math
+import subprocess
+import sys
 import types
 import warnings
 
@@ -75,6 +77,25 @@ def built_grids() -> dict[str, xr.Dataset]:
         for sweep in grid.sweeps:
             cubes[f"{name}/{sweep.name}"] = build(grid, sweep, records)
     return cubes
+
+
+def test_building_cubes_imports_no_scipy_stats():
+    """Intervals and correlations need only scipy.special: a warm re-run of a sweep rebuilds
+    every cube, and importing scipy.stats would take it about a second."""
+    code = (
+        "import sys\n"
+        "from pipeline.cube import build_cube\n"
+        "from tests import golden_cubes as golden\n"
+        "grid = golden.grid()\n"
+        "records = golden.rich_entries(grid)\n"
+        "cubes = [build_cube(grid, sweep, records) for sweep in grid.sweeps]\n"
+        "assert any('correlation_r' in cube for cube in cubes)\n"
+        "print(sorted(name for name in sys.modules if name.startswith('scipy.stats')))\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=300
+    )
+    assert result.stdout.strip() == "[]", result.stdout
 
 
 def test_builtin_grids_cubes_reproduce_the_golden_files():
