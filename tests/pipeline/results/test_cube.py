@@ -84,7 +84,7 @@ def test_building_cubes_imports_no_scipy_stats():
     every cube, and importing scipy.stats would take it about a second."""
     code = (
         "import sys\n"
-        "from pipeline.cube import build_cube\n"
+        "from pipeline.results.cube import build_cube\n"
         "from tests import golden_cubes as golden\n"
         "grid = golden.grid()\n"
         "records = golden.rich_entries(grid)\n"
