@@ -56,6 +56,16 @@ def _version() -> str:
         return "unknown"
 
 
+def _scene_fields_epilog() -> str:
+    """Every scene field, one line each, from the schema's single declaration of it."""
+    from pipeline.design.scene import scene_fields
+
+    lines = (f"  {field.text()}" for field in scene_fields())
+    return "Scene fields (scene files, a grid's base and its axes; dotted paths):\n" + "\n".join(
+        lines
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="eskin",
@@ -77,6 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
         parents=[common],
         help="simulate one scene and print its accuracy, spike metrics and stage timings",
         description="Simulate one scene end to end and print a summary.",
+        epilog=_scene_fields_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     run.add_argument(
         "--scene",
@@ -99,6 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="sweep a grid of scenes on Dask and write labelled result cubes",
         description="Run the Prefect flow 'sweep': compute the grid's cache misses on Dask "
         "workers and write one xarray cube per sweep under the root.",
+        epilog=_scene_fields_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sweep.add_argument(
         "--grid",

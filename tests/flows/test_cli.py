@@ -279,3 +279,17 @@ def test_dry_run_default_root_on_another_dataset_is_its_own(capsys, tmp_path, mo
     assert code == 0, err
     assert json.loads(out)["root"] == str(Path("runs") / "g-my-data")
     assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_help_lists_every_scene_field_from_its_declaration(capsys, command):
+    from pipeline.design.scene import scene_fields
+
+    with pytest.raises(SystemExit) as exit_info:
+        main([command, "--help"])
+    assert exit_info.value.code == 0
+    out = capsys.readouterr().out
+    fields = scene_fields()
+    assert len(fields) > 30
+    for field in fields:
+        assert f"  {field.text()}\n" in out + "\n", field.path
