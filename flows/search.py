@@ -1,0 +1,403 @@
+"""A search of a design space (``eskin optimize``): Optuna asks, the sweep machinery evaluates.
+
+The coordinator (this process) drives an in-memory Optuna study by ask-and-tell; no Optuna
+storage is used, so workers never touch the study and its format never ties a run root to an
+Optuna version. The run root keeps the search instead: its journal
+(:class:`storage.search_log.SearchJournal`) records every trial asked and told, and a search
+started again on the root replays it, told trials back into the sampler, asked ones never
+told (a killed search's) asked again with their own values. A larger budget continues it.
+
+Each batch of trials (as many as the cluster has worker threads, so parallel trials fill the
+workers) is a grid of one zipped sweep (:meth:`pipeline.design.space.Space.trial_grid`), planned
+and scheduled as any sweep (:func:`flows.planning.plan_sweep`,
+:func:`flows.scheduling.submit_missing`): the same store, cache keys, batching and workers; a
+point already in the store, from any sweep or search, costs nothing. Once its points are done,
+the trial cube of every trial so far is built (:func:`pipeline.results.cube.build_cube`, along
+``trial``), the batch's objective values are read from it and told, and the cubes ``trials``
+and ``front`` (:func:`pipeline.report.trials.front_cube`) are written.
+
+Sampler: multi-objective TPE (``TPESampler(multivariate=True, constant_liar=True)``, seeded from
+the space's seed; the constant liar keeps the trials of one batch apart). Cost accounting: a
+budget in seconds (``budget_s``) is spent in stage seconds as measured when each point was
+computed, each distinct point once and each spike train once
+(:func:`pipeline.report.trials.search_seconds`): a trial that shares the spike train of an
+earlier one costs only its coding and training.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from flows.cluster import dask_client
+from flows.environment import hermetic_environment
+from flows.planning import DEFAULT_RUNS_DIR, check_grid, plan_sweep
+from flows.progress import SweepFailed, completed_points, failure_message
+from flows.scheduling import submit_missing
+from pipeline.design.space import TRIALS, DimensionKind, Space, load_space, objective_values
+from pipeline.errors import EskinError
+from pipeline.report.trials import front_cube, search_seconds, trial_cube
+from pipeline.run.stages import SPIKES
+from storage import SweepStore
+from storage.search_log import SearchJournal
+
+#: Trials of a search without a budget.
+DEFAULT_BUDGET = 50
+FRONT = "front"
+
+
+class BudgetError(EskinError):
+    """A budget that is not a positive number."""
+
+
+@dataclass
+class BatchOutcome:
+    """What one batch of trials did: its trial numbers, distinct points found in the store
+    (``cache_hits``) and computed, and failures by trial."""
+
+    trials: list[int]
+    cache_hits: int = 0
+    computed: int = 0
+    failed: dict[int, str] = field(default_factory=dict)
+
+
+def distributions(space: Space) -> dict[str, Any]:
+    """Optuna's distribution of each dimension, by field."""
+    from optuna.distributions import (
+        CategoricalDistribution,
+        FloatDistribution,
+        IntDistribution,
+    )
+
+    found: dict[str, Any] = {}
+    for d in space.dimensions:
+        if d.kind is DimensionKind.CATEGORICAL:
+            found[d.field] = CategoricalDistribution(d.choices)
+        elif d.kind is DimensionKind.INT:
+            found[d.field] = IntDistribution(int(d.low), int(d.high), step=int(d.step), log=d.log)
+        else:
+            found[d.field] = FloatDistribution(d.low, d.high, step=d.step, log=d.log)
+    return found
+
+
+class Search:
+    """One search of ``space`` in the store at ``root``: its study, journal and trials.
+
+    Open it holding the root's lock (:meth:`storage.SweepStore.lock`).
+    """
+
+    def __init__(self, space: Space, root: str | Path):
+        import optuna
+
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        self.space = space
+        self.root = str(root)
+        self.distributions = distributions(space)
+        self.journal = SearchJournal.open(root, space.name, space.fingerprint())
+        # Seeded from the space's seed and the trials already asked: a resumed search samples
+        # afresh rather than repeating the first run's random start-up trials.
+        seed = int(
+            np.random.SeedSequence([space.seed, len(self.journal.params)]).generate_state(1)[0]
+        )
+        sampler = optuna.samplers.TPESampler(multivariate=True, constant_liar=True, seed=seed)
+        self.study = optuna.create_study(
+            directions=["minimize" if o.sign > 0 else "maximize" for o in space.objectives],
+            sampler=sampler,
+        )
+        for number in sorted(self.journal.params):
+            params = self.journal.params[number]
+            if number in self.journal.values:
+                self._add(params, values=self.journal.values[number])
+            elif number in self.journal.failed:
+                self._add(params, values=None)
+            else:
+                self.study.enqueue_trial(params, skip_if_exists=False)
+        self._asked: dict[int, Any] = {}
+        self.cube: xr.Dataset | None = None
+
+    def _add(self, params: dict[str, Any], values: list[float] | None) -> None:
+        """Replay a told trial: finished with finite ``values``, or failed."""
+        import optuna
+
+        finite = values is not None and all(math.isfinite(v) for v in values)
+        self.study.add_trial(
+            optuna.trial.create_trial(
+                params=params,
+                distributions=self.distributions,
+                values=values if finite else None,
+                state=optuna.trial.TrialState.COMPLETE if finite else _failed_state(),
+            )
+        )
+
+    @property
+    def told(self) -> int:
+        """Trials told (finished or failed)."""
+        return len(self.journal.values) + len(self.journal.failed)
+
+    def ask(self, n: int) -> list[int]:
+        """The next ``n`` trials: a killed search's untold ones first, then new ones."""
+        numbers = []
+        pending = [p for p in self.journal.pending if p not in self._asked]
+        for _ in range(n):
+            trial = self.study.ask(self.distributions)
+            if pending:
+                number = pending.pop(0)
+            else:
+                number = max(self.journal.params, default=-1) + 1
+                self.journal.asked(number, trial.params)
+            self._asked[number] = trial
+            numbers.append(number)
+        return numbers
+
+    def evaluate(self, numbers: list[int], client_for: Callable[[], Any]) -> BatchOutcome:
+        """Compute the trials' points (those not in the store), tell the trials, write cubes.
+
+        ``client_for()`` gives the Dask client, called only if a point is missing.
+        """
+        outcome = BatchOutcome(numbers)
+        params = [self.journal.params[n] for n in numbers]
+        plan = plan_sweep(self.space.trial_grid(params), self.root)
+        outcome.cache_hits, outcome.computed = len(plan.cached), len(plan.missing)
+        failed_keys: dict[str, str] = {}
+        if plan.missing:
+            client = client_for()
+            futures = submit_missing(plan, client)
+            failed_keys = {k: why for k, why in completed_points(client, futures) if why}
+        keys = [point.key for point in plan.grid.points()]
+        for number, key in zip(numbers, keys, strict=True):
+            if key in failed_keys:
+                outcome.failed[number] = failed_keys[key]
+                self.study.tell(self._asked.pop(number), state=_failed_state())
+                self.journal.told_failed(number, failed_keys[key])
+        done = [n for n in numbers if n not in outcome.failed]
+        self.cube = self.write_cubes(done)
+        found = objective_values(self.cube.sel(trial=done), self.space.objectives)
+        for number, row in zip(done, found, strict=True):
+            values = [float(v) for v in row]
+            trial = self._asked.pop(number)
+            if all(math.isfinite(v) for v in values):
+                self.study.tell(trial, values)
+            else:
+                self.study.tell(trial, state=_failed_state())
+            self.journal.told(number, values)
+        return outcome
+
+    def write_cubes(self, finished: Sequence[int] = ()) -> xr.Dataset | None:
+        """Build the cube of every told trial and of the ``finished`` ones (whose points are in
+        the store) and the front, write both; return the first (None before any trial)."""
+        from pipeline.results.cube import build_cube
+
+        numbers = sorted({*self.journal.values, *finished})
+        if not numbers:
+            return None
+        grid = self.space.trial_grid([self.journal.params[n] for n in numbers])
+        plan = plan_sweep(grid, self.root)
+        cube = trial_cube(build_cube(grid, grid.sweeps[0], plan.records), numbers, grid.name)
+        store = SweepStore.open(self.root)
+        store.write_cube(TRIALS, cube)
+        store.write_cube(FRONT, front_cube(cube, self.space.objectives))
+        return cube
+
+    def seconds_spent(self) -> float:
+        """Stage seconds of the finished trials (:func:`pipeline.report.trials.search_seconds`)."""
+        if self.cube is None:
+            return 0.0
+        grid = self.space.trial_grid(
+            [self.journal.params[int(n)] for n in self.cube["trial"].values]
+        )
+        spike_keys = [SPIKES.key(p.scene) for p in grid.points()]
+        models = [str(m) for m in self.cube["model"].values]
+        return search_seconds(self.cube, spike_keys, SPIKES.steps_for(models))
+
+    def front_rows(self) -> list[dict[str, Any]]:
+        """The front's trials: number, searched values, objective values, on the front or only
+        indistinguishable from it."""
+        if self.cube is None:
+            return []
+        front = front_cube(self.cube, self.space.objectives)
+        rows = []
+        for i, number in enumerate(int(n) for n in front["trial"].values):
+            values = front["objective_value"].isel(trial=i).values
+            rows.append(
+                {
+                    "trial": number,
+                    "params": self.journal.params[number],
+                    "objectives": {
+                        o.name: float(v) for o, v in zip(self.space.objectives, values, strict=True)
+                    },
+                    "on_front": bool(front["on_front"].values[i]),
+                }
+            )
+        return rows
+
+
+def _failed_state() -> Any:
+    import optuna
+
+    return optuna.trial.TrialState.FAIL
+
+
+def default_search_root(space: Space) -> Path:
+    return DEFAULT_RUNS_DIR / space.name
+
+
+def check_space(space: Space) -> None:
+    """Check the space's extremes against its recordings (:func:`flows.planning.check_grid` of
+    its corners: every bound and choice of each field, with the others at theirs), before any
+    work; raise :class:`pipeline.errors.SceneError` listing every misfit."""
+    check_grid(space.exhaustive_grid(2))
+
+
+def check_budget(budget: int | None, budget_s: float | None) -> tuple[int | None, float | None]:
+    """``(budget, budget_s)`` checked: at most one given, positive; default
+    :data:`DEFAULT_BUDGET` trials."""
+    if budget is not None and budget_s is not None:
+        raise BudgetError("give a budget in trials or in seconds, not both")
+    if budget is not None and (
+        isinstance(budget, bool) or not isinstance(budget, int) or budget < 1
+    ):
+        raise BudgetError(f"--budget: expected a positive number of trials, got {budget!r}")
+    if budget_s is not None and not (isinstance(budget_s, int | float) and budget_s > 0):
+        raise BudgetError(f"--budget-s: expected a positive number of seconds, got {budget_s!r}")
+    if budget is None and budget_s is None:
+        budget = DEFAULT_BUDGET
+    return budget, budget_s
+
+
+@contextlib.contextmanager
+def lazy_client(
+    root: str | Path, client: Any = None, workers: int | None = None, address: str | None = None
+) -> Iterator[Callable[[], Any]]:
+    """A function giving the Dask client: ``client``, or a local cluster (or ``address``) made
+    on the first call and closed at the end; no cluster starts for a search with nothing to
+    compute."""
+    with contextlib.ExitStack() as stack:
+        made: list[Any] = [client] if client is not None else []
+
+        def get() -> Any:
+            if not made:
+                hermetic_environment(Path(root), prefect=False)
+                made.append(stack.enter_context(dask_client(workers, address)))
+            return made[0]
+
+        yield get
+
+
+def batch_size(client: Any, workers: int | None) -> int:
+    """Trials per batch: the cluster's worker threads (the local cluster's ``workers``)."""
+    if client is not None:
+        return max(1, sum(client.nthreads().values()))
+    from flows.cluster import available_cores
+
+    return workers or available_cores()
+
+
+def search_batches(
+    search: Search,
+    budget: int | None,
+    budget_s: float | None,
+    size: int,
+) -> Iterator[list[int]]:
+    """The batches a search asks, until its budget is spent: trials told (``budget``) or stage
+    seconds (``budget_s``, :meth:`Search.seconds_spent`)."""
+    while True:
+        if budget is not None:
+            n = min(size, budget - search.told)
+        else:
+            n = size if search.seconds_spent() < budget_s else 0
+        if n <= 0:
+            return
+        yield search.ask(n)
+
+
+def run_optimize(
+    space: str | Path | Space,
+    root: str | Path | None = None,
+    *,
+    budget: int | None = None,
+    budget_s: float | None = None,
+    client: Any = None,
+    workers: int | None = None,
+    address: str | None = None,
+    on_batch: Callable[[Search, BatchOutcome], None] | None = None,
+    evaluate: Callable[[Search, list[int], Callable[[], Any]], BatchOutcome] | None = None,
+) -> dict[str, Any]:
+    """Search ``space`` (a file or a :class:`Space`) into the store at ``root``, without Prefect.
+
+    Holds the root's lock, replays the root's journal of this space, asks batches of trials
+    until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds
+    are spent, and returns :func:`search_summary`. ``client`` (left open), or a local cluster
+    of ``workers`` processes, or the scheduler at ``address``, made only if a point is missing.
+    ``on_batch`` is called after each batch; ``evaluate`` replaces :meth:`Search.evaluate`
+    (the Prefect flow runs it as a task).
+
+    Raises
+    ------
+    EskinError
+        A bad space, budget or root, before anything is written.
+    SweepFailed
+        Some trials' points failed (the others are told and kept).
+    """
+    start = time.perf_counter()
+    budget, budget_s = check_budget(budget, budget_s)
+    if not isinstance(space, Space):
+        space = load_space(space)
+    check_space(space)
+    store = SweepStore.open_or_create(root or default_search_root(space))
+    cache_hits = computed = 0
+    failed: dict[int, str] = {}
+    with store.lock():
+        store.clean_partials()
+        search = Search(space, store.root)
+        search.cube = search.write_cubes()
+        told_before = len(search.journal.values)
+        with lazy_client(store.root, client, workers, address) as client_for:
+            size = (
+                batch_size(client, workers) if address is None else batch_size(client_for(), None)
+            )
+            for numbers in search_batches(search, budget, budget_s, size):
+                outcome = (evaluate or Search.evaluate)(search, numbers, client_for)
+                cache_hits += outcome.cache_hits
+                computed += outcome.computed
+                failed |= outcome.failed
+                if on_batch is not None:
+                    on_batch(search, outcome)
+    if failed:
+        raise SweepFailed(failure_message(list(failed.values()), len(failed), store.root))
+    return search_summary(
+        search,
+        new_trials=len(search.journal.values) - told_before,
+        cache_hits=cache_hits,
+        computed=computed,
+        seconds=time.perf_counter() - start,
+    )
+
+
+def search_summary(
+    search: Search, new_trials: int, cache_hits: int, computed: int, seconds: float
+) -> dict[str, Any]:
+    """What ``eskin optimize --json`` prints: ``root``, ``space``, ``trials`` (finished, all
+    runs), ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
+    batches), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
+    :meth:`Search.seconds_spent`), ``cubes`` and ``front`` (:meth:`Search.front_rows`)."""
+    location = Path(search.root) / "store.zarr" / "cubes"
+    return {
+        "root": search.root,
+        "space": search.space.name,
+        "trials": len(search.journal.values),
+        "new_trials": new_trials,
+        "cache_hits": cache_hits,
+        "computed": computed,
+        "seconds": seconds,
+        "search_seconds": search.seconds_spent(),
+        "cubes": {name: str(location / name) for name in (TRIALS, FRONT)},
+        "front": search.front_rows(),
+    }

@@ -1,0 +1,439 @@
+"""Design spaces: a base scene, ranges over scene fields and two or three objectives.
+
+A *space* is what ``eskin optimize`` searches instead of gridding: each *dimension* is one scene
+field and the values it may take, each *objective* a number of a point's result to maximise or
+minimise. A *trial* is one point of the space, a scene like a grid's points: it is computed,
+cached and keyed exactly as they are.
+
+TOML layout::
+
+    name = "design"
+    base = "paper"                     # a built-in scene, a scene file, or a [base] table
+    seed = 0                           # the search's seed (default 0)
+
+    [space]
+    "readout.threshold_v" = { low = 0.02, high = 0.3, log = true }   # continuous, log-scaled
+    "coding.window_s" = { choices = [0.05, 0.1, 0.2] }              # categorical
+    "array.rows" = { low = 1, high = 4, step = 1 }                  # integer (an int field)
+
+    [objectives]
+    "accuracy.ffnn" = "max"            # accuracy_mean of a model the base scene trains
+    "data_rate_bps" = "min"            # or readout_power_w, compute_s
+
+A range ``{low, high}`` of an integer field is an integer range (``step`` default 1), of a float
+field a continuous one (``step`` optional, ``log = true`` samples ``log(value)`` uniformly and
+needs ``low > 0``); ``choices`` lists the values of a categorical dimension (any values the field
+takes, strings included). Everything is checked when the space loads, and every problem is
+reported at once (:class:`pipeline.errors.SceneError`): unknown keys and fields, malformed
+ranges, bounds and choices the field refuses (each checked at the base scene), unknown models,
+fewer than two or more than three objectives.
+
+Objectives (:class:`Metric`), read per trial from its result cube:
+
+* ``accuracy.<model>``: ``accuracy_mean`` of that model (fraction);
+* ``data_rate_bps``: the address-event data rate (bit/s);
+* ``readout_power_w``: ``event_rate_hz * E_event + data_rate_bps * E_link`` with the default
+  :class:`pipeline.results.hardware.EnergyModel` (W);
+* ``compute_s``: the stage seconds of the point for the objective's models (all trained models,
+  spike stages included), as measured when they were computed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import hashlib
+import json
+import math
+import tomllib
+import types
+import typing
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.design import fields
+from pipeline.design.grid import (
+    NAME_PATTERN,
+    Grid,
+    Sweep,
+    SweepAxis,
+    SweepMode,
+    _read_base,
+    _valid_name,
+)
+from pipeline.design.scene import Model, Scene, SceneVariants
+from pipeline.errors import SceneError
+from pipeline.results.hardware import event_power_w
+
+#: The name of the trial cube's sweep and of its dimension.
+TRIALS = "trials"
+TRIAL_DIM = "trial"
+
+
+class Direction(enum.StrEnum):
+    MAX = "max"
+    MIN = "min"
+
+
+class Metric(enum.StrEnum):
+    """What an objective measures (the part of its name before any ``.<model>``)."""
+
+    ACCURACY = "accuracy"
+    DATA_RATE = "data_rate_bps"
+    POWER = "readout_power_w"
+    COMPUTE = "compute_s"
+
+
+class DimensionKind(enum.StrEnum):
+    FLOAT = "float"
+    INT = "int"
+    CATEGORICAL = "categorical"
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """One searched scene field: dotted ``field``, its ``kind`` and values.
+
+    ``low``/``high`` bound a FLOAT or INT dimension (inclusive), ``step`` its grid (None:
+    continuous), ``log`` samples it log-uniformly; ``choices`` are a CATEGORICAL one's values.
+    """
+
+    field: str
+    kind: DimensionKind
+    low: float | None = None
+    high: float | None = None
+    step: float | None = None
+    log: bool = False
+    choices: tuple[Any, ...] = ()
+
+    def extremes(self) -> tuple[Any, ...]:
+        """The values a scene must accept for every trial to be valid: bounds or choices."""
+        return self.choices if self.kind is DimensionKind.CATEGORICAL else (self.low, self.high)
+
+    def grid_values(self, n: int) -> tuple[Any, ...]:
+        """``n`` values spread over the dimension (log-spaced when ``log``): every choice of a
+        categorical one, every step of a stepped one with at most ``n`` steps."""
+        if self.kind is DimensionKind.CATEGORICAL:
+            return self.choices
+        if self.step is not None and (self.high - self.low) / self.step + 1 <= n:
+            count = round((self.high - self.low) / self.step) + 1
+            values = self.low + self.step * np.arange(count)
+        elif self.log:
+            values = np.geomspace(self.low, self.high, n)
+        else:
+            values = np.linspace(self.low, self.high, n)
+        if self.kind is DimensionKind.INT:
+            return tuple(dict.fromkeys(int(round(v)) for v in values))
+        return tuple(float(v) for v in values)
+
+
+@dataclass(frozen=True)
+class Objective:
+    """One objective: ``metric`` (of ``model`` for accuracy) and its ``direction``."""
+
+    metric: Metric
+    direction: Direction
+    model: str | None = None
+
+    @property
+    def name(self) -> str:
+        return self.metric.value + (f".{self.model}" if self.model else "")
+
+    @property
+    def sign(self) -> float:
+        """+1 for a minimised objective, -1 for a maximised one: ``sign * value`` is minimised."""
+        return 1.0 if self.direction is Direction.MIN else -1.0
+
+
+@dataclass(frozen=True)
+class Space:
+    """A base scene, the searched dimensions, the objectives and the search's seed."""
+
+    name: str
+    base: Scene
+    dimensions: tuple[Dimension, ...]
+    objectives: tuple[Objective, ...]
+    seed: int = 0
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], source: str = "<dict>", base_dir: Path | None = None
+    ) -> Space:
+        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem."""
+        problems: list[str] = []
+        space = _read_space(data, base_dir or Path.cwd(), problems)
+        if problems:
+            raise SceneError(problems, source, kind="space")
+        return space
+
+    def fingerprint(self) -> str:
+        """A hash of everything that shapes the search: base, dimensions, objectives, seed."""
+        described = {
+            "base": self.base.to_dict(),
+            "dimensions": [fields.plain(dataclasses.asdict(d)) for d in self.dimensions],
+            "objectives": [[o.name, o.direction.value] for o in self.objectives],
+            "seed": self.seed,
+        }
+        text = json.dumps(described, sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    @property
+    def fields(self) -> tuple[str, ...]:
+        return tuple(d.field for d in self.dimensions)
+
+    def scene(self, params: Mapping[str, Any]) -> Scene:
+        """The trial scene: the base with each searched field at ``params[field]``."""
+        return self.base.replace(**dict(params))
+
+    def trial_grid(self, trials: Sequence[Mapping[str, Any]]) -> Grid:
+        """The trials as a grid of one zipped sweep, :data:`TRIALS`, one point per trial in order
+        (two trials at the same values are two points of one design, computed once)."""
+        if not trials:
+            raise ValueError("a trial grid needs at least one trial")
+        axes = tuple(
+            SweepAxis(field, field.split(".")[-1], tuple(t[field] for t in trials))
+            for field in self.fields
+        )
+        return Grid(self.name, self.base, (Sweep(TRIALS, _named(axes), SweepMode.ZIP),))
+
+    def exhaustive_grid(self, per_dimension: int) -> Grid:
+        """The space gridded (Cartesian product, :meth:`Dimension.grid_values`): for the
+        benchmark's exhaustive front and for what a grid of it would cost."""
+        axes = tuple(
+            SweepAxis(d.field, d.field.split(".")[-1], d.grid_values(per_dimension))
+            for d in self.dimensions
+        )
+        return Grid(self.name, self.base, (Sweep("grid", _named(axes)),))
+
+
+def _named(axes: tuple[SweepAxis, ...]) -> tuple[SweepAxis, ...]:
+    """Axes whose last field parts clash take their last two parts as dimension names."""
+    lasts = [a.field.split(".")[-1] for a in axes]
+    return tuple(
+        a
+        if lasts.count(last) == 1
+        else dataclasses.replace(a, dim="_".join(a.field.split(".")[-2:]))
+        for a, last in zip(axes, lasts, strict=True)
+    )
+
+
+def load_space(path: str | Path) -> Space:
+    """A space TOML file; raise :class:`SceneError` naming the file and every problem."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SceneError([f"cannot read file: {exc.strerror}"], str(path), "space") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError([f"not UTF-8 text (byte {exc.start})"], str(path), "space") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError([f"not valid TOML: {exc}"], str(path), "space") from None
+    data.setdefault("name", path.stem)
+    return Space.from_dict(data, source=str(path), base_dir=path.parent)
+
+
+# ---------------------------------------------------------------------------------------------
+# Objective values of trials
+
+
+def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.ndarray:
+    """float64 (points, objectives): each objective of every point of a cube with one sweep
+    dimension (a trial cube), NaN where the point does not state it."""
+    (dim,) = [d for d in cube["result_key"].dims]
+    columns = []
+    for objective in objectives:
+        match objective.metric:
+            case Metric.ACCURACY:
+                values = cube["accuracy_mean"].sel(model=objective.model)
+            case Metric.DATA_RATE:
+                values = cube["data_rate_bps"]
+            case Metric.POWER:
+                rates = (cube["event_rate_hz"].values, cube["data_rate_bps"].values)
+                ok = np.all([np.isfinite(r) & (r >= 0) for r in rates], axis=0)
+                power = event_power_w(*(np.where(ok, r, 0.0) for r in rates))
+                values = xr.DataArray(np.where(ok, power, np.nan), dims=(dim,))
+            case Metric.COMPUTE:
+                values = cube["seconds"].sum("stage", min_count=1)
+        columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
+    return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading and validation
+
+
+def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
+    if not isinstance(data, Mapping):
+        problems.append(f"space: must be a table, got {type(data).__name__}")
+        return Space("space", Scene(), (), ())
+    known = ("name", "base", "seed", "space", "objectives")
+    for key in data:
+        if key not in known:
+            problems.append(f"{key}: unknown key (known: {', '.join(known)})")
+    name = data.get("name", "space")
+    if not _valid_name(name):
+        problems.append(f"name: {name!r} is not a valid space name ({NAME_PATTERN})")
+        name = "space"
+    seed = data.get("seed", 0)
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**32:
+        problems.append(f"seed: expected an integer in [0, 2**32), got {seed!r}")
+        seed = 0
+    base = _read_base(data.get("base", "paper"), base_dir, problems)
+    dims_data = data.get("space")
+    if not isinstance(dims_data, Mapping) or not dims_data:
+        problems.append(
+            'space: needs at least one dimension ("field" = { low, high } or { choices })'
+        )
+        dims_data = {}
+    dimensions = [d for f, v in dims_data.items() if (d := _read_dimension(f, v, problems))]
+    _check_against_base(base, dimensions, problems)
+    objectives = _read_objectives(data.get("objectives"), base, problems)
+    return Space(name, base, tuple(dimensions), tuple(objectives), seed)
+
+
+def _read_dimension(field: str, value: Any, problems: list[str]) -> Dimension | None:
+    where = f"space.{field}"
+    try:
+        slot = fields.resolve(Scene, field).slot
+    except fields.UnknownField as exc:
+        problems.append(f"space: {exc.text}")
+        return None
+    if not isinstance(value, Mapping):
+        problems.append(
+            f"{where}: expected {{ low, high }} or {{ choices = [...] }}, got {value!r}"
+        )
+        return None
+    count = len(problems)
+    if "choices" in value:
+        extra = sorted(set(value) - {"choices"})
+        if extra:
+            problems.append(f"{where}: choices take no {', '.join(extra)}")
+        choices = value["choices"]
+        if not isinstance(choices, list) or len(choices) < 2:
+            problems.append(f"{where}.choices: must list at least two values")
+            return None
+        if not all(isinstance(c, str | int | float) for c in choices):
+            problems.append(f"{where}.choices: values must be strings, numbers or booleans")
+            return None
+        labels = [json.dumps(c, sort_keys=True) for c in choices]
+        duplicates = sorted({c for c in labels if labels.count(c) > 1})
+        if duplicates:
+            problems.append(f"{where}.choices: duplicate values {', '.join(duplicates)}")
+        if len(problems) > count:
+            return None
+        return Dimension(field, DimensionKind.CATEGORICAL, choices=tuple(choices))
+    for key in value:
+        if key not in ("low", "high", "step", "log"):
+            problems.append(f"{where}.{key}: unknown key (known: low, high, step, log, choices)")
+    integer = _is_integer(slot.kind)
+    numbers = {}
+    for key in ("low", "high", "step"):
+        number = value.get(key)
+        if number is None and key != "step":
+            problems.append(f"{where}: needs {key} (or choices)")
+        elif number is not None and (
+            isinstance(number, bool)
+            or not isinstance(number, int | float)
+            or not math.isfinite(number)
+            or (integer and not isinstance(number, int))
+        ):
+            kind = "an integer" if integer else "a finite number"
+            problems.append(f"{where}.{key}: expected {kind}, got {number!r}")
+        else:
+            numbers[key] = number
+    log = value.get("log", False)
+    if not isinstance(log, bool):
+        problems.append(f"{where}.log: expected true or false, got {log!r}")
+    if not integer and not _is_float(slot.kind):
+        problems.append(f"{where}: {field} is not a number; give its choices instead")
+    if len(problems) > count:
+        return None
+    low, high, step = numbers["low"], numbers["high"], numbers.get("step")
+    if low >= high:
+        problems.append(f"{where}: low ({low}) must be below high ({high})")
+    if step is not None and step <= 0:
+        problems.append(f"{where}.step: must be > 0, got {step}")
+    if log and low <= 0:
+        problems.append(f"{where}: a log range needs low > 0, got {low}")
+    if log and step is not None and not (integer and step == 1):
+        problems.append(f"{where}: a log range takes no step")
+    if step is not None and step > 0 and low < high and not _fits_steps(low, high, step):
+        problems.append(f"{where}.step: {high} - {low} is not a whole number of steps of {step}")
+    if len(problems) > count:
+        return None
+    if integer:
+        kind, step = DimensionKind.INT, step or 1
+    else:
+        kind = DimensionKind.FLOAT
+    return Dimension(field, kind, low, high, None if log and not integer else step, bool(log))
+
+
+def _fits_steps(low: float, high: float, step: float) -> bool:
+    n = (high - low) / step
+    return abs(n - round(n)) <= 1e-9 * max(1.0, n)
+
+
+def _is_integer(kind: Any) -> bool:
+    return kind is int or (
+        typing.get_origin(kind) in (typing.Union, types.UnionType)
+        and int in typing.get_args(kind)
+        and float not in typing.get_args(kind)
+    )
+
+
+def _is_float(kind: Any) -> bool:
+    return kind is float or (
+        typing.get_origin(kind) in (typing.Union, types.UnionType)
+        and float in typing.get_args(kind)
+    )
+
+
+def _check_against_base(base: Scene, dimensions: list[Dimension], problems: list[str]) -> None:
+    """Every bound and choice must make a valid scene with the other fields at the base."""
+    for dimension in dimensions:
+        variants = SceneVariants(base, [(dimension.field, dimension.extremes())])
+        for i, value in enumerate(dimension.extremes()):
+            problems += [
+                f"space.{dimension.field} = {value!r}: {p}" for p in variants.problems([i])
+            ]
+
+
+def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Objective]:
+    if not isinstance(data, Mapping) or not 2 <= len(data) <= 3:
+        problems.append('objectives: needs two or three, e.g. "accuracy.ffnn" = "max"')
+        return []
+    metrics = ", ".join(
+        ["accuracy.<model>", *(m.value for m in Metric if m is not Metric.ACCURACY)]
+    )
+    objectives = []
+    for name, direction in data.items():
+        where = f"objectives.{name}"
+        metric_name, _, model = name.partition(".")
+        try:
+            metric = Metric(metric_name)
+        except ValueError:
+            problems.append(f"{where}: unknown objective (known: {metrics})")
+            continue
+        try:
+            direction = Direction(direction)
+        except ValueError:
+            problems.append(f"{where}: expected 'max' or 'min', got {direction!r}")
+            continue
+        if (metric is Metric.ACCURACY) != bool(model):
+            problems.append(f"{where}: unknown objective (known: {metrics})")
+            continue
+        if model:
+            trained = [m.value for m in base.training.models]
+            if model not in [m.value for m in Model]:
+                problems.append(f"{where}: unknown model {model!r} (known: {', '.join(Model)})")
+                continue
+            if model not in trained:
+                problems.append(f"{where}: the base scene trains {', '.join(trained)}, not {model}")
+                continue
+        objectives.append(Objective(metric, direction, model or None))
+    return objectives

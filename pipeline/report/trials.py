@@ -1,0 +1,140 @@
+"""The front of a search: the Pareto-optimal trials over two or three objectives, and hypervolume.
+
+Objectives are turned into costs to minimise (``sign * value``, :attr:`Objective.sign`). Trial
+``a`` *dominates* ``b`` when it is no worse in every objective and better in one; the *front* is
+the trials no other trial dominates (:func:`pareto_mask`; two trials of one design, the same
+result key, are one point). A trial off the front is compared with the front trial dominating
+it that is best in the first accuracy objective, by the report's paired test on the same
+recordings (:meth:`pipeline.report.evidence.Evidence.compare`, one unadjusted test per trial,
+alpha 0.05); one the test cannot tell from it is *indistinguishable* and kept beside the front,
+as the report's hardware fronts do.
+
+The *hypervolume* of a front (:func:`hypervolume`) is the volume of objective space, in costs,
+that its points dominate and that a reference point bounds: ``lambda(U_p [p, r])``. It is
+computed exactly by slicing along the last objective (fronts of a search hold tens of points).
+
+The front cube (:func:`front_cube`) is the trial cube restricted to the front and the trials
+indistinguishable from it, with ``objective_value`` (trial, objective), ``on_front`` (trial, bool)
+and ``dominated_by`` (trial: the trial number of the front trial compared with, -1 on the front).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from pipeline.design.space import TRIAL_DIM, Metric, Objective, objective_values
+from pipeline.report.evidence import ALPHA, gather_evidence
+
+OBJECTIVE_ATTRS = {"units": "1", "long_name": "objective"}
+VALUE_ATTRS = {"units": "1", "long_name": "value of the objective (its own units)"}
+
+
+def pareto_mask(costs: np.ndarray) -> np.ndarray:
+    """bool (n,): the rows of ``costs`` (float64 (n, d), minimised) no other row dominates.
+
+    Rows with a NaN are never on the front; equal rows are all on it or all off it.
+    """
+    costs = np.asarray(costs, dtype=np.float64)
+    usable = np.isfinite(costs).all(axis=1)
+    on = usable.copy()
+    for i in np.flatnonzero(usable):
+        others = costs[usable]
+        dominated = (others <= costs[i]).all(axis=1) & (others < costs[i]).any(axis=1)
+        on[i] = not dominated.any()
+    return on
+
+
+def hypervolume(costs: np.ndarray, reference: np.ndarray) -> float:
+    """Volume that the rows of ``costs`` (float64 (n, d), minimised) dominate below
+    ``reference`` (d,); rows not strictly below it in every objective add nothing."""
+    costs = np.asarray(costs, dtype=np.float64)
+    reference = np.asarray(reference, dtype=np.float64)
+    inside = costs[np.isfinite(costs).all(axis=1) & (costs < reference).all(axis=1)]
+    if inside.size == 0:
+        return 0.0
+    if reference.size == 1:
+        return float(reference[0] - inside[:, 0].min())
+    inside = inside[np.argsort(inside[:, -1], kind="stable")]
+    volume = 0.0
+    for i in range(len(inside)):
+        top = inside[i + 1, -1] if i + 1 < len(inside) else reference[-1]
+        if top > inside[i, -1]:
+            volume += hypervolume(inside[: i + 1, :-1], reference[:-1]) * (top - inside[i, -1])
+    return volume
+
+
+def trial_costs(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.ndarray:
+    """float64 (trials, objectives): each objective of each trial as a cost (minimised)."""
+    signs = np.array([o.sign for o in objectives])
+    return objective_values(cube, objectives) * signs
+
+
+def front_cube(trials: xr.Dataset, objectives: Sequence[Objective]) -> xr.Dataset:
+    """The front of a trial cube (dimension :data:`TRIAL_DIM`), with the indistinguishable
+    trials beside it (see the module docstring)."""
+    values = objective_values(trials, objectives)
+    costs = values * np.array([o.sign for o in objectives])
+    keys = [str(k) for k in trials["result_key"].values]
+    on = pareto_mask(costs)
+    accuracy = next((o for o in objectives if o.metric is Metric.ACCURACY), None)
+    evidence = gather_evidence({"trials": trials}) if accuracy is not None else None
+    dominated_by = np.full(len(keys), -1, dtype=np.int64)
+    kept = on.copy()
+    front = np.flatnonzero(on)
+    numbers = trials[TRIAL_DIM].values
+    for i in np.flatnonzero(~on & np.isfinite(costs).all(axis=1)):
+        above = [j for j in front if (costs[j] <= costs[i]).all() and (costs[j] < costs[i]).any()]
+        if not above or evidence is None or accuracy is None:
+            continue
+        j = min(above, key=lambda j: costs[j][objectives.index(accuracy)])
+        dominated_by[i] = numbers[j]
+        test = evidence.compare(keys[i], keys[j], accuracy.model or "")
+        kept[i] = test is not None and not test.significant(ALPHA)
+    names = [o.name for o in objectives]
+    marked = trials.assign(
+        objective_value=((TRIAL_DIM, "objective"), values, VALUE_ATTRS),
+        on_front=(TRIAL_DIM, on, {"units": "1", "long_name": "on the Pareto front"}),
+        dominated_by=(
+            TRIAL_DIM,
+            dominated_by,
+            {"units": "1", "long_name": "trial of the front it is compared with (-1: none)"},
+        ),
+    ).assign_coords(objective=("objective", names, OBJECTIVE_ATTRS))
+    return marked.isel({TRIAL_DIM: np.flatnonzero(kept)})
+
+
+def trial_cube(cube: xr.Dataset, numbers: Sequence[int], space_name: str) -> xr.Dataset:
+    """A trial grid's cube (:meth:`pipeline.design.space.Space.trial_grid`) along
+    :data:`TRIAL_DIM`, the trials' ``numbers`` its coordinate; the searched fields stay
+    coordinates along it (attribute ``field``), as every other scene field does."""
+    (dim,) = cube["result_key"].dims
+    renamed = cube.rename_dims({dim: TRIAL_DIM}).drop_indexes(dim)
+    attrs = {"units": "1", "long_name": "trial of the search, in the order asked"}
+    numbered = renamed.assign_coords({TRIAL_DIM: (TRIAL_DIM, np.asarray(numbers), attrs)})
+    return numbered.assign_attrs(space=space_name)
+
+
+def search_seconds(
+    cube: xr.Dataset, spike_keys: Sequence[str], spike_stages: Sequence[str]
+) -> float:
+    """The stage seconds a search's trials cost: each distinct point once, and the
+    ``spike_stages`` of each spike train (``spike_keys``, per trial) once, so that a trial
+    sharing the train of an earlier one costs only its coding and training. Seconds are those
+    measured when each point was computed, whether this search or an earlier run computed it."""
+    seconds = cube["seconds"].transpose(TRIAL_DIM, "stage").values
+    stages = [str(s) for s in cube["stage"].values]
+    spike = np.array([s in spike_stages for s in stages])
+    seen_points: set[str] = set()
+    seen_trains: set[str] = set()
+    total = 0.0
+    for i, key in enumerate(str(k) for k in cube["result_key"].values):
+        if key in seen_points:
+            continue
+        seen_points.add(key)
+        keep = ~spike if spike_keys[i] in seen_trains else np.ones_like(spike)
+        seen_trains.add(spike_keys[i])
+        total += float(np.nansum(seconds[i][keep]))
+    return total

@@ -1,0 +1,95 @@
+"""The journal of a search (``eskin optimize``) in its run root: every trial asked and told.
+
+``<root>/search-<space>.jsonl`` holds one JSON object per line, appended as the search goes:
+``{"space", "trial", "params"}`` when a trial is asked (before its point is submitted) and
+``{"space", "trial", "values"}`` (its objective values) or ``{"space", "trial", "failed"}``
+when it is told. ``space`` is the fingerprint of the space searched, so a journal is never
+replayed into another space. Each line is written with one ``write`` on a file opened with
+``O_APPEND`` and flushed to disk (``fsync``); a line that does not parse (a write torn by a kill)
+is skipped when reading. The search replays it to resume: told trials go back into the sampler
+as they were, asked ones that were never told are asked again with the same values.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from storage.store import StoreError
+
+
+@dataclass
+class SearchJournal:
+    """The trials of one search read from its journal, in trial order.
+
+    ``params`` maps each asked trial's number to its values by field; ``values`` each told
+    trial's objective values; ``failed`` each failed trial's reason.
+    """
+
+    path: Path
+    fingerprint: str
+    params: dict[int, dict[str, Any]] = field(default_factory=dict)
+    values: dict[int, list[float]] = field(default_factory=dict)
+    failed: dict[int, str] = field(default_factory=dict)
+
+    @classmethod
+    def open(cls, root: str | Path, name: str, fingerprint: str) -> SearchJournal:
+        """The journal of space ``name`` under ``root`` (empty if there is none yet).
+
+        Raises
+        ------
+        StoreError
+            The journal holds trials of another space of that name (other ranges or
+            objectives): continuing it would mix them.
+        """
+        journal = cls(Path(root) / f"search-{name}.jsonl", fingerprint)
+        if not journal.path.is_file():
+            return journal
+        for line in journal.path.read_text(encoding="utf-8", errors="replace").splitlines():
+            try:
+                record = json.loads(line)
+                number = int(record["trial"])
+                if record["space"] != fingerprint:
+                    raise StoreError(
+                        f"{journal.path} holds a search of another space named {name!r} "
+                        "(its ranges or objectives differ): give another --root or name"
+                    )
+                if "params" in record:
+                    journal.params[number] = dict(record["params"])
+                elif "values" in record:
+                    journal.values[number] = [float(v) for v in record["values"]]
+                else:
+                    journal.failed[number] = str(record["failed"])
+            except (ValueError, KeyError, TypeError):
+                continue
+        return journal
+
+    @property
+    def pending(self) -> list[int]:
+        """Trials asked but never told (a killed search's), in order."""
+        return [n for n in sorted(self.params) if n not in self.values and n not in self.failed]
+
+    def asked(self, number: int, params: Mapping[str, Any]) -> None:
+        self.params[number] = dict(params)
+        self._append({"trial": number, "params": dict(params)})
+
+    def told(self, number: int, values: Sequence[float]) -> None:
+        self.values[number] = [float(v) for v in values]
+        self._append({"trial": number, "values": self.values[number]})
+
+    def told_failed(self, number: int, why: str) -> None:
+        self.failed[number] = why
+        self._append({"trial": number, "failed": why})
+
+    def _append(self, record: dict[str, Any]) -> None:
+        line = json.dumps({"space": self.fingerprint, **record}, sort_keys=True) + "\n"
+        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        try:
+            os.write(fd, line.encode())
+            os.fsync(fd)
+        finally:
+            os.close(fd)
