@@ -1,6 +1,7 @@
 """The ``eskin`` command line: it parses arguments, calls plain functions and prints.
 
 ``eskin run`` simulates one scene; ``eskin sweep`` runs the Prefect flow ``sweep`` on Dask;
+``eskin optimize`` runs the flow ``optimize``, a search of a design space on the same machinery;
 ``eskin server`` starts, shows or stops the local Prefect server sweeps use; ``eskin serve``
 serves the flow as a deployment; ``eskin report`` writes a run root's report.
 
@@ -45,6 +46,21 @@ def _workers(text: str) -> int:
         return cluster.check_workers(text)
     except cluster.ClusterError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _positive(kind: type) -> Any:
+    """An argparse type: a number of ``kind`` above zero."""
+
+    def read(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            value = None
+        if value is None or not value > 0 or value == float("inf"):
+            raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+        return value
+
+    return read
 
 
 def _version() -> str:
@@ -155,6 +171,54 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     sweep.set_defaults(handler=_sweep)
 
+    optimize = commands.add_parser(
+        "optimize",
+        parents=[common],
+        help="search a design space (ranges over scene fields, two or three objectives) on the "
+        "sweep's cache and cluster, and write its trials and front as cubes",
+        description="Run the Prefect flow 'optimize': a multi-objective search (Optuna's TPE, "
+        "ask-and-tell) whose trials are computed as sweep points, on Dask workers, through the "
+        "root's cache. The search is kept in the root: run it again to resume or to continue "
+        "it with a larger budget.",
+        epilog=_scene_fields_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    optimize.add_argument(
+        "--space", required=True, metavar="FILE", help="a space TOML file (see the README)"
+    )
+    optimize.add_argument(
+        "--root", metavar="DIR", help="where the store goes (default: runs/<space name>)"
+    )
+    budget = optimize.add_mutually_exclusive_group()
+    budget.add_argument(
+        "--budget",
+        type=_positive(int),
+        metavar="N",
+        help="trials in all, this run and earlier ones of the root (default 50)",
+    )
+    budget.add_argument(
+        "--budget-s",
+        type=_positive(float),
+        metavar="SECONDS",
+        help="stage seconds of the trials in all, each point and spike train counted once",
+    )
+    where = optimize.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=_workers,
+        metavar="N",
+        help=f"local Dask workers, 1 thread each, and trials per batch (default: the cores "
+        f"available, {cluster.available_cores()} here)",
+    )
+    where.add_argument(
+        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
+    )
+    optimize.add_argument(
+        "--report", action="store_true", help="write the report (<root>/report) at the end"
+    )
+    optimize.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    optimize.set_defaults(handler=_optimize)
+
     server = commands.add_parser(
         "server",
         parents=[common],
@@ -171,14 +235,22 @@ def build_parser() -> argparse.ArgumentParser:
     serve = commands.add_parser(
         "serve",
         parents=[common],
-        help="serve the 'sweep' flow as the deployment sweep/default on a Prefect server",
-        description="Serve the flow 'sweep' as deployment 'default' on the server of "
-        "PREFECT_API_URL, or on the local one (started if need be, kept up while serving). "
-        "Start sweeps with: prefect deployment run sweep/default --param grid=smoke "
-        "--param root=DIR",
+        help="serve the flows 'sweep' and 'optimize' as the deployments sweep/default and "
+        "optimize/default on a Prefect server",
+        description="Serve the flows 'sweep' and 'optimize' as deployments 'default' on the "
+        "server of PREFECT_API_URL, or on the local one (started if need be, kept up while "
+        "serving). Start sweeps with: prefect deployment run sweep/default --param grid=smoke "
+        "--param root=DIR; searches with: prefect deployment run optimize/default --param "
+        "space=FILE --param root=DIR --param budget=N",
     )
     serve.add_argument(
         "--grid", default="smoke", metavar="NAME|FILE", help="default grid of the deployment"
+    )
+    serve.add_argument(
+        "--space",
+        metavar="FILE",
+        help="default space of the optimize deployment (default: examples/design_space.toml "
+        "of the serving process's folder)",
     )
     serve.set_defaults(handler=_serve)
 
@@ -349,6 +421,48 @@ def _sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _optimize(args: argparse.Namespace) -> int:
+    from flows.cluster import probe_scheduler
+    from flows.environment import hermetic_environment
+    from flows.search import check_space, default_search_root
+    from flows.server import prefect_server
+    from flows.summaries import format_search_summary
+    from pipeline.design.space import load_space
+    from storage import SweepStore
+
+    # The space is loaded and checked before the store is created and Prefect imported.
+    space = load_space(args.space)
+    check_space(space)
+    if args.address is not None:
+        probe_scheduler(args.address)
+    store = SweepStore.open_or_create(Path(args.root) if args.root else default_search_root(space))
+    signal.signal(signal.SIGTERM, _interrupt)
+    start = time.perf_counter()
+    with store.lock():
+        hermetic_environment(store.root)
+        if args.json or args.quiet:
+            os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
+        with prefect_server(show_progress=not args.quiet):
+            from flows.optimize import optimize
+
+            summary = optimize(
+                space=space,
+                root=str(store.root),
+                budget=args.budget,
+                budget_s=args.budget_s,
+                workers=args.workers or cluster.available_cores(),
+                address=args.address,
+                report=args.report,
+                show_progress=not args.quiet,
+            )
+    summary["seconds"] = time.perf_counter() - start
+    if args.json:
+        print(json.dumps(json_safe(summary), indent=2))
+    else:
+        print(format_search_summary(summary))
+    return 0
+
+
 def _describe(args: argparse.Namespace) -> int:
     from flows.describe import (
         check_export_folder,
@@ -437,12 +551,27 @@ def _serve(args: argparse.Namespace) -> int:
     from flows.server import prefect_server
 
     load_sweep_grid(args.grid)
+    search = {}
+    if args.space is not None:
+        from pipeline.design.space import load_space
+
+        load_space(args.space)
+        search["space"] = str(Path(args.space).resolve())
     with prefect_server(show_progress=not args.quiet) as api_url:
+        from prefect import serve
+
+        from flows.optimize import optimize
         from flows.sweep import sweep
 
         if not args.quiet:
-            print(f"serving sweep/default on {api_url.removesuffix('/api')}", file=sys.stderr)
-        sweep.serve(name="default", parameters={"grid": args.grid})
+            print(
+                f"serving sweep/default and optimize/default on {api_url.removesuffix('/api')}",
+                file=sys.stderr,
+            )
+        serve(
+            sweep.to_deployment(name="default", parameters={"grid": args.grid}),
+            optimize.to_deployment(name="default", parameters=search),
+        )
     return 0
 
 

@@ -166,3 +166,29 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, list):
         return [json_safe(v) for v in value]
     return value
+
+
+def format_search_summary(summary: Mapping[str, Any]) -> str:
+    """The text ``eskin optimize`` prints: counts, the front (trial, objectives, searched
+    values; ``~`` marks a trial a paired test cannot tell from the front), where the cubes are.
+
+    ``summary`` is :func:`flows.search.search_summary`'s, optionally with ``report`` and
+    ``flow_run_url``.
+    """
+    lines = [
+        f"{summary['trials']} trials ({summary['new_trials']} new: {summary['computed']} points "
+        f"computed, {summary['cache_hits']} found in the store) in {summary['seconds']:.1f} s; "
+        f"{summary['search_seconds']:.1f} stage seconds in all",
+        "front (~: off it, but not significantly worse):",
+    ]
+    for row in summary["front"]:
+        values = ", ".join(f"{k} {v:.4g}" for k, v in row["objectives"].items())
+        at = ", ".join(
+            f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row["params"].items()
+        )
+        lines.append(f"  {'' if row['on_front'] else '~'}trial {row['trial']}: {values} at {at}")
+    lines += [f"cube {name}: {where}" for name, where in summary["cubes"].items()]
+    for key, label in (("report", "report"), ("flow_run_url", "Prefect flow run")):
+        if summary.get(key):
+            lines.append(f"{label}: {summary[key]}")
+    return "\n".join(lines)

@@ -128,7 +128,7 @@ class Dimension:
         else:
             values = np.linspace(self.low, self.high, n)
         if self.kind is DimensionKind.INT:
-            return tuple(dict.fromkeys(int(round(v)) for v in values))
+            return tuple(dict.fromkeys(round(float(v)) for v in values))
         return tuple(float(v) for v in values)
 
 
