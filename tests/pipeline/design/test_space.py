@@ -1,0 +1,132 @@
+"""Space files: dimensions, objectives, every problem at once; trials as a grid."""
+
+from pathlib import Path
+
+import pytest
+
+from pipeline.design.space import (
+    Dimension,
+    DimensionKind,
+    Direction,
+    Metric,
+    Space,
+    load_space,
+)
+from pipeline.errors import SceneError
+
+EXAMPLE = Path(__file__).parents[3] / "examples" / "design_space.toml"
+
+
+def space(**changes) -> dict:
+    data = {
+        "name": "s",
+        "base": "smoke",
+        "space": {
+            "readout.threshold_v": {"low": 0.02, "high": 0.3, "log": True},
+            "coding.window_s": {"choices": [0.05, 0.1, 0.2]},
+            "array.rows": {"low": 1, "high": 4, "step": 1},
+        },
+        "objectives": {"accuracy.ffnn": "max", "data_rate_bps": "min"},
+    }
+    for key, value in changes.items():
+        data[key] = value
+    return data
+
+
+def problems(data: dict) -> list[str]:
+    with pytest.raises(SceneError) as caught:
+        Space.from_dict(data)
+    return caught.value.problems
+
+
+def test_the_example_space_loads_with_each_kind_of_dimension():
+    loaded = load_space(EXAMPLE)
+    assert loaded.name == "design" and loaded.base.name == "paper"
+    threshold, window, rows = loaded.dimensions
+    assert threshold == Dimension("readout.threshold_v", DimensionKind.FLOAT, 0.02, 0.3, None, True)
+    assert window.kind is DimensionKind.CATEGORICAL and window.choices == (0.05, 0.1, 0.2)
+    assert rows == Dimension("array.rows", DimensionKind.INT, 1, 4, 1, False)
+    accuracy, rate = loaded.objectives
+    assert (accuracy.metric, accuracy.model, accuracy.direction) == (
+        Metric.ACCURACY,
+        "ffnn",
+        Direction.MAX,
+    )
+    assert (rate.name, rate.sign, accuracy.sign) == ("data_rate_bps", 1.0, -1.0)
+
+
+def test_every_problem_is_reported_at_once():
+    found = problems(
+        space(
+            seed=-1,
+            extra=1,
+            space={
+                "readout.nope": {"low": 1, "high": 2},
+                "array.rows": {"low": 0.5, "high": 4},
+                "readout.threshold_v": {"low": 0.3, "high": 0.1},
+                "readout.full_scale_v": {"low": -1.0, "high": 1.0, "log": True},
+                "coding.window_s": {"choices": [0.1, 0.1]},
+                "coding.n_windows": {"low": 1, "high": 4, "step": 2},
+                "training.epochs": {"low": 0, "high": 4},
+                "array.cols": {"low": 1, "high": 3, "size": 2},
+            },
+            objectives={"accuracy.svm": "max", "accuracy.cnn": "up", "latency": "min"},
+        )
+    )
+    expected = [
+        "extra: unknown key",
+        "seed: expected an integer",
+        "'readout.nope' is not a scene field",
+        "space.array.rows.low: expected an integer, got 0.5",
+        "space.readout.threshold_v: low (0.3) must be below high (0.1)",
+        "space.readout.full_scale_v: a log range needs low > 0",
+        "space.coding.window_s.choices: duplicate values 0.1",
+        "space.coding.n_windows.step: 4 - 1 is not a whole number of steps of 2",
+        "space.array.cols.size: unknown key",
+        "space.training.epochs = 0: training.epochs: 0 is out of range",
+        "objectives.accuracy.svm: unknown model 'svm'",
+        "objectives.accuracy.cnn: expected 'max' or 'min'",
+        "objectives.latency: unknown objective",
+    ]
+    assert len(found) == len(expected), found
+    for text, problem in zip(expected, found, strict=True):
+        assert text in problem
+
+
+def test_objectives_are_two_or_three_of_models_the_base_trains():
+    assert any("two or three" in p for p in problems(space(objectives={"compute_s": "min"})))
+    base = {"name": "one", "training": {"models": ["cnn"]}}
+    assert any("trains cnn, not ffnn" in p for p in problems(space(base=base)))
+    three = {"accuracy.ffnn": "max", "readout_power_w": "min", "compute_s": "min"}
+    assert len(Space.from_dict(space(objectives=three)).objectives) == 3
+
+
+def test_trials_are_the_points_of_one_zipped_sweep():
+    loaded = Space.from_dict(space())
+    trials = [
+        {"readout.threshold_v": 0.05, "coding.window_s": 0.1, "array.rows": 2},
+        {"readout.threshold_v": 0.05, "coding.window_s": 0.1, "array.rows": 2},
+        {"readout.threshold_v": 0.2, "coding.window_s": 0.2, "array.rows": 1},
+    ]
+    grid = loaded.trial_grid(trials)
+    points = grid.points()
+    assert len(points) == 3 and len(grid.unique_points()) == 2  # one design, computed once
+    assert points[2].scene == loaded.base.replace(**trials[2])
+    assert grid.sweeps[0].dims == ("threshold_v",)
+
+
+def test_the_exhaustive_grid_spreads_each_dimension():
+    loaded = Space.from_dict(space())
+    threshold, window, rows = loaded.exhaustive_grid(3).sweeps[0].axes
+    assert threshold.values == pytest.approx((0.02, (0.02 * 0.3) ** 0.5, 0.3))
+    assert window.values == (0.05, 0.1, 0.2)
+    assert rows.values == (1, 2, 4)  # 4 steps do not fit in 3 values: 1, 2.5, 4 rounded
+    assert loaded.exhaustive_grid(4).sweeps[0].axes[2].values == (1, 2, 3, 4)
+
+
+def test_the_fingerprint_follows_what_shapes_the_search():
+    a = Space.from_dict(space())
+    assert a.fingerprint() == Space.from_dict(space()).fingerprint()
+    assert a.fingerprint() != Space.from_dict(space(seed=1)).fingerprint()
+    other = space(objectives={"accuracy.ffnn": "max", "compute_s": "min"})
+    assert a.fingerprint() != Space.from_dict(other).fingerprint()
