@@ -5,6 +5,9 @@
   give what ``eskin run --json`` and ``eskin run`` print.
 - Sweep a grid: :func:`run_sweep` on a ``distributed.Client`` you give (or a local cluster it
   starts), without Prefect; the Prefect flow ``flows.sweep.sweep`` does the same with a UI.
+- Search a design space: :func:`run_optimize` (a space file or a
+  :class:`pipeline.design.space.Space`, a budget in trials or stage seconds), without Prefect;
+  the Prefect flow ``flows.optimize.optimize`` does the same with a UI.
 - Open the results: :func:`open_results` (a dict of cubes by sweep name) or :func:`open_tree`
   (one ``xarray.DataTree``), and :func:`best_points` of a cube.
 - Compare two designs recording by recording: :func:`compare` (a paired difference in accuracy
@@ -19,9 +22,11 @@ from flows.assembly import best_points
 from flows.progress import SweepFailed
 from flows.report import write_run_report
 from flows.run import run_sweep
+from flows.search import run_optimize
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.design.grid import Grid, load_grid
 from pipeline.design.scene import Scene
+from pipeline.design.space import Space, load_space
 from pipeline.errors import EskinError
 from pipeline.report.evidence import compare_points as compare
 from pipeline.run.simulate import SceneResult, run_scene
@@ -32,6 +37,7 @@ __all__ = [
     "Grid",
     "Scene",
     "SceneResult",
+    "Space",
     "SweepFailed",
     "best_points",
     "compare",
@@ -39,9 +45,11 @@ __all__ = [
     "format_sweep_summary",
     "json_safe",
     "load_grid",
+    "load_space",
     "open_results",
     "open_tree",
     "result_summary",
+    "run_optimize",
     "run_scene",
     "run_sweep",
     "write_run_report",

@@ -42,3 +42,12 @@ def test_the_python_api_session_runs_as_shown(tmp_path, monkeypatch):
     runner.run(test, out=report.append)
     assert runner.summarize(verbose=False).failed == 0, "".join(report)
     assert (tmp_path / "runs" / "api" / "report" / "report.html").is_file()
+
+
+def test_the_space_example_is_the_example_space_file():
+    from pipeline.design.space import Space, load_space
+
+    block = next(b for b in TOML_BLOCKS if "[objectives]" in b)
+    shown = Space.from_dict(tomllib.loads(block))
+    example = load_space(Path(__file__).resolve().parents[1] / "examples" / "design_space.toml")
+    assert shown.fingerprint() == example.fingerprint()

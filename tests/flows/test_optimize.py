@@ -96,8 +96,11 @@ def test_a_budget_of_12_then_16_computes_only_the_4_new_trials(space, tmp_path):
     assert row["objectives"]["data_rate_bps"] == pytest.approx(rate[on[0]])
 
     stored, thresholds = results(root), trials["threshold_v"].values
-    second = optimize(path, root, env, "--budget", "16")
+    second = optimize(path, root, env, "--budget", "16", "--report")
     assert second["trials"] == 16 and second["new_trials"] == 4
+    # The report's answer section works on the search's designs.
+    report = (Path(second["report"]).parent / "report.md").read_text()
+    assert "## The answer" in report and "distinct designs" in report
     trials = open_results(root)["trials"]
     assert trials.sizes["trial"] == 16
     new = set(trials["result_key"].values) - distinct
