@@ -22,13 +22,17 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from flows import cluster
 from flows.report import DEFAULT_ADC_BITS, ENERGY_OPTIONS, energy_argument
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
+
+if TYPE_CHECKING:
+    from storage import SweepStore
 
 EXIT_USER_ERROR = 2
 
@@ -79,6 +83,20 @@ def _scene_fields_epilog() -> str:
     lines = (f"  {field.text()}" for field in scene_fields())
     return "Scene fields (scene files, a grid's base and its axes; dotted paths):\n" + "\n".join(
         lines
+    )
+
+
+def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None:
+    """``--workers N`` (``workers`` says what they are) or ``--address``, not both."""
+    where = command.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=_workers,
+        metavar="N",
+        help=f"{workers} (default: the cores available, {cluster.available_cores()} here)",
+    )
+    where.add_argument(
+        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
     )
 
 
@@ -142,17 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="where the store goes (default: runs/<grid name>, or runs/<grid name>-<dataset "
         "name> with --dataset)",
     )
-    where = sweep.add_mutually_exclusive_group()
-    where.add_argument(
-        "--workers",
-        type=_workers,
-        metavar="N",
-        help=f"local Dask workers, 1 thread each (default: the cores available, "
-        f"{cluster.available_cores()} here)",
-    )
-    where.add_argument(
-        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
-    )
+    _add_cluster_options(sweep, "local Dask workers, 1 thread each")
     sweep.add_argument(
         "--dataset",
         metavar="NAME|PATH",
@@ -202,17 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SECONDS",
         help="stage seconds of the trials in all, each point and spike train counted once",
     )
-    where = optimize.add_mutually_exclusive_group()
-    where.add_argument(
-        "--workers",
-        type=_workers,
-        metavar="N",
-        help=f"local Dask workers, 1 thread each, and trials per batch (default: the cores "
-        f"available, {cluster.available_cores()} here)",
-    )
-    where.add_argument(
-        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
-    )
+    _add_cluster_options(optimize, "local Dask workers, 1 thread each, and trials per batch")
     optimize.add_argument(
         "--report", action="store_true", help="write the report (<root>/report) at the end"
     )
@@ -372,9 +370,7 @@ def _run(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
     from flows.dry_run import dry_run, format_dry_run
-    from flows.environment import hermetic_environment
     from flows.planning import check_grid, default_root, load_sweep_grid
-    from flows.server import prefect_server
     from storage import SweepStore
 
     workers = args.workers or cluster.available_cores()
@@ -391,41 +387,56 @@ def _sweep(args: argparse.Namespace) -> int:
             json.dumps(json_safe(plan.to_json()), indent=2) if args.json else format_dry_run(plan)
         )
         return 0
-    store = SweepStore.open_or_create(root)
+
+    def run(store: SweepStore) -> dict[str, Any]:
+        from flows.sweep import sweep
+
+        return sweep(
+            grid=grid,
+            root=str(store.root),
+            workers=workers,
+            address=args.address,
+            report=args.report,
+            show_progress=not args.quiet,
+        )
+
+    return _run_flow(args, SweepStore.open_or_create(root), run, format_sweep_summary)
+
+
+def _run_flow(
+    args: argparse.Namespace,
+    store: SweepStore,
+    run: Callable[[SweepStore], dict[str, Any]],
+    format_text: Callable[[dict[str, Any]], str],
+) -> int:
+    """Run a flow (``run(store)``) on ``store``'s root holding its lock, with the Prefect server
+    up, and print its summary (``format_text`` of it, or JSON with ``--json``)."""
+    from flows.environment import hermetic_environment
+    from flows.server import prefect_server
+
     # SIGTERM unwinds like Ctrl-C, so the local Dask cluster is stopped (the default action
     # would kill this process alone).
     signal.signal(signal.SIGTERM, _interrupt)
     start = time.perf_counter()
-    # Refuse a second sweep on this root before Prefect starts; the flow's own lock nests in it.
+    # Refuse a second run on this root before Prefect starts; the flow's own lock nests in it.
     with store.lock():
         hermetic_environment(store.root)
         if args.json or args.quiet:
             os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
         with prefect_server(show_progress=not args.quiet):
-            from flows.sweep import sweep
-
-            summary = sweep(
-                grid=grid,
-                root=str(store.root),
-                workers=workers,
-                address=args.address,
-                report=args.report,
-                show_progress=not args.quiet,
-            )
-    # The whole sweep as the user waits for it, the server start included.
+            summary = run(store)
+    # The whole run as the user waits for it, the server start included.
     summary["seconds"] = time.perf_counter() - start
     if args.json:
         print(json.dumps(json_safe(summary), indent=2))
     else:
-        print(format_sweep_summary(summary))
+        print(format_text(summary))
     return 0
 
 
 def _optimize(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
-    from flows.environment import hermetic_environment
     from flows.search import check_space, default_search_root
-    from flows.server import prefect_server
     from flows.summaries import format_search_summary
     from pipeline.design.space import load_space
     from storage import SweepStore
@@ -435,32 +446,23 @@ def _optimize(args: argparse.Namespace) -> int:
     check_space(space)
     if args.address is not None:
         probe_scheduler(args.address)
-    store = SweepStore.open_or_create(Path(args.root) if args.root else default_search_root(space))
-    signal.signal(signal.SIGTERM, _interrupt)
-    start = time.perf_counter()
-    with store.lock():
-        hermetic_environment(store.root)
-        if args.json or args.quiet:
-            os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
-        with prefect_server(show_progress=not args.quiet):
-            from flows.optimize import optimize
 
-            summary = optimize(
-                space=space,
-                root=str(store.root),
-                budget=args.budget,
-                budget_s=args.budget_s,
-                workers=args.workers or cluster.available_cores(),
-                address=args.address,
-                report=args.report,
-                show_progress=not args.quiet,
-            )
-    summary["seconds"] = time.perf_counter() - start
-    if args.json:
-        print(json.dumps(json_safe(summary), indent=2))
-    else:
-        print(format_search_summary(summary))
-    return 0
+    def run(store: SweepStore) -> dict[str, Any]:
+        from flows.optimize import optimize
+
+        return optimize(
+            space=space,
+            root=str(store.root),
+            budget=args.budget,
+            budget_s=args.budget_s,
+            workers=args.workers or cluster.available_cores(),
+            address=args.address,
+            report=args.report,
+            show_progress=not args.quiet,
+        )
+
+    root = Path(args.root) if args.root else default_search_root(space)
+    return _run_flow(args, SweepStore.open_or_create(root), run, format_search_summary)
 
 
 def _describe(args: argparse.Namespace) -> int:

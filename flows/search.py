@@ -109,7 +109,7 @@ class Search:
         )
         sampler = optuna.samplers.TPESampler(multivariate=True, constant_liar=True, seed=seed)
         self.study = optuna.create_study(
-            directions=["minimize" if o.sign > 0 else "maximize" for o in space.objectives],
+            directions=[o.direction.verb for o in space.objectives],
             sampler=sampler,
         )
         for number in sorted(self.journal.params):

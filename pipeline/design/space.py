@@ -76,8 +76,15 @@ TRIAL_DIM = "trial"
 
 
 class Direction(enum.StrEnum):
+    """Whether an objective is maximised or minimised."""
+
     MAX = "max"
     MIN = "min"
+
+    @property
+    def verb(self) -> str:
+        """``"maximize"`` or ``"minimize"``, as search libraries (Optuna) name directions."""
+        return f"{self.value}imize"
 
 
 class Metric(enum.StrEnum):
@@ -90,6 +97,9 @@ class Metric(enum.StrEnum):
 
 
 class DimensionKind(enum.StrEnum):
+    """How a dimension's values are drawn: from a float range (continuous, stepped or
+    log-scaled), an integer range, or a list of choices."""
+
     FLOAT = "float"
     INT = "int"
     CATEGORICAL = "categorical"
