@@ -13,8 +13,14 @@ process on 1,000 points, the straightforward way (``Scene.replace``, the whole c
 and the fit check at every point) over the shared-parts path, after checking that both give the
 same points and keys. Medians of 3 runs.
 
+Scale rows: 100,000 and 1,000,000 points (:data:`SCALE_SIZES`), each planned in a fresh process
+(``python -m benchmarks.planning --one N``) so that its peak memory is its own: the time per
+point (CPU seconds of the process, which a busy machine does not inflate as it does wall time;
+wall time in the detail) and the peak resident memory per point above the interpreter's after
+its imports, at 1,000,000 over 100,000 (linear: at most 1.5). Medians of 3 processes.
+
 ``python -m benchmarks.planning`` runs this suite alone and prints its rows and the seconds of
-each phase at 100,000 points.
+each phase at 100,000 points; ``--scale`` runs the scale rows alone.
 """
 
 from __future__ import annotations
@@ -24,6 +30,8 @@ import hashlib
 import json
 import resource
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from collections.abc import Callable
@@ -48,7 +56,7 @@ MISMATCH_REL = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5]
 
 
 def grid_text(n_points: int) -> str:
-    """A grid TOML of ``n_points`` (1,000 times a power of ten up to 100,000) on ``paper``."""
+    """A grid TOML of ``n_points`` (1,000 times a power of ten up to 1,000,000) on ``paper``."""
     mismatch = MISMATCH_REL if n_points >= 10_000 else MISMATCH_REL[1:2]
     seeds = list(range(n_points // 10_000)) if n_points >= 100_000 else [0]
     axes = {
@@ -164,6 +172,71 @@ def measure(folder: Path, repeat: int = REPEAT) -> dict:
     }
 
 
+SCALE_SIZES = (100_000, 1_000_000)
+
+
+def plan_in_process(n_points: int, folder: Path) -> dict[str, float]:
+    """Plan an ``n_points`` grid as :func:`sweep_before_work` does, in this process: wall and
+    CPU seconds, peak resident memory and the memory before planning (MiB)."""
+    path = folder / f"plan{n_points}.toml"
+    path.write_text(grid_text(n_points))
+    before_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    wall, cpu = time.perf_counter(), time.process_time()
+    planned = sweep_before_work(str(path), str(folder / f"root{n_points}"))
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    if planned != n_points:
+        raise RuntimeError(f"{path} planned {planned} distinct points, not {n_points}")
+    peak_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return {"wall_s": wall, "cpu_s": cpu, "peak_mib": peak_mib, "before_mib": before_mib}
+
+
+def plan_in_fresh_process(n_points: int) -> dict[str, float]:
+    """:func:`plan_in_process` in a new Python process (its peak memory its own)."""
+    with tempfile.TemporaryDirectory(prefix="eskin-plan-") as folder:
+        done = subprocess.run(
+            [sys.executable, "-m", "benchmarks.planning", "--one", str(n_points), folder],
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def scale_rows(repeat: int = REPEAT) -> list[dict]:
+    """Time and peak memory per point at 1,000,000 points over 100,000 (module docstring)."""
+    runs = {n: [plan_in_fresh_process(n) for _ in range(repeat)] for n in SCALE_SIZES}
+    figures = {}
+    for n, found in runs.items():
+        figures[n] = {
+            "cpu_us": statistics.median(r["cpu_s"] for r in found) / n * 1e6,
+            "wall_us": statistics.median(r["wall_s"] for r in found) / n * 1e6,
+            "peak_b": statistics.median((r["peak_mib"] - r["before_mib"]) * 2**20 for r in found)
+            / n,
+            "peak_mib": statistics.median(r["peak_mib"] for r in found),
+        }
+    small, large = (figures[n] for n in SCALE_SIZES)
+    sizes = "; ".join(
+        f"{n:,}: {f['cpu_us']:.1f} us CPU ({f['wall_us']:.1f} wall), "
+        f"{f['peak_b']:.0f} B per point (peak {f['peak_mib']:.0f} MiB)"
+        for n, f in figures.items()
+    )
+    return [
+        {
+            "benchmark": f"plan+check time per point: {SCALE_SIZES[1]:,} / {SCALE_SIZES[0]:,}",
+            "ratio": large["cpu_us"] / small["cpu_us"],
+            "target": f"<= {LINEAR_TARGET} (linear)",
+            "detail": sizes,
+        },
+        {
+            "benchmark": f"plan+check peak memory per point: {SCALE_SIZES[1]:,} / "
+            f"{SCALE_SIZES[0]:,}",
+            "ratio": large["peak_b"] / small["peak_b"],
+            "target": f"<= {LINEAR_TARGET} (linear)",
+            "detail": "peak resident memory above the interpreter's after its imports",
+        },
+    ]
+
+
 def rows(found: dict) -> list[dict]:
     seconds = found["seconds"]
     per_point_us = {n: s / n * 1e6 for n, s in seconds.items()}
@@ -196,10 +269,17 @@ def rows(found: dict) -> list[dict]:
 
 def run(repeat: int = REPEAT) -> list[dict]:
     with tempfile.TemporaryDirectory(prefix="eskin-plan-") as folder:
-        return rows(measure(Path(folder), repeat))
+        return rows(measure(Path(folder), repeat)) + scale_rows(repeat)
 
 
 def main() -> None:
+    if sys.argv[1:2] == ["--one"]:
+        print(json.dumps(plan_in_process(int(sys.argv[2]), Path(sys.argv[3]))))
+        return
+    if sys.argv[1:2] == ["--scale"]:
+        for r in scale_rows():
+            print(f"{r['benchmark']}  {r['ratio']:.2f}  {r['target']}; {r['detail']}")
+        return
     with tempfile.TemporaryDirectory(prefix="eskin-plan-") as folder:
         found = measure(Path(folder))
     table = rows(found)

@@ -129,8 +129,9 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
         by_kind.setdefault(cost_kind(scenes[key]), []).append(seconds)
     medians = {kind: statistics.median(values) for kind, values in by_kind.items()}
     estimated = 0.0
-    unknown = 0
-    for key, scene in scenes.items():
+    unknown = 0 if medians else len(scenes) - len(totals)
+    # A point's kind is looked up only where some kind has a cached point to go by.
+    for key, scene in scenes.items() if medians else ():
         if key in totals:
             continue
         median = medians.get(cost_kind(scene))

@@ -13,7 +13,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid
+from flows.environment import machine_memory_bytes
+from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid, plannable_points
 from pipeline.design.scene import DatasetSpec, Scene
 from pipeline.recordings.sources import resolve_dataset_argument
 from pipeline.run.records import ResultEntry
@@ -81,11 +82,14 @@ def load_sweep_grid(grid_ref: str | Path, dataset: str | Path | None = None) -> 
     Raises
     ------
     SceneError
-        The grid is invalid, or a sweep sets a ``dataset.*`` field while ``dataset`` is given.
+        The grid is invalid, larger than this machine can plan
+        (:func:`pipeline.design.grid.plannable_points`), or a sweep sets a ``dataset.*`` field
+        while ``dataset`` is given.
     DatasetError
         ``dataset`` names no dataset.
     """
-    grid = load_grid(grid_ref)
+    # A grid larger than this machine can plan is refused from its axis sizes.
+    grid = load_grid(grid_ref, plannable_points(machine_memory_bytes()))
     if dataset is not None:
         grid = grid.with_dataset(resolve_dataset_argument(str(dataset)))
     return grid

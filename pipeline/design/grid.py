@@ -171,11 +171,19 @@ class Grid:
 
     @classmethod
     def from_dict(
-        cls, data: Mapping[str, Any], source: str = "<dict>", base_dir: Path | None = None
+        cls,
+        data: Mapping[str, Any],
+        source: str = "<dict>",
+        base_dir: Path | None = None,
+        max_points: int | None = None,
     ) -> Grid:
-        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem."""
+        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem.
+
+        A grid of more than ``max_points`` points (counted from its axis sizes, none built:
+        :func:`too_large`) is refused with its count, its cost and the advice to search it.
+        """
         problems: list[str] = []
-        grid = _read_grid(data, source, base_dir or Path.cwd(), problems)
+        grid = _read_grid(data, source, base_dir or Path.cwd(), problems, max_points)
         if problems:
             raise SceneError(problems, source, kind="grid")
         return grid
@@ -339,13 +347,78 @@ def cost_kind(scene: Scene) -> str:
     return json.dumps(form, sort_keys=True, separators=(",", ":"))
 
 
+#: Memory and time planning takes per point (load, check, distinct points, cache keys, cached
+#: entries), measured at 1,000,000 points by ``benchmarks/planning.py`` (peak resident memory
+#: above the interpreter's, CPU time), rounded up.
+PLAN_BYTES_PER_POINT = 1_000
+PLAN_SECONDS_PER_POINT = 20e-6
+#: The share of the machine's memory a plan may take (the sweep needs the rest), and the
+#: longest a command may plan before it says anything.
+PLAN_MEMORY_SHARE = 0.5
+PLAN_MAX_S = 120.0
+#: Stage seconds of a typical point, for the cost of a grid too large to plan: the ``paper``
+#: grid's mean (483 stage seconds over 48 points, 2 cores).
+TYPICAL_POINT_S = 10.0
+
+
+def plannable_points(memory_bytes: int) -> int:
+    """The most points a machine of ``memory_bytes`` plans: in :data:`PLAN_MEMORY_SHARE` of its
+    memory at :data:`PLAN_BYTES_PER_POINT`, and in :data:`PLAN_MAX_S` at
+    :data:`PLAN_SECONDS_PER_POINT` (6,000,000 points on a machine of 12 GB or more)."""
+    by_memory = memory_bytes * PLAN_MEMORY_SHARE / PLAN_BYTES_PER_POINT
+    return int(min(by_memory, round(PLAN_MAX_S / PLAN_SECONDS_PER_POINT)))
+
+
+def sweep_sizes(sweeps: Any) -> dict[str, int]:
+    """Points of each sweep of a grid's ``sweeps`` table, from its axis sizes alone (a product
+    of their lengths, or the longest of zipped axes); axes that are not lists count 1."""
+    sizes = {}
+    for name, data in sweeps.items() if isinstance(sweeps, Mapping) else ():
+        axes = data.get("axes") if isinstance(data, Mapping) else None
+        lengths = [
+            len(v)
+            for v in (axes.values() if isinstance(axes, Mapping) else ())
+            if isinstance(v, list)
+        ]
+        zipped = isinstance(data, Mapping) and data.get("mode") == SweepMode.ZIP.value
+        sizes[str(name)] = max(lengths, default=0) if zipped else math.prod(lengths)
+    return sizes
+
+
+def too_large(sweeps: Any, max_points: int | None) -> str:
+    """Why a grid's ``sweeps`` table is too large to plan (more than ``max_points`` points,
+    :func:`sweep_sizes`), with its count, its planning and computing cost and the advice to
+    search it instead; empty when it is not (or ``max_points`` is None)."""
+    sizes = sweep_sizes(sweeps)
+    n = sum(sizes.values())
+    if max_points is None or n <= max_points:
+        return ""
+    largest = max(sizes, key=sizes.__getitem__)
+    memory_gb = n * PLAN_BYTES_PER_POINT / 1e9
+    return (
+        f"sweeps: {n:,} points (sweeps.{largest} has {sizes[largest]:,}) are more than this "
+        f"machine can plan ({max_points:,} at most); planning them would take about "
+        f"{memory_gb:,.1f} GB and {_duration(n * PLAN_SECONDS_PER_POINT)}, computing them about "
+        f"{_duration(n * TYPICAL_POINT_S)} of stage time at {TYPICAL_POINT_S:g} s per point: "
+        "search the space with `eskin optimize` instead"
+    )
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("years", 365 * 86400), ("days", 86400), ("hours", 3600), ("min", 60)):
+        if seconds >= size:
+            return f"{seconds / size:,.1f} {unit}"
+    return f"{seconds:.0f} s"
+
+
 def builtin_grid_names() -> tuple[str, ...]:
     files = resources.files("pipeline.design.grids").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
 
 
-def load_grid(name_or_path: str | Path) -> Grid:
-    """A built-in grid by name (``paper``, ``smoke``) or a grid TOML file by path."""
+def load_grid(name_or_path: str | Path, max_points: int | None = None) -> Grid:
+    """A built-in grid by name (``paper``, ``smoke``) or a grid TOML file by path; more than
+    ``max_points`` points are refused (:meth:`Grid.from_dict`)."""
     text = str(name_or_path)
     if text in builtin_grid_names():
         content = (
@@ -353,7 +426,7 @@ def load_grid(name_or_path: str | Path) -> Grid:
         )
         data = tomllib.loads(content)
         data.setdefault("name", text)
-        return Grid.from_dict(data, source=f"built-in {text!r}")
+        return Grid.from_dict(data, source=f"built-in {text!r}", max_points=max_points)
     path = Path(text)
     try:
         content = path.read_text(encoding="utf-8")
@@ -369,7 +442,7 @@ def load_grid(name_or_path: str | Path) -> Grid:
     except tomllib.TOMLDecodeError as exc:
         raise SceneError([f"not valid TOML: {exc}"], str(path), "grid") from None
     data.setdefault("name", path.stem)
-    return Grid.from_dict(data, source=str(path), base_dir=path.parent)
+    return Grid.from_dict(data, source=str(path), base_dir=path.parent, max_points=max_points)
 
 
 @dataclass(frozen=True)
@@ -554,7 +627,9 @@ def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
 # Reading and validation
 
 
-def _read_grid(data: Any, source: str, base_dir: Path, problems: list[str]) -> Grid:
+def _read_grid(
+    data: Any, source: str, base_dir: Path, problems: list[str], max_points: int | None = None
+) -> Grid:
     if not isinstance(data, Mapping):
         problems.append(f"grid: must be a table, got {type(data).__name__}")
         return Grid("grid", Scene(), ())
@@ -570,9 +645,13 @@ def _read_grid(data: Any, source: str, base_dir: Path, problems: list[str]) -> G
     if not isinstance(sweeps_data, Mapping) or not sweeps_data:
         problems.append("sweeps: a grid needs at least one [sweeps.<name>] table")
         sweeps_data = {}
+    # Counted before any point is checked: a grid too large to plan is refused at once.
+    refusal = too_large(sweeps_data, max_points)
+    if refusal:
+        problems.append(refusal)
     sweeps = []
     for sweep_name, sweep_data in sweeps_data.items():
-        sweep = _read_sweep(sweep_name, sweep_data, base, problems)
+        sweep = _read_sweep(sweep_name, sweep_data, base, problems, check_points=not refusal)
         if sweep is not None:
             sweeps.append(sweep)
     return Grid(name, base, tuple(sweeps))
@@ -591,7 +670,9 @@ def _read_base(value: Any, base_dir: Path, problems: list[str]) -> Scene:
     return Scene()
 
 
-def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep | None:
+def _read_sweep(
+    name: str, data: Any, base: Scene, problems: list[str], check_points: bool = True
+) -> Sweep | None:
     where = f"sweeps.{name}"
     if not _valid_name(name):
         problems.append(f"{where}: not a valid sweep name ({NAME_PATTERN})")
@@ -650,6 +731,8 @@ def _read_sweep(name: str, data: Any, base: Scene, problems: list[str]) -> Sweep
     except SceneError as exc:
         problems.append(f"{where}.set: {'; '.join(exc.problems)}")
         return None
+    if not check_points:
+        return sweep
     # Each scene part is validated once per combination of the values in it, not per point.
     variants = _variants(fixed_base, sweep)
     for _, indices in _positions(sweep):

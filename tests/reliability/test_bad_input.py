@@ -57,6 +57,19 @@ def scene_file(tmp: Path, *, dataset=SYNTHETIC, readout="", coding="", training=
     return write(tmp / "scene.toml", text)
 
 
+#: Five axes of 100 values each.
+HUGE_AXES = "".join(
+    f'"{field}" = {[round(0.001 * (i + 1), 3) for i in range(100)]}\n'
+    for field in (
+        "readout.threshold_v",
+        "coding.window_s",
+        "readout.effects.threshold_mismatch.sigma_rel",
+        "readout.effects.amplifier_noise.sigma_v",
+        "readout.effects.comparator_noise.sigma_v",
+    )
+)
+
+
 def grid_file(tmp: Path, base: str, sweeps: str | None = None, head: str = "") -> Path:
     sweeps = sweeps or '[sweeps.t]\naxes = { "readout.threshold_v" = [0.05, 0.09] }\n'
     return write(tmp / "grid.toml", f'{head}base = "{base}"\n{sweeps}')
@@ -282,6 +295,17 @@ CASES: list[Case] = [
         "args-workers-and-address",
         lambda t: ["--grid", "smoke", "--workers", "3", "--address", "tcp://127.0.0.1:1"],
         "--address",
+    ),
+    (
+        # 100 ** 5 points: refused from the axis sizes, in milliseconds, none built.
+        "grid-too-large-to-plan",
+        lambda t: [
+            "--grid",
+            str(grid_file(t, "paper", "[sweeps.huge.axes]\n" + HUGE_AXES)),
+            "--dry-run",
+        ],
+        "10,000,000,000 points (sweeps.huge has 10,000,000,000) are more than this machine can "
+        "plan",
     ),
     ("args-no-grid", lambda t: [], "--grid"),
     ("args-unknown-option", lambda t: ["--grid", "smoke", "--frobnicate"], "--frobnicate"),

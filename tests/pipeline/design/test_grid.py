@@ -552,3 +552,43 @@ def test_check_fits_reports_as_the_per_point_check():
     with pytest.raises(SceneError) as info:
         check_fits(grid, {cache_key(grid.base, "recordings"): facts})
     assert info.value.problems == expected
+
+
+def test_a_grid_too_large_to_plan_is_refused_from_its_axis_sizes(monkeypatch):
+    from pipeline.design import grid as grid_module
+
+    data = {
+        "base": "smoke",
+        "sweeps": {
+            "a": {"axes": {"readout.threshold_v": [0.05, 0.09], "coding.window_s": [0.1, 0.2]}},
+            "b": {"mode": "zip", "axes": {"array.rows": [1, 2, 3], "array.cols": [1, 2, 3]}},
+            # Not checked point by point once the grid is known to be too large.
+            "c": {"axes": {"readout.threshold_v": [-1.0]}},
+        },
+    }
+    assert grid_module.sweep_sizes(data["sweeps"]) == {"a": 4, "b": 3, "c": 1}
+    assert (
+        len(
+            Grid.from_dict(
+                {**data, "sweeps": dict(list(data["sweeps"].items())[:2])}, max_points=7
+            ).points()
+        )
+        == 7
+    )
+
+    def no_point_is_checked(*args):
+        raise AssertionError("a point was checked")
+
+    monkeypatch.setattr(grid_module, "_positions", no_point_is_checked)
+    with pytest.raises(SceneError) as caught:
+        Grid.from_dict(data, max_points=7)
+    (first,) = caught.value.problems
+    assert first.startswith("sweeps: 8 points (sweeps.a has 4) are more than this machine can plan")
+    assert "(7 at most)" in first and "search the space with `eskin optimize` instead" in first
+
+
+def test_plannable_points_follow_memory_up_to_the_planning_time():
+    from pipeline.design.grid import PLAN_BYTES_PER_POINT, plannable_points
+
+    assert plannable_points(2 * PLAN_BYTES_PER_POINT * 1000) == 1000
+    assert plannable_points(24 * 2**30) == 6_000_000
