@@ -17,6 +17,7 @@ from benchmarks import (
     encoder,
     planning,
     scale,
+    search,
     sweep,
     sweep_scale,
     training,
@@ -26,10 +27,11 @@ from benchmarks import (
 
 def main() -> None:
     # --quick skips the scale runs, the paper-grid sweeps (~25 minutes), the sweep machinery
-    # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes) and the warm
-    # re-run of the paper grid (whose root, runs/bench/paper, the first run computes).
+    # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes), the warm
+    # re-run of the paper grid (whose root, runs/bench/paper, the first run computes) and the
+    # search against its exhaustive grid (runs/bench/search, computed by the first run).
     quick = "--quick" in sys.argv
-    slow = [scale, sweep, sweep_scale, warm_rerun]
+    slow = [scale, sweep, sweep_scale, warm_rerun, search]
     suites = [encoder, coding, training, planning] + ([] if quick else slow)
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):

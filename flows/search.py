@@ -16,8 +16,10 @@ the trial cube of every trial so far is built (:func:`pipeline.results.cube.buil
 ``trial``), the batch's objective values are read from it and told, and the cubes ``trials``
 and ``front`` (:func:`pipeline.report.trials.front_cube`) are written.
 
-Sampler: multi-objective TPE (``TPESampler(multivariate=True, constant_liar=True)``, seeded from
-the space's seed; the constant liar keeps the trials of one batch apart). Cost accounting: a
+Sampler: the space's (:class:`pipeline.design.space.Sampler`), by default multi-objective TPE
+(``TPESampler(multivariate=True, constant_liar=True)``; the constant liar keeps the trials of one
+batch apart), NSGA-II or random search, seeded from the space's seed and the trials already
+asked. Cost accounting: a
 budget in seconds (``budget_s``) is spent in stage seconds as measured when each point was
 computed, each distinct point once and each spike train once
 (:func:`pipeline.report.trials.search_seconds`): a trial that shares the spike train of an
@@ -29,7 +31,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -42,7 +44,14 @@ from flows.environment import hermetic_environment
 from flows.planning import DEFAULT_RUNS_DIR, check_grid, plan_sweep
 from flows.progress import SweepFailed, completed_points, failure_message
 from flows.scheduling import submit_missing
-from pipeline.design.space import TRIALS, DimensionKind, Space, load_space, objective_values
+from pipeline.design.space import (
+    TRIALS,
+    DimensionKind,
+    Sampler,
+    Space,
+    load_space,
+    objective_values,
+)
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import SPIKES
@@ -88,6 +97,20 @@ def distributions(space: Space) -> dict[str, Any]:
     return found
 
 
+def make_sampler(kind: Sampler, seed: int) -> Any:
+    """The Optuna sampler of ``kind``, seeded."""
+    import optuna
+
+    match kind:
+        case Sampler.TPE:
+            return optuna.samplers.TPESampler(multivariate=True, constant_liar=True, seed=seed)
+        case Sampler.NSGA2:
+            return optuna.samplers.NSGAIISampler(seed=seed)
+        case Sampler.RANDOM:
+            return optuna.samplers.RandomSampler(seed=seed)
+    raise ValueError(f"unknown sampler {kind}")
+
+
 class Search:
     """One search of ``space`` in the store at ``root``: its study, journal and trials.
 
@@ -107,7 +130,7 @@ class Search:
         seed = int(
             np.random.SeedSequence([space.seed, len(self.journal.params)]).generate_state(1)[0]
         )
-        sampler = optuna.samplers.TPESampler(multivariate=True, constant_liar=True, seed=seed)
+        sampler = make_sampler(space.sampler, seed)
         self.study = optuna.create_study(
             directions=[o.direction.verb for o in space.objectives],
             sampler=sampler,
@@ -193,29 +216,23 @@ class Search:
     def write_cubes(self, finished: Sequence[int] = ()) -> xr.Dataset | None:
         """Build the cube of every told trial and of the ``finished`` ones (whose points are in
         the store) and the front, write both; return the first (None before any trial)."""
-        from pipeline.results.cube import build_cube
-
         numbers = sorted({*self.journal.values, *finished})
         if not numbers:
             return None
-        grid = self.space.trial_grid([self.journal.params[n] for n in numbers])
-        plan = plan_sweep(grid, self.root)
-        cube = trial_cube(build_cube(grid, grid.sweeps[0], plan.records), numbers, grid.name)
+        cube = trials_cube(
+            self.space, self.root, [self.journal.params[n] for n in numbers], numbers
+        )
         store = SweepStore.open(self.root)
         store.write_cube(TRIALS, cube)
         store.write_cube(FRONT, front_cube(cube, self.space.objectives))
         return cube
 
     def seconds_spent(self) -> float:
-        """Stage seconds of the finished trials (:func:`pipeline.report.trials.search_seconds`)."""
+        """Stage seconds of the finished trials (:func:`spent_seconds`)."""
         if self.cube is None:
             return 0.0
-        grid = self.space.trial_grid(
-            [self.journal.params[int(n)] for n in self.cube["trial"].values]
-        )
-        spike_keys = [SPIKES.key(p.scene) for p in grid.points()]
-        models = [str(m) for m in self.cube["model"].values]
-        return search_seconds(self.cube, spike_keys, SPIKES.steps_for(models))
+        params = [self.journal.params[int(n)] for n in self.cube["trial"].values]
+        return spent_seconds(self.space, params, self.cube)
 
     def front_rows(self) -> list[dict[str, Any]]:
         """The front's trials: number, searched values, objective values, on the front or only
@@ -237,6 +254,26 @@ class Search:
                 }
             )
         return rows
+
+
+def trials_cube(
+    space: Space, root: str | Path, params: Sequence[Mapping[str, Any]], numbers: Sequence[int]
+) -> xr.Dataset:
+    """The cube of trials ``numbers`` at ``params`` (their points in the store at ``root``)
+    along ``trial`` (:func:`pipeline.report.trials.trial_cube`)."""
+    from pipeline.results.cube import build_cube
+
+    grid = space.trial_grid(params)
+    plan = plan_sweep(grid, root)
+    return trial_cube(build_cube(grid, grid.sweeps[0], plan.records), numbers, grid.name)
+
+
+def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Dataset) -> float:
+    """The stage seconds of trials at ``params`` whose cube is ``cube``, each point and spike
+    train once (:func:`pipeline.report.trials.search_seconds`)."""
+    spike_keys = [SPIKES.key(p.scene) for p in space.trial_grid(params).points()]
+    models = [str(m) for m in cube["model"].values]
+    return search_seconds(cube, spike_keys, SPIKES.steps_for(models))
 
 
 def _failed_state() -> Any:

@@ -10,6 +10,7 @@ TOML layout::
     name = "design"
     base = "paper"                     # a built-in scene, a scene file, or a [base] table
     seed = 0                           # the search's seed (default 0)
+    sampler = "tpe"                    # "tpe" (default), "nsga2" or "random"
 
     [space]
     "readout.threshold_v" = { low = 0.02, high = 0.3, log = true }   # continuous, log-scaled
@@ -96,6 +97,15 @@ class Metric(enum.StrEnum):
     COMPUTE = "compute_s"
 
 
+class Sampler(enum.StrEnum):
+    """How trials are proposed: multi-objective TPE (the default: multivariate, a constant liar
+    for parallel trials), NSGA-II, or uniformly at random (a baseline)."""
+
+    TPE = "tpe"
+    NSGA2 = "nsga2"
+    RANDOM = "random"
+
+
 class DimensionKind(enum.StrEnum):
     """How a dimension's values are drawn: from a float range (continuous, stepped or
     log-scaled), an integer range, or a list of choices."""
@@ -169,6 +179,7 @@ class Space:
     dimensions: tuple[Dimension, ...]
     objectives: tuple[Objective, ...]
     seed: int = 0
+    sampler: Sampler = Sampler.TPE
 
     @classmethod
     def from_dict(
@@ -188,6 +199,7 @@ class Space:
             "dimensions": [fields.plain(dataclasses.asdict(d)) for d in self.dimensions],
             "objectives": [[o.name, o.direction.value] for o in self.objectives],
             "seed": self.seed,
+            "sampler": self.sampler.value,
         }
         text = json.dumps(described, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -281,7 +293,7 @@ def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
     if not isinstance(data, Mapping):
         problems.append(f"space: must be a table, got {type(data).__name__}")
         return Space("space", Scene(), (), ())
-    known = ("name", "base", "seed", "space", "objectives")
+    known = ("name", "base", "seed", "sampler", "space", "objectives")
     for key in data:
         if key not in known:
             problems.append(f"{key}: unknown key (known: {', '.join(known)})")
@@ -293,6 +305,12 @@ def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**32:
         problems.append(f"seed: expected an integer in [0, 2**32), got {seed!r}")
         seed = 0
+    try:
+        sampler = Sampler(data.get("sampler", Sampler.TPE.value))
+    except ValueError:
+        known_samplers = ", ".join(repr(s.value) for s in Sampler)
+        problems.append(f"sampler: {data.get('sampler')!r} is not one of {known_samplers}")
+        sampler = Sampler.TPE
     base = _read_base(data.get("base", "paper"), base_dir, problems)
     dims_data = data.get("space")
     if not isinstance(dims_data, Mapping) or not dims_data:
@@ -303,7 +321,7 @@ def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
     dimensions = [d for f, v in dims_data.items() if (d := _read_dimension(f, v, problems))]
     _check_against_base(base, dimensions, problems)
     objectives = _read_objectives(data.get("objectives"), base, problems)
-    return Space(name, base, tuple(dimensions), tuple(objectives), seed)
+    return Space(name, base, tuple(dimensions), tuple(objectives), seed, sampler)
 
 
 def _read_dimension(field: str, value: Any, problems: list[str]) -> Dimension | None:
