@@ -407,6 +407,8 @@ def run_optimize(
                 failed |= outcome.failed
                 if on_batch is not None:
                     on_batch(search, outcome)
+                if len(outcome.failed) == len(outcome.trials):
+                    break  # a whole batch failed: the next would too, and spend nothing
     if failed:
         raise SweepFailed(failure_message(list(failed.values()), len(failed), store.root))
     return search_summary(
