@@ -12,9 +12,10 @@ workers) is a grid of one zipped sweep (:meth:`pipeline.design.space.Space.trial
 and scheduled as any sweep (:func:`flows.planning.plan_sweep`,
 :func:`flows.scheduling.submit_missing`): the same store, cache keys, batching and workers; a
 point already in the store, from any sweep or search, costs nothing. Once its points are done,
-the trial cube of every trial so far is built (:func:`pipeline.results.cube.build_cube`, along
-``trial``), the batch's objective values are read from it and told, and the cubes ``trials``
-and ``front`` (:func:`pipeline.report.trials.front_cube`) are written.
+the trial cube of every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`,
+along ``trial``; each result read from the store once) and the batch's objective values are read
+from it and told. The cubes ``trials`` and ``front`` (:func:`pipeline.report.trials.front_cube`)
+are written when the search ends or is stopped.
 
 Sampler: the space's (:class:`pipeline.design.space.Sampler`), by default multi-objective TPE
 (``TPESampler(multivariate=True, constant_liar=True)``; the constant liar keeps the trials of one
@@ -46,6 +47,7 @@ from flows.progress import SweepFailed, completed_points, failure_message
 from flows.scheduling import submit_missing
 from pipeline.design.space import (
     TRIALS,
+    Dimension,
     DimensionKind,
     Sampler,
     Space,
@@ -54,8 +56,8 @@ from pipeline.design.space import (
 )
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
-from pipeline.run.stages import SPIKES
-from storage import SweepStore
+from pipeline.run.stages import RESULTS, SPIKES
+from storage import StoreError, SweepStore
 from storage.search_log import SearchJournal
 
 #: Trials of a search without a budget.
@@ -79,7 +81,9 @@ class BatchOutcome:
 
 
 def distributions(space: Space) -> dict[str, Any]:
-    """Optuna's distribution of each dimension, by field."""
+    """Optuna's distribution of each dimension, by field. Numeric choices are ordered: they are
+    searched as the index into their sorted values (:func:`ordered_choices`), so that the sampler
+    sees neighbours as neighbours."""
     from optuna.distributions import (
         CategoricalDistribution,
         FloatDistribution,
@@ -88,13 +92,41 @@ def distributions(space: Space) -> dict[str, Any]:
 
     found: dict[str, Any] = {}
     for d in space.dimensions:
-        if d.kind is DimensionKind.CATEGORICAL:
+        ordered = ordered_choices(d)
+        if ordered:
+            found[d.field] = IntDistribution(0, len(ordered) - 1)
+        elif d.kind is DimensionKind.CATEGORICAL:
             found[d.field] = CategoricalDistribution(d.choices)
         elif d.kind is DimensionKind.INT:
             found[d.field] = IntDistribution(int(d.low), int(d.high), step=int(d.step), log=d.log)
         else:
             found[d.field] = FloatDistribution(d.low, d.high, step=d.step, log=d.log)
     return found
+
+
+def ordered_choices(dimension: Dimension) -> tuple[Any, ...]:
+    """The choices of a categorical dimension of numbers, sorted; empty for any other."""
+    choices = dimension.choices
+    numbers = all(isinstance(c, int | float) and not isinstance(c, bool) for c in choices)
+    return tuple(sorted(choices)) if dimension.kind is DimensionKind.CATEGORICAL and numbers else ()
+
+
+def sampled(space: Space, params: Mapping[str, Any]) -> dict[str, Any]:
+    """Trial values (by field) as the sampler holds them: ordered choices as their indices."""
+    return {
+        d.field: ordered.index(params[d.field])
+        if (ordered := ordered_choices(d))
+        else params[d.field]
+        for d in space.dimensions
+    }
+
+
+def trial_values(space: Space, raw: Mapping[str, Any]) -> dict[str, Any]:
+    """The inverse of :func:`sampled`: scene values by field."""
+    return {
+        d.field: ordered[raw[d.field]] if (ordered := ordered_choices(d)) else raw[d.field]
+        for d in space.dimensions
+    }
 
 
 def make_sampler(kind: Sampler, seed: int) -> Any:
@@ -142,9 +174,11 @@ class Search:
             elif number in self.journal.failed:
                 self._add(params, values=None)
             else:
-                self.study.enqueue_trial(params, skip_if_exists=False)
+                self.study.enqueue_trial(sampled(space, params), skip_if_exists=False)
         self._asked: dict[int, Any] = {}
-        self.cube: xr.Dataset | None = None
+        # The results of the trials' points as read from the store, each once.
+        self.records: dict[str, Any] = {}
+        self.cube: xr.Dataset | None = self.build_cube()
 
     def _add(self, params: dict[str, Any], values: list[float] | None) -> None:
         """Replay a told trial: finished with finite ``values``, or failed."""
@@ -153,7 +187,7 @@ class Search:
         finite = values is not None and all(math.isfinite(v) for v in values)
         self.study.add_trial(
             optuna.trial.create_trial(
-                params=params,
+                params=sampled(self.space, params),
                 distributions=self.distributions,
                 values=values if finite else None,
                 state=optuna.trial.TrialState.COMPLETE if finite else _failed_state(),
@@ -175,7 +209,7 @@ class Search:
                 number = pending.pop(0)
             else:
                 number = max(self.journal.params, default=-1) + 1
-                self.journal.asked(number, trial.params)
+                self.journal.asked(number, trial_values(self.space, trial.params))
             self._asked[number] = trial
             numbers.append(number)
         return numbers
@@ -201,7 +235,7 @@ class Search:
                 self.study.tell(self._asked.pop(number), state=_failed_state())
                 self.journal.told_failed(number, failed_keys[key])
         done = [n for n in numbers if n not in outcome.failed]
-        self.cube = self.write_cubes(done)
+        self.cube = self.build_cube(done)
         found = objective_values(self.cube.sel(trial=done), self.space.objectives)
         for number, row in zip(done, found, strict=True):
             values = [float(v) for v in row]
@@ -213,19 +247,22 @@ class Search:
             self.journal.told(number, values)
         return outcome
 
-    def write_cubes(self, finished: Sequence[int] = ()) -> xr.Dataset | None:
-        """Build the cube of every told trial and of the ``finished`` ones (whose points are in
-        the store) and the front, write both; return the first (None before any trial)."""
+    def build_cube(self, finished: Sequence[int] = ()) -> xr.Dataset | None:
+        """The cube of every told trial and of the ``finished`` ones (whose points are in the
+        store), in memory; None before any trial."""
         numbers = sorted({*self.journal.values, *finished})
         if not numbers:
             return None
-        cube = trials_cube(
-            self.space, self.root, [self.journal.params[n] for n in numbers], numbers
-        )
+        params = [self.journal.params[n] for n in numbers]
+        return trials_cube(self.space, self.root, params, numbers, self.records)
+
+    def write_cubes(self) -> None:
+        """Write the trial cube (:attr:`cube`) and its front into the store."""
+        if self.cube is None:
+            return
         store = SweepStore.open(self.root)
-        store.write_cube(TRIALS, cube)
-        store.write_cube(FRONT, front_cube(cube, self.space.objectives))
-        return cube
+        store.write_cube(TRIALS, self.cube)
+        store.write_cube(FRONT, front_cube(self.cube, self.space.objectives))
 
     def seconds_spent(self) -> float:
         """Stage seconds of the finished trials (:func:`spent_seconds`)."""
@@ -257,15 +294,33 @@ class Search:
 
 
 def trials_cube(
-    space: Space, root: str | Path, params: Sequence[Mapping[str, Any]], numbers: Sequence[int]
+    space: Space,
+    root: str | Path,
+    params: Sequence[Mapping[str, Any]],
+    numbers: Sequence[int],
+    records: dict[str, Any] | None = None,
 ) -> xr.Dataset:
-    """The cube of trials ``numbers`` at ``params`` (their points in the store at ``root``)
-    along ``trial`` (:func:`pipeline.report.trials.trial_cube`)."""
+    """The cube of trials ``numbers`` at ``params`` along ``trial``
+    (:func:`pipeline.report.trials.trial_cube`), from the results of their points in the store
+    at ``root``. ``records`` (result entries by key) is a cache: those it lacks are read and
+    added to it.
+
+    Raises
+    ------
+    StoreError
+        A trial's point has no result in the store.
+    """
     from pipeline.results.cube import build_cube
 
     grid = space.trial_grid(params)
-    plan = plan_sweep(grid, root)
-    return trial_cube(build_cube(grid, grid.sweeps[0], plan.records), numbers, grid.name)
+    records = {} if records is None else records
+    wanted = [key for key in grid.unique_points() if key not in records]
+    if wanted:
+        records |= SweepStore.open(root).read_many(RESULTS.record, wanted, discard_corrupt=False)
+    missing = [key for key in wanted if key not in records]
+    if missing:
+        raise StoreError(f"{len(missing)} trial point(s) have no result in {root}: {missing[0]}")
+    return trial_cube(build_cube(grid, grid.sweeps[0], records), numbers, grid.name)
 
 
 def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Dataset) -> float:
@@ -394,21 +449,23 @@ def run_optimize(
     with store.lock():
         store.clean_partials()
         search = Search(space, store.root)
-        search.cube = search.write_cubes()
         told_before = len(search.journal.values)
-        with lazy_client(store.root, client, workers, address) as client_for:
-            size = (
-                batch_size(client, workers) if address is None else batch_size(client_for(), None)
-            )
-            for numbers in search_batches(search, budget, budget_s, size):
-                outcome = (evaluate or Search.evaluate)(search, numbers, client_for)
-                cache_hits += outcome.cache_hits
-                computed += outcome.computed
-                failed |= outcome.failed
-                if on_batch is not None:
-                    on_batch(search, outcome)
-                if len(outcome.failed) == len(outcome.trials):
-                    break  # a whole batch failed: the next would too, and spend nothing
+        # The cubes are written at the end, or when the search is stopped; the journal, written
+        # as trials are told, is what a killed search resumes from.
+        try:
+            with lazy_client(store.root, client, workers, address) as client_for:
+                size = batch_size(client_for() if address else client, workers)
+                for numbers in search_batches(search, budget, budget_s, size):
+                    outcome = (evaluate or Search.evaluate)(search, numbers, client_for)
+                    cache_hits += outcome.cache_hits
+                    computed += outcome.computed
+                    failed |= outcome.failed
+                    if on_batch is not None:
+                        on_batch(search, outcome)
+                    if len(outcome.failed) == len(outcome.trials):
+                        break  # a whole batch failed: the next would too, and spend nothing
+        finally:
+            search.write_cubes()
     if failed:
         raise SweepFailed(failure_message(list(failed.values()), len(failed), store.root))
     return search_summary(
