@@ -47,7 +47,6 @@ from flows.progress import SweepFailed, completed_points, failure_message
 from flows.scheduling import submit_missing
 from pipeline.design.space import (
     TRIALS,
-    Dimension,
     DimensionKind,
     Sampler,
     Space,
@@ -81,9 +80,7 @@ class BatchOutcome:
 
 
 def distributions(space: Space) -> dict[str, Any]:
-    """Optuna's distribution of each dimension, by field. Numeric choices are ordered: they are
-    searched as the index into their sorted values (:func:`ordered_choices`), so that the sampler
-    sees neighbours as neighbours."""
+    """Optuna's distribution of each dimension, by field."""
     from optuna.distributions import (
         CategoricalDistribution,
         FloatDistribution,
@@ -92,41 +89,13 @@ def distributions(space: Space) -> dict[str, Any]:
 
     found: dict[str, Any] = {}
     for d in space.dimensions:
-        ordered = ordered_choices(d)
-        if ordered:
-            found[d.field] = IntDistribution(0, len(ordered) - 1)
-        elif d.kind is DimensionKind.CATEGORICAL:
+        if d.kind is DimensionKind.CATEGORICAL:
             found[d.field] = CategoricalDistribution(d.choices)
         elif d.kind is DimensionKind.INT:
             found[d.field] = IntDistribution(int(d.low), int(d.high), step=int(d.step), log=d.log)
         else:
             found[d.field] = FloatDistribution(d.low, d.high, step=d.step, log=d.log)
     return found
-
-
-def ordered_choices(dimension: Dimension) -> tuple[Any, ...]:
-    """The choices of a categorical dimension of numbers, sorted; empty for any other."""
-    choices = dimension.choices
-    numbers = all(isinstance(c, int | float) and not isinstance(c, bool) for c in choices)
-    return tuple(sorted(choices)) if dimension.kind is DimensionKind.CATEGORICAL and numbers else ()
-
-
-def sampled(space: Space, params: Mapping[str, Any]) -> dict[str, Any]:
-    """Trial values (by field) as the sampler holds them: ordered choices as their indices."""
-    return {
-        d.field: ordered.index(params[d.field])
-        if (ordered := ordered_choices(d))
-        else params[d.field]
-        for d in space.dimensions
-    }
-
-
-def trial_values(space: Space, raw: Mapping[str, Any]) -> dict[str, Any]:
-    """The inverse of :func:`sampled`: scene values by field."""
-    return {
-        d.field: ordered[raw[d.field]] if (ordered := ordered_choices(d)) else raw[d.field]
-        for d in space.dimensions
-    }
 
 
 def make_sampler(kind: Sampler, seed: int) -> Any:
@@ -174,7 +143,7 @@ class Search:
             elif number in self.journal.failed:
                 self._add(params, values=None)
             else:
-                self.study.enqueue_trial(sampled(space, params), skip_if_exists=False)
+                self.study.enqueue_trial(params, skip_if_exists=False)
         self._asked: dict[int, Any] = {}
         # The results of the trials' points as read from the store, each once.
         self.records: dict[str, Any] = {}
@@ -187,7 +156,7 @@ class Search:
         finite = values is not None and all(math.isfinite(v) for v in values)
         self.study.add_trial(
             optuna.trial.create_trial(
-                params=sampled(self.space, params),
+                params=params,
                 distributions=self.distributions,
                 values=values if finite else None,
                 state=optuna.trial.TrialState.COMPLETE if finite else _failed_state(),
@@ -209,7 +178,7 @@ class Search:
                 number = pending.pop(0)
             else:
                 number = max(self.journal.params, default=-1) + 1
-                self.journal.asked(number, trial_values(self.space, trial.params))
+                self.journal.asked(number, trial.params)
             self._asked[number] = trial
             numbers.append(number)
         return numbers
