@@ -8,8 +8,8 @@ per class the accuracies are so noisy that every sampler, random search included
 0.9 of the exhaustive hypervolume at 25 %: there was no structure to find.) The grid is swept
 once into a store (``runs/bench/search``, kept between runs; ``--root`` names another), and its
 cost is counted as a search's is (:func:`flows.search.spent_seconds`: stage seconds as
-measured, each point and each spike train once). Then each sampler (TPE, the default; NSGA-II; random search)
-searches the space with a budget of 10 % and 25 % of those stage seconds, for 10 seeds, with
+measured, each point and each spike train once). Then each sampler (TPE, the default; NSGA-II;
+random search) searches the space with a budget of 10 % and 25 % of those stage seconds, for 10 seeds, with
 :func:`flows.search.run_optimize` on that store (batches of 2 trials, as 2 workers would take):
 nothing is computed, and the stage seconds a trial would have cost are counted from the store.
 
