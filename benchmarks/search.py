@@ -3,15 +3,17 @@
 The space (:data:`SPACE`) is small enough to grid exhaustively: 8 thresholds x 3 windows x 4
 taxel rows x 2 columns = 192 points, on a smaller built-in dataset and short training (10
 touches per class of 2 s, 5 folds, FFNN only, 5 epochs) so that the grid computes in under a
-minute on 2 cores; every dimension is discrete, so every trial is a grid point. (With 4 touches
-per class the accuracies are so noisy that every sampler, random search included, found about
-0.9 of the exhaustive hypervolume at 25 %: there was no structure to find.) The grid is swept
-once into a store (``runs/bench/search``, kept between runs; ``--root`` names another), and its
-cost is counted as a search's is (:func:`flows.search.spent_seconds`: stage seconds as
-measured, each point and each spike train once). Then each sampler (TPE, the default; NSGA-II;
-random search) searches the space with a budget of 10 % and 25 % of those stage seconds, for 10 seeds, with
-:func:`flows.search.run_optimize` on that store (batches of 2 trials, as 2 workers would take):
-nothing is computed, and the stage seconds a trial would have cost are counted from the store.
+minute on 2 cores; every dimension is discrete, so every trial is a grid point. (With 4
+touches per class the accuracies are so noisy that every sampler, random search included,
+found about 0.9 of the exhaustive hypervolume at 25 %: there was no structure to find.)
+
+The grid is swept once into a store (``runs/bench/search``, kept between runs; ``--root`` names
+another), and its cost is counted as a search's is (:func:`flows.search.spent_seconds`: stage
+seconds as measured, each point and each spike train once). Then each sampler (TPE, the
+default; NSGA-II; random search) searches the space with a budget of 10 % and 25 % of those
+stage seconds, for 10 seeds, with :func:`flows.search.run_optimize` on that store (batches of 2
+trials, as 2 workers would take): nothing is computed, and the stage seconds a trial would have
+cost are counted from the store.
 
 Hypervolume: of the trials' (accuracy, data rate) costs ``(-accuracy, log10(1 + data_rate_bps))``,
 each scaled to [0, 1] over the exhaustive grid, against the reference point (1.1, 1.1)
