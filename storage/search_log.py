@@ -53,11 +53,15 @@ class SearchJournal:
             try:
                 record = json.loads(line)
                 number = int(record["trial"])
-                if record["space"] != fingerprint:
-                    raise StoreError(
-                        f"{journal.path} holds a search of another space named {name!r} "
-                        "(its ranges or objectives differ): give another --root or name"
-                    )
+                space = record["space"]
+            except (ValueError, KeyError, TypeError):
+                continue
+            if space != fingerprint:
+                raise StoreError(
+                    f"{journal.path} holds a search of another space named {name!r} "
+                    "(its ranges or objectives differ): give another --root or name"
+                )
+            try:
                 if "params" in record:
                     journal.params[number] = dict(record["params"])
                 elif "values" in record:

@@ -1,0 +1,37 @@
+"""The search journal: trials asked and told, replayed; torn lines skipped; other spaces refused."""
+
+import pytest
+
+from storage import StoreError
+from storage.search_log import SearchJournal
+
+
+def test_a_journal_replays_what_was_asked_and_told(tmp_path):
+    journal = SearchJournal.open(tmp_path, "design", "abc")
+    journal.asked(0, {"readout.threshold_v": 0.05, "coding.window_s": 0.1})
+    journal.asked(1, {"readout.threshold_v": 0.2, "coding.window_s": 0.2})
+    journal.asked(2, {"readout.threshold_v": 0.1, "coding.window_s": 0.05})
+    journal.told(0, [0.5, 120.0])
+    journal.told_failed(2, "point 1234: out of memory")
+    again = SearchJournal.open(tmp_path, "design", "abc")
+    assert again.params == journal.params
+    assert again.values == {0: [0.5, 120.0]}
+    assert again.failed == {2: "point 1234: out of memory"}
+    assert again.pending == [1]
+
+
+def test_a_torn_last_line_is_skipped(tmp_path):
+    journal = SearchJournal.open(tmp_path, "design", "abc")
+    journal.asked(0, {"array.rows": 2})
+    journal.told(0, [0.5, 1.0])
+    with open(journal.path, "a") as file:
+        file.write('{"space": "abc", "trial": 1, "par')  # a kill mid-write
+    again = SearchJournal.open(tmp_path, "design", "abc")
+    assert again.params == {0: {"array.rows": 2}} and again.values == {0: [0.5, 1.0]}
+
+
+def test_a_journal_of_another_space_is_refused(tmp_path):
+    SearchJournal.open(tmp_path, "design", "abc").asked(0, {"array.rows": 2})
+    with pytest.raises(StoreError, match="another space named 'design'"):
+        SearchJournal.open(tmp_path, "design", "other")
+    assert SearchJournal.open(tmp_path, "elsewhere", "other").params == {}
