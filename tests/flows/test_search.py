@@ -1,0 +1,30 @@
+"""``flows.api.run_optimize`` on a Dask client: budgets in stage seconds, one batch per worker
+thread, no cluster for a search with nothing to compute."""
+
+import pytest
+
+from flows.api import Space, run_optimize
+from tests.flows.test_optimize import SPACE
+
+pytestmark = pytest.mark.slow
+
+
+def test_a_budget_in_seconds_is_spent_batch_by_batch(client, tmp_path):
+    import tomllib
+
+    space = Space.from_dict(tomllib.loads(SPACE))
+    root = tmp_path / "run"
+    # Any point costs more than a microsecond: one batch of one trial (one worker thread).
+    first = run_optimize(space, root, budget_s=1e-6, client=client)
+    assert (first["trials"], first["computed"]) == (1, 1)
+    assert first["search_seconds"] > 1e-6
+    # Continued to twice what it spent: at least one more trial, and no more than that budget
+    # before its last batch.
+    budget = 2 * first["search_seconds"]
+    second = run_optimize(space, root, budget_s=budget, client=client)
+    assert second["trials"] >= 2 and second["new_trials"] == second["trials"] - 1
+    assert second["search_seconds"] >= budget
+    # Spent already: no trial, no cluster needed.
+    third = run_optimize(space, root, budget_s=budget, workers=1)
+    assert (third["new_trials"], third["computed"], third["cache_hits"]) == (0, 0, 0)
+    assert third["front"] == second["front"]
