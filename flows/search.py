@@ -45,7 +45,7 @@ import xarray as xr
 
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
-from flows.planning import DEFAULT_RUNS_DIR, check_grid, plan_sweep
+from flows.planning import DEFAULT_RUNS_DIR, SweepPlan, check_grid, plan_sweep
 from flows.progress import SweepFailed, completed_points, failure_message
 from flows.scheduling import submit_missing
 from pipeline.design.space import (
@@ -150,7 +150,7 @@ class Search:
         self._asked: dict[int, Any] = {}
         # The results of the trials' points as read from the store, each once.
         self.records: dict[str, Any] = {}
-        self.cube: xr.Dataset | None = self.build_cube()
+        self.cube: xr.Dataset | None = None  # see restore()
 
     def _add(self, params: dict[str, Any], values: list[float] | None) -> None:
         """Replay a told trial: finished with finite ``values``, or failed."""
@@ -186,20 +186,35 @@ class Search:
             numbers.append(number)
         return numbers
 
+    def compute(
+        self, numbers: Sequence[int], client_for: Callable[[], Any]
+    ) -> tuple[SweepPlan, dict[str, str]]:
+        """Plan the trials' points and compute those not in the store (``client_for()`` gives
+        the Dask client, called only then); the plan, and why points failed by key."""
+        params = [self.journal.params[n] for n in numbers]
+        plan = plan_sweep(self.space.trial_grid(params), self.root)
+        if not plan.missing:
+            return plan, {}
+        client = client_for()
+        futures = submit_missing(plan, client)
+        return plan, {k: why for k, why in completed_points(client, futures) if why}
+
+    def restore(self, client_for: Callable[[], Any]) -> int:
+        """Build the cube of the trials told before (:attr:`cube`), computing again any of
+        their points the store lost (a batch found corrupt and discarded); returns how many."""
+        told = sorted(self.journal.values)
+        computed = len(self.compute(told, client_for)[0].missing) if told else 0
+        self.cube = self.build_cube()
+        return computed
+
     def evaluate(self, numbers: list[int], client_for: Callable[[], Any]) -> BatchOutcome:
         """Compute the trials' points (those not in the store), tell the trials, write cubes.
 
         ``client_for()`` gives the Dask client, called only if a point is missing.
         """
         outcome = BatchOutcome(numbers)
-        params = [self.journal.params[n] for n in numbers]
-        plan = plan_sweep(self.space.trial_grid(params), self.root)
+        plan, failed_keys = self.compute(numbers, client_for)
         outcome.cache_hits, outcome.computed = len(plan.cached), len(plan.missing)
-        failed_keys: dict[str, str] = {}
-        if plan.missing:
-            client = client_for()
-            futures = submit_missing(plan, client)
-            failed_keys = {k: why for k, why in completed_points(client, futures) if why}
         keys = [point.key for point in plan.grid.points()]
         for number, key in zip(numbers, keys, strict=True):
             if key in failed_keys:
@@ -427,6 +442,7 @@ def run_optimize(
         try:
             with lazy_client(store.root, client, workers, address) as client_for:
                 size = batch_size(client_for() if address else client, workers)
+                computed += search.restore(client_for)
                 for numbers in search_batches(search, budget, budget_s, size):
                     outcome = (evaluate or Search.evaluate)(search, numbers, client_for)
                     cache_hits += outcome.cache_hits

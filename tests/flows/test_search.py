@@ -28,3 +28,24 @@ def test_a_budget_in_seconds_is_spent_batch_by_batch(client, tmp_path):
     third = run_optimize(space, root, budget_s=budget, workers=1)
     assert (third["new_trials"], third["computed"], third["cache_hits"]) == (0, 0, 0)
     assert third["front"] == second["front"]
+
+
+def test_a_point_the_store_lost_is_computed_again(client, tmp_path):
+    import tomllib
+
+    from storage import SweepStore, open_results
+
+    space = Space.from_dict(tomllib.loads(SPACE))
+    root = tmp_path / "run"
+    run_optimize(space, root, budget=2, client=client)
+    trials = open_results(root)["trials"]
+    store = SweepStore.open(root)
+    lost = str(trials["result_key"].values[0])
+    assert store.discard("results", lost)  # as a batch found corrupt is discarded
+    again = run_optimize(space, root, budget=2, client=client)
+    assert (again["trials"], again["new_trials"], again["computed"]) == (2, 0, 1)
+    assert lost in store.complete_keys("results")
+    assert (
+        open_results(root)["trials"]["result_key"].values.tolist()
+        == trials["result_key"].values.tolist()
+    )
