@@ -5,7 +5,8 @@ storage is used, so workers never touch the study and its format never ties a ru
 Optuna version. The run root keeps the search instead: its journal
 (:class:`storage.search_log.SearchJournal`) records every trial asked and told, and a search
 started again on the root replays it, told trials back into the sampler, asked ones never
-told (a killed search's) asked again with their own values. A larger budget continues it.
+told (a killed search's) asked again with their own values, and any point of a told trial the
+store lost (a corrupt batch discarded) computed again. A larger budget continues it.
 
 Each batch of trials (as many as the cluster has worker threads, so parallel trials fill the
 workers) is a grid of one zipped sweep (:meth:`pipeline.design.space.Space.trial_grid`), planned
