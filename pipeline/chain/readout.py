@@ -16,6 +16,20 @@ interpolated time ``t = (n - 1 + (m - u_{n-1}) / (u_n - u_{n-1})) / fs``, in tim
 computed from the integer sample index, so they keep sub-nanosecond precision for hours of
 recording at kHz rates.
 
+Decaying-threshold encoder
+--------------------------
+``readout.encoder = "decaying"`` (as in the decaying-threshold encoder of Alea et al., IEEE
+TBioCAS 2024): the reference ``r`` starts at the first sample and the threshold is
+
+    theta(t) = theta_min + (theta_0 - theta_min) * exp(-(t - t_last) / tau)
+
+with ``t_last`` the time of the last spike (0 at the start). A +1 spike is emitted at the first
+instant the interpolated signal reaches ``r + theta(t)``, a -1 spike at ``r - theta(t)``; the spike
+moves ``r`` by that ``theta(t)`` and sets ``t_last``. Within a segment the condition is a line
+minus a decaying exponential, which is concave, so its first root has a closed-form bracket and is
+solved by safeguarded Newton steps in continuous time (see :func:`_first_reach`); a segment may
+hold several spikes. ``theta_min = theta_0`` is the fixed encoder.
+
 Non-ideal encoder (the REAL train)
 ----------------------------------
 The scene's effects act in this order (each only when the scene names it)::
@@ -27,8 +41,13 @@ The scene's effects act in this order (each only when the scene names it)::
     decision at sample i: v[i] - r >= up + e[i]  if v[i] >= r,  else  r - v[i] >= down + e[i]
                                                         (comparator_noise, per sample)
 
-Every effective threshold is clipped below at ``floor_rel * theta`` (``threshold_mismatch``'s
-``floor_rel`` when the scene names it, else :data:`THRESHOLD_FLOOR_REL`): mismatch or offsets
+For the decaying encoder ``theta_t`` is the taxel's curve: one mismatch draw scales both
+``theta_0`` and ``theta_min``, a comparator offset shifts both ends of its comparator's curve,
+and a sample's decision noise shifts both ends of both curves in its segment.
+
+Every effective threshold is clipped below at ``floor_rel * theta_min`` (``theta_min`` is
+``theta`` for the fixed encoder; ``floor_rel`` is ``threshold_mismatch``'s when the scene names
+it, else :data:`THRESHOLD_FLOOR_REL`): mismatch or offsets
 that would push a threshold to zero or below leave the comparator at the smallest step it can
 resolve, so the train stays finite. With equal UP and DOWN thresholds and no comparator noise
 the REAL train is the ideal encoder run with ``theta_t`` on ``v_t``. Otherwise the reference
@@ -368,7 +387,8 @@ def _decaying_kernel(
     ``noise_rng``, ``None``: none) shifts both ends of both curves in that sample's segment,
     each clipped below at ``floor_v``. A spike moves ``r`` by the threshold it crossed and
     restarts the decay. Segments whose ends stay closer to ``r`` than the lowest threshold are
-    skipped without evaluating the exponential. Writes while the buffers have room and returns
+    skipped without evaluating the exponential, and those closer than the thresholds at their
+    end with one evaluation. Writes while the buffers have room and returns
     the full count, or stops at the first count above ``limit``, as :func:`_general_kernel`.
     """
     n = v.shape[0]
@@ -382,10 +402,15 @@ def _decaying_kernel(
         e = 0.0 if noise_rng is None else noise_sigma_v * noise_rng.standard_normal()
         up_min = max(up_min_v + e, floor_v)
         down_min = max(down_min_v + e, floor_v)
-        if max(a, b) - r < up_min and r - min(a, b) < down_min:
+        high = max(a, b) - r
+        low = r - min(a, b)
+        if high < up_min and low < down_min:
             continue
         up_swing = max(up0_v + e, floor_v) - up_min
         down_swing = max(down0_v + e, floor_v) - down_min
+        decayed = math.exp((t_last - i) / tau)  # the thresholds only fall within the segment
+        if high < up_min + up_swing * decayed and low < down_min + down_swing * decayed:
+            continue
         lo = 0.0
         while True:
             s_ref = t_last - (i - 1)
