@@ -144,7 +144,7 @@ def format_sweep_summary(
         cube = cubes[name]
         dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy_mean"].dims[:-1])
         for row in best_points(cube):
-            at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
+            at = ", ".join(f"{d}={_coordinate(v)}" for d, v in row["at"].items())
             lines.append(
                 f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
             )
@@ -155,6 +155,11 @@ def format_sweep_summary(
     if summary.get("flow_run_url"):
         lines.append(f"Prefect flow run: {summary['flow_run_url']}")
     return "\n".join(lines)
+
+
+def _coordinate(value: Any) -> str:
+    """A coordinate's value: a number in short form, an option (``"decaying"``) as is."""
+    return f"{value:g}" if isinstance(value, int | float) else str(value)
 
 
 def json_safe(value: Any) -> Any:
