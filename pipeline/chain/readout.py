@@ -436,13 +436,7 @@ def _decaying_kernel(
 
 
 def decaying_crossings(
-    v: np.ndarray,
-    fs_hz: float,
-    theta0_v: float,
-    theta_min_v: float,
-    tau_s: float,
-    *,
-    max_spikes: int = MAX_SPIKES_PER_TRAIN,
+    v: np.ndarray, fs_hz: float, theta0_v: float, theta_min_v: float, tau_s: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Ideal continuous-time level-crossing encoder with a decaying threshold.
 
@@ -458,15 +452,13 @@ def decaying_crossings(
     Parameters
     ----------
     v : float64 (n,)
-        Signal samples in volts, finite.
+        The signal's samples in volts, all finite.
     fs_hz : float
-        Sampling rate, > 0.
+        Sampling rate in Hz, > 0.
     theta0_v, theta_min_v : float
         Threshold right after a spike and its floor, in volts, ``0 < theta_min_v <= theta0_v``.
     tau_s : float
         Time constant of the decay in seconds, > 0.
-    max_spikes : int
-        Cap on the train's length; see :data:`MAX_SPIKES_PER_TRAIN`.
 
     Returns
     -------
@@ -478,7 +470,7 @@ def decaying_crossings(
     ValueError
         Listing every bad parameter at once, or for a non-finite sample.
     SimulationError
-        If the train would hold more than ``max_spikes`` spikes.
+        If the train would hold more than :data:`MAX_SPIKES_PER_TRAIN` spikes.
     """
     v = _as_signal(v)
     problems = _non_finite_problems(v) + _positive_problems(
@@ -490,9 +482,8 @@ def decaying_crossings(
         problems.append(f"tau_s * fs_hz must be > 0, got {tau_s!r} * {fs_hz!r}")
     if problems:
         raise ValueError("; ".join(problems))
-    return _decaying_train(
-        v, fs_hz, (theta0_v, theta_min_v), (theta0_v, theta_min_v), tau_s, max_spikes
-    )
+    curve = (theta0_v, theta_min_v)
+    return _decaying_train(v, fs_hz, curve, curve, tau_s, MAX_SPIKES_PER_TRAIN)
 
 
 def _decaying_train(v, fs_hz, up, down, tau_s, max_spikes, floor_v=0.0, noise=None):
@@ -726,14 +717,14 @@ def _encode(v, fs_hz, readout, up, down, floor_v, noise, max_spikes):
     """Encode ``v`` with the readout's encoder at UP and DOWN ``(theta_0, theta_min)``
     thresholds (equal for a fixed encoder), floor ``floor_v`` and decision ``noise``
     (``(sigma_v, rng factory)`` or None). ``down=None`` (no comparator effect): both
-    comparators at ``up`` without noise, which the ideal encoders compute."""
-    decaying = readout.encoder is Encoder.DECAYING
-    if down is None:
-        if decaying:
-            return decaying_crossings(v, fs_hz, *up, readout.decay.tau_s, max_spikes=max_spikes)
-        return level_crossings(v, fs_hz, up[0], max_spikes=max_spikes)
-    if decaying:
+    comparators at ``up`` without noise, which :func:`level_crossings` computes for the fixed
+    encoder."""
+    if readout.encoder is Encoder.DECAYING:
+        v = _checked_signal(v)  # the decaying kernel does not look for non-finite samples
+        down = up if down is None else down
         return _decaying_train(v, fs_hz, up, down, readout.decay.tau_s, max_spikes, floor_v, noise)
+    if down is None:
+        return level_crossings(v, fs_hz, up[0], max_spikes=max_spikes)
 
     def call(rng, sigma_v, times, polarity):
         return _general_kernel(

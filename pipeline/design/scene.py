@@ -52,6 +52,7 @@ MAX_TAXELS_PER_SIDE = 256
 
 _POSITIVE = Range(0, low_open=True)
 _NONNEGATIVE = Range(0)
+_TAU = Range(0, 3600, low_open=True)
 
 
 class DatasetKind(enum.StrEnum):
@@ -269,18 +270,10 @@ class DecaySpec:
     decays toward ``theta_min_v`` with time constant ``tau_s``."""
 
     theta_min_v: float = param(
-        0.03,
-        "V",
-        "lowest threshold of the decaying encoder",
-        within=_POSITIVE,
-        cost=Cost.FREE,
+        0.03, "V", "lowest threshold of the decaying encoder", within=_POSITIVE, cost=Cost.FREE
     )
     tau_s: float = param(
-        0.02,
-        "s",
-        "time constant of the decaying threshold",
-        within=Range(0, 3600, low_open=True),
-        cost=Cost.FREE,
+        0.02, "s", "time constant of the decaying threshold", within=_TAU, cost=Cost.FREE
     )
 
 

@@ -147,21 +147,6 @@ CASES: list[Case] = [
         lambda t: scene_grid(t, coding="n_windows = 1e300"),
         "coding.n_windows",
     ),
-    (
-        "scene-unknown-encoder",
-        lambda t: scene_grid(t, readout='encoder = "sigma-delta"'),
-        "readout.encoder",
-    ),
-    (
-        "scene-decay-floor-above-threshold",
-        lambda t: scene_grid(t, readout='encoder = "decaying"\ndecay.theta_min_v = 0.5'),
-        "readout.decay.theta_min_v",
-    ),
-    (
-        "scene-decay-zero-tau",
-        lambda t: scene_grid(t, readout="decay.tau_s = 0.0"),
-        "readout.decay.tau_s",
-    ),
     ("scene-no-models", lambda t: scene_grid(t, training="models = []"), "training.models"),
     (
         "scene-folder-without-path",
@@ -187,11 +172,6 @@ CASES: list[Case] = [
         "grid-empty-axis",
         lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "coding.window_s" = [] }\n'),
         "sweeps.a.axes.coding.window_s",
-    ),
-    (
-        "grid-unknown-encoder",
-        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "readout.encoder" = ["lcs", "n-lcs"] }\n'),
-        "readout.encoder",
     ),
     (
         "grid-duplicate-values",
@@ -306,6 +286,26 @@ CASES: list[Case] = [
     ("args-no-grid", lambda t: [], "--grid"),
     ("args-unknown-option", lambda t: ["--grid", "smoke", "--frobnicate"], "--frobnicate"),
 ]
+# The encoder's fields: (id, [readout] lines of the base scene, or an axis, the culprit).
+CASES += [
+    (name, lambda t, r=readout: scene_grid(t, readout=r), culprit)
+    for name, readout, culprit in [
+        ("scene-unknown-encoder", 'encoder = "sigma-delta"', "readout.encoder"),
+        ("scene-decay-zero-tau", "decay.tau_s = 0.0", "readout.decay.tau_s"),
+        (
+            "scene-decay-floor-above-threshold",
+            'encoder = "decaying"\ndecay.theta_min_v = 0.5',
+            "readout.decay.theta_min_v",
+        ),
+    ]
+]
+CASES.append(
+    (
+        "grid-unknown-encoder",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "readout.encoder" = ["lcs", "n-lcs"] }\n'),
+        "readout.encoder",
+    )
+)
 
 
 def tree(path: Path):
