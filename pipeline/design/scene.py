@@ -20,7 +20,8 @@ Cache keys (:func:`pipeline.run.stages.cache_key`) hash exactly the fields a sta
 fields those are is declared with the stages themselves, in :mod:`pipeline.run.stages`::
 
     recordings : dataset
-    spikes     : dataset, array, readout (+ seed if a random effect is named)
+    spikes     : dataset, array, readout (+ seed if a random effect is named; readout.decay
+                 only with the decaying encoder)
     rates      : spikes fields + coding
     results    : rates fields + training
 
