@@ -4,6 +4,7 @@ import dataclasses
 import hashlib
 import itertools
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -560,3 +561,17 @@ def test_check_fits_reports_as_the_per_point_check():
     with pytest.raises(SceneError) as info:
         check_fits(grid, {cache_key(grid.base, "recordings"): facts})
     assert info.value.problems == expected
+
+
+def test_the_encoder_example_sweeps_both_encoders_with_the_decay_keyed_for_one():
+    grid = load_grid(Path(__file__).parents[3] / "examples" / "encoders.toml")
+    points = grid.points()
+    assert {p.scene.readout.encoder.value for p in points} == {"lcs", "decaying"}
+    assert len(points) == 6 and len({p.key for p in points}) == 6
+    for point in points:
+        keyed = "decay" in point.scene.canonical()
+        assert keyed == (point.scene.readout.encoder.value == "decaying")
+        assert point.key == reference_key(point.scene, LEVELS[-1])
+    paper = Scene.paper().replace(**{"readout.threshold_v": 0.05})
+    lcs = [p for p in points if p.scene.readout.encoder.value == "lcs"]
+    assert cache_key(paper, "results") in {p.key for p in lcs}  # the paper's own points
