@@ -135,8 +135,17 @@ def build_parser() -> argparse.ArgumentParser:
         f"{cluster.available_cores()} here)",
     )
     where.add_argument(
-        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
+        "--address",
+        metavar="tcp|tls://HOST:PORT",
+        help="use an existing Dask scheduler instead (tls:// with the three --tls-* files, or "
+        "Dask's distributed.comm.tls settings)",
     )
+    for option, what in (
+        ("--tls-ca-file", "the CA certificate that signed the scheduler's certificate"),
+        ("--tls-cert", "this client's certificate"),
+        ("--tls-key", "this client's private key"),
+    ):
+        sweep.add_argument(option, metavar="FILE", help=f"{what} (PEM), for --address tls://")
     sweep.add_argument(
         "--dataset",
         metavar="NAME|PATH",
@@ -298,6 +307,18 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    import dask
+
+    files = {
+        option: getattr(args, option.lstrip("-").replace("-", "_"))
+        for option in cluster.TLS_OPTIONS
+    }
+    # The TLS files as Dask's own settings: the flow's client reads them as any Dask client does.
+    with dask.config.set(cluster.tls_config(args.address, files)):
+        return _sweep_checked(args)
+
+
+def _sweep_checked(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
     from flows.dry_run import dry_run, format_dry_run
     from flows.environment import hermetic_environment
