@@ -171,7 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Sweeps use the Prefect server named by PREFECT_API_URL, or else a local "
         "one (127.0.0.1, state in $ESKIN_SERVER_DIR, default runs/.prefect) that the first "
         "sweep starts and later sweeps reuse; it stops by itself after $ESKIN_SERVER_IDLE_S "
-        "seconds (default 1800) without a sweep.",
+        "seconds (default 1800) without a sweep. It asks every client for the auth string "
+        "in <state>/auth-string (only its owner may read it), which the UI asks for too.",
     )
     server.add_argument("action", choices=["start", "status", "stop"])
     server.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -406,6 +407,8 @@ def _server(args: argparse.Namespace) -> int:
         with server.prefect_server(show_progress=not args.quiet) as api_url:
             pass
         info = {"running": True, "api_url": api_url, "ui_url": api_url.removesuffix("/api")}
+        if server.auth_file().is_file() and "PREFECT_API_URL" not in os.environ:
+            info["auth_string_file"] = str(server.auth_file())
     elif args.action == "stop":
         stopped = server.stop()
         info = {
@@ -418,6 +421,7 @@ def _server(args: argparse.Namespace) -> int:
         info = {"running": found is not None, "state_dir": str(server.server_dir())}
         if found is not None:
             info |= {"api_url": found.api_url, "ui_url": found.ui_url, "pid": found.pid}
+            info["auth_string_file"] = str(server.auth_file())
     if args.json:
         print(json.dumps(info, indent=2))
     elif args.action == "stop":
@@ -426,6 +430,8 @@ def _server(args: argparse.Namespace) -> int:
         print(
             f"Prefect server: {info['ui_url']}" + (f" (PID {info['pid']})" if "pid" in info else "")
         )
+        if "auth_string_file" in info:
+            print(f"The UI asks for the auth string in {info['auth_string_file']}")
     else:
         print(f"no Prefect server running (state in {info['state_dir']})")
     return 0

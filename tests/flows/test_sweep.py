@@ -13,7 +13,7 @@ from flows.cli import main
 from pipeline.run.stages import SPIKES
 from storage import SweepStore, open_results
 from storage.batches import BATCH_PREFIX, read_batch_keys
-from tests.flows.helpers import eskin, hermetic_env
+from tests.flows.helpers import api_headers, eskin, hermetic_env
 
 SMOKE_SWEEPS = {"threshold", "window", "noise"}
 
@@ -303,7 +303,7 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
         data=json.dumps(
             {"artifacts": {"key": {"any_": [artifact_key(root.name, "report")]}}}
         ).encode(),
-        headers={"Content-Type": "application/json"},
+        headers=api_headers(server.auth_file().read_text().strip()),
         method="POST",
     )
     with urllib.request.urlopen(request, timeout=60) as response:
