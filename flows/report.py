@@ -153,13 +153,16 @@ def write_run_report(
     with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
         hermetic_environment(store.root, prefect=False)
     from pipeline.report import FrameReadout, build_report, sampling_rate_hz
+    from pipeline.report.cost import sweep_runs
     from pipeline.report.figures import draw_report
     from storage.report import check_report_folder
-    from storage.runlog import read_sweep_runs
+    from storage.runlog import read_sweep_records
 
     rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
     frame = FrameReadout(adc_bits, rate_hz) if rate_hz else None
-    report = build_report(cubes, frame=frame, energy=energy, runs=read_sweep_runs(store.root))
+    report = build_report(
+        cubes, frame=frame, energy=energy, runs=sweep_runs(read_sweep_records(store.root))
+    )
     if rate_hz is None:
         print(
             "eskin: warning: the cubes do not state the recordings' sampling rate; the report "

@@ -142,16 +142,31 @@ def prefect_server(*, show_progress: bool = True) -> Iterator[str]:
 
 @contextlib.contextmanager
 def _using(info: ServerInfo) -> Iterator[None]:
-    """Point Prefect at ``info`` for the block, whether or not Prefect is imported yet."""
+    """Point Prefect at ``info`` for the block, and send it no flow-run heartbeats.
+
+    Heartbeats only feed automations that mark silent runs as crashed, and the local server
+    has none; Prefect's heartbeat thread, which wakes once a second, would still hold up the
+    end of every flow run by up to a second. A server named by ``PREFECT_API_URL`` keeps
+    Prefect's own setting.
+    """
     urls = {"PREFECT_API_URL": info.api_url, "PREFECT_UI_URL": info.ui_url}
     with restored_environment(urls):
+        # Set before Prefect is imported too: it reads the environment when imported.
         os.environ.update(urls)
-        if "prefect" not in sys.modules:  # it reads the environment when imported
-            yield
-            return
-        from prefect.settings import PREFECT_API_URL, PREFECT_UI_URL, temporary_settings
+        from prefect.settings import (
+            PREFECT_API_URL,
+            PREFECT_FLOWS_HEARTBEAT_FREQUENCY,
+            PREFECT_UI_URL,
+            temporary_settings,
+        )
 
-        with temporary_settings({PREFECT_API_URL: info.api_url, PREFECT_UI_URL: info.ui_url}):
+        with temporary_settings(
+            {
+                PREFECT_API_URL: info.api_url,
+                PREFECT_UI_URL: info.ui_url,
+                PREFECT_FLOWS_HEARTBEAT_FREQUENCY: None,
+            }
+        ):
             yield
 
 

@@ -125,25 +125,27 @@ def format_sweep_summary(
     ----------
     summary
         A sweep's summary: ``root``, ``cubes`` (names in order), ``points``, ``cache_hits``,
-        ``computed`` and ``seconds``, optionally ``report`` and ``flow_run_url``.
+        ``computed`` and ``seconds``, optionally ``sweeps`` (each cube's summary,
+        :func:`flows.assembly.summarize`), ``report`` and ``flow_run_url``.
     cubes
-        The sweep's cubes by name; default: read from ``summary["root"]``
-        (:func:`storage.open_results`).
+        The sweep's cubes by name, summarized when ``summary`` has no ``sweeps``; default:
+        read from ``summary["root"]`` (:func:`storage.open_results`).
     """
-    from flows.assembly import best_points
+    from flows.assembly import summarize
     from storage import open_results
 
-    if cubes is None:
-        cubes = open_results(summary["root"])
+    sweeps = summary.get("sweeps")
+    if sweeps is None:
+        cubes = open_results(summary["root"]) if cubes is None else cubes
+        sweeps = {name: summarize(cubes[name]) for name in summary["cubes"]}
     lines = [
         f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
         f"computed) in {summary['seconds']:.1f} s",
         f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
     ]
     for name in summary["cubes"]:
-        cube = cubes[name]
-        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy_mean"].dims[:-1])
-        for row in best_points(cube):
+        dims = ", ".join(f"{d}={size}" for d, size in sweeps[name]["dims"].items())
+        for row in sweeps[name]["best"]:
             at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
             lines.append(
                 f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"

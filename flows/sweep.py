@@ -36,7 +36,7 @@ from prefect.cache_policies import NO_CACHE
 from prefect.task_runners import ThreadPoolTaskRunner
 from prefect.utilities.annotations import quote
 
-from flows.assembly import assemble_cube, best_points, cube_location
+from flows.assembly import assemble, cube_location
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import (
     SweepFailed,
@@ -83,8 +83,9 @@ def plan_task(grid: Grid, root: str) -> SweepPlan:
 
 
 @task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
-def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
-    """Wait for the sweep's points, assemble its cube, publish its best points as a table."""
+def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str, Any]:
+    """Wait for the sweep's points, assemble its cube, publish its best points as a table;
+    return the cube's summary (:func:`flows.assembly.summarize`)."""
     logger = get_run_logger()
     keys = plan.sweep_keys[name]
     mine = {futures[key] for key in keys if key in futures}
@@ -97,8 +98,8 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
     ]
     if failed:
         raise SweepFailed(failure_message(failed, len(keys), plan.root))
-    cube = assemble_cube(plan, name)
-    rows = best_points(cube)
+    summary = assemble(plan, name)
+    rows = summary["best"]
     create_table_artifact(
         key=artifact_key(plan.grid.name, name, "best"),
         table=[{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
@@ -108,7 +109,7 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
     for r in rows:
         at = ", ".join(f"{dim}={value}" for dim, value in r["at"].items())
         logger.info("%s: best %s %.1f %% at %s", name, r["model"], 100 * r["accuracy"], at)
-    return cube_location(plan, name)
+    return summary
 
 
 @task(name="report", cache_policy=NO_CACHE)
@@ -180,8 +181,8 @@ def sweep(
         failed = [run.state.message for run in runs if not run.state.is_completed()]
         if failed:
             raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
-        cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
-    summary |= sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+        sweeps = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
+    summary |= sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
     log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
     if report:
         summary["report"] = report_task(plan.root)

@@ -31,13 +31,21 @@ def state(tmp_path, monkeypatch):
 
 
 def test_started_once_reused_and_stopped(state):
+    from prefect.settings import get_current_settings
+
     assert server.status(state) is None
+    heartbeat_s = get_current_settings().flows.heartbeat_frequency
+    assert heartbeat_s is not None
     with server.prefect_server(show_progress=False) as url:
         first = server.status(state)
         assert first is not None and url == first.api_url
         assert url.startswith("http://127.0.0.1:")
         assert os.environ["PREFECT_API_URL"] == url
+        assert get_current_settings().api.url == url
+        # Nothing on the local server reads heartbeats: flow runs send none.
+        assert get_current_settings().flows.heartbeat_frequency is None
     assert "PREFECT_API_URL" not in os.environ, "the block's settings leaked"
+    assert get_current_settings().flows.heartbeat_frequency == heartbeat_s
     with server.prefect_server(show_progress=False) as again:
         assert again == url
     assert server.status(state).pid == first.pid, "a second use started another server"
