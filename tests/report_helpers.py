@@ -142,5 +142,6 @@ def make_cubes(
             ),
             recordings=recordings,
             out_of_fold=oof if predictions else None,
+            n_windows_used=8 if scene.coding.n_windows == "auto" else scene.coding.n_windows,
         )
     return {s.name: build_cube(grid, s, records) for s in grid.sweeps}

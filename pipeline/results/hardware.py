@@ -79,6 +79,9 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "CHIP",
+    "CHIP_EVENT_RATE_HZ",
+    "CHIP_TAXELS",
     "MAX_BITS",
     "PARAMETERS",
     "EnergyModel",
@@ -105,6 +108,8 @@ CHIP = (
     "2.2 kevent/s, 12.33 nW per taxel"
 )
 """The chip the event readout's defaults are calibrated on (see the module docstring)."""
+CHIP_TAXELS, CHIP_EVENT_RATE_HZ = 192, 2200.0
+"""Its array and its events per second in all, which the calibration feeds the model."""
 
 
 @dataclass(frozen=True)
