@@ -209,9 +209,10 @@ def model_answer(
 GLANCE_COLUMNS = (
     "design",
     "accuracy [95 % interval]",
-    "data rate (frame readout: x more)",
-    "power: static share (frame readout: x more)",
+    "data rate",
+    "power (static share)",
     "energy per decision",
+    "frame readout / this: data rate, power",
 )
 
 
@@ -227,15 +228,18 @@ def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
     for chosen, roles in _roles(answer):
         a = chosen.accuracy
         power = chosen.power
-        share = "" if power is None else f": {_share(power.static_share)} static"
+        share = "" if power is None else f" ({_share(power.static_share)} static)"
         rows.append(
             (
-                "; ".join(roles),
+                ", ".join(roles),
                 chosen.design.label,
                 pct_interval(a.mean, a.low, a.high),
-                f"{rate(chosen.data_rate_bps, 'bit/s')} ({_factor(chosen.data_rate_ratio)})",
-                f"{si(chosen.power_w, 'W')}{share} ({_factor(chosen.power_ratio)})",
+                rate(chosen.data_rate_bps, "bit/s"),
+                f"{si(chosen.power_w, 'W')}{share}",
                 _energy(chosen),
+                "unknown"
+                if chosen.frame_power is None
+                else f"{times(chosen.data_rate_ratio)}, {times(chosen.power_ratio)}",
             )
         )
     return tuple(rows)
@@ -262,9 +266,9 @@ def how_sure(answer: ModelAnswer) -> str:
     worst = max(losses)
     if worst <= 0:
         return text + "; the cheapest is at least as accurate as the best (95 % interval)."
-    return (
-        text + f"; the cheapest may still lose up to {100 * worst:.1f} points of accuracy against "
-        f"the best (95 % interval), which more recordings per class or {REPEATS} would narrow."
+    return text + (
+        f"; the cheapest may still lose up to {100 * worst:.1f} points of accuracy against the "
+        "best (95 % interval)."
     )
 
 
@@ -281,7 +285,7 @@ def method_sentences(
         "(exact McNemar for one repeat, bootstrap otherwise); the p-values are Holm-corrected over "
         f"the model's comparisons (alpha {ALPHA:g}). Not significantly below is not the same as "
         "as accurate: the lower end of the difference's 95 % interval bounds what a choice may "
-        "lose.",
+        f"lose (more recordings per class, or {REPEATS}, narrow it).",
         frame_sentence(frame),
         "Readout power is static bias (every taxel's front end and comparators; for the frame "
         "readout the front ends and the ADCs) plus dynamic power (per event and per bit sent; "
@@ -358,15 +362,11 @@ def _roles(answer: ModelAnswer) -> list[tuple[Candidate, list[str]]]:
     for chosen, role in (
         (answer.best, "best"),
         (answer.by_data_rate, "cheapest by data rate"),
-        (answer.by_power, "cheapest by power"),
+        (answer.by_power, "by power"),
     ):
         if chosen is not None:
             roles.setdefault(id(chosen), (chosen, []))[1].append(role)
     return list(roles.values())
-
-
-def _factor(ratio: float) -> str:
-    return "frame readout unknown" if not math.isfinite(ratio) else f"{times(ratio)}"
 
 
 def _share(fraction: float) -> str:

@@ -21,10 +21,10 @@ FIGURES = "figures"
 _MD_MARKUP = re.compile(r"<(?=[A-Za-z/!?])|&(?=#?\w+;)")
 
 _STYLE = (
-    "body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em}"
-    "table{border-collapse:collapse;margin:1em 0}"
-    "th,td{border:1px solid #ccc;padding:.3em .5em;text-align:left;vertical-align:top}"
-    "figure{margin:1em 0}figure svg{max-width:100%;height:auto}"
+    "body{font-family:sans-serif;max-width:72em;margin:1em auto;padding:0 1em}"
+    "table{border-collapse:collapse;margin:.6em 0;font-size:.9em}"
+    "th,td{border:1px solid #ccc;padding:.2em .4em;text-align:left;vertical-align:top}"
+    "figure{margin:.6em 0}figure svg{max-width:100%;max-height:24em;width:auto;height:auto}"
     "summary{cursor:pointer;font-weight:bold;margin:1em 0}"
 )
 
