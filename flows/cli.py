@@ -35,6 +35,18 @@ from pipeline.results.hardware import MAX_BITS
 EXIT_USER_ERROR = 2
 
 
+_POWER_TEXT = {
+    "help": "both readouts' power (static and dynamic) and data rate for an array and an event "
+    "rate, without a sweep",
+    "description": "Estimate the power and data rate of the event readout of an array of N "
+    "taxels sending R events/s in all, and of a frame readout of the same array (a B-bit ADC "
+    "sampling every taxel at F Hz), from the energy model (static bias of the front end and "
+    "comparators, energy per event, per link bit and per ADC conversion).",
+    "epilog": "The defaults are calibrated on the chip of Alea et al., IEEE TBioCAS 2024: "
+    "--taxels 192 --event-rate-hz 2200 gives about 12.2 nW per taxel (the chip: 12.33).",
+}
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with the command line's error format: one line on stderr, exit status 2."""
 
@@ -247,18 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     report.set_defaults(handler=_report)
 
-    power = commands.add_parser(
-        "power",
-        parents=[energy],
-        help="both readouts' power (static and dynamic) and data rate for an array and an event "
-        "rate, without a sweep",
-        description="Estimate the power and data rate of the event readout of an array of N "
-        "taxels sending R events/s in all, and of a frame readout of the same array (a B-bit "
-        "ADC sampling every taxel at F Hz), from the energy model (static bias of the front end "
-        "and comparators, energy per event, per link bit and per ADC conversion). The defaults "
-        "are calibrated on the chip of Alea et al., IEEE TBioCAS 2024: --taxels 192 "
-        "--event-rate-hz 2200 gives about 12.3 nW per taxel.",
-    )
+    power = commands.add_parser("power", parents=[common, energy], **_POWER_TEXT)
     power.add_argument(
         "--taxels",
         required=True,

@@ -507,13 +507,18 @@ DESCRIBE_CASES: list[Case] = [
 def test_describe_refuses_bad_input(capsys, tmp_path, build, expected):
     argv = build(tmp_path)
     before = tree(tmp_path)
-    code = run_cli(["describe", *argv])
+    assert_one_line_exit_2(capsys, ["describe", *argv], expected)
+    assert tree(tmp_path) == before, "something was written"
+
+
+def assert_one_line_exit_2(capsys, argv: list[str], expected: str) -> None:
+    """``eskin argv`` exits 2 with one ``eskin: error:`` line holding ``expected``, no output."""
+    code = run_cli(argv)
     out, err = capsys.readouterr()
     assert code == 2 and out == ""
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
     assert expected in lines[0], lines[0]
-    assert tree(tmp_path) == before, "something was written"
 
 
 def test_describe_refuses_an_unwritable_export_folder(capsys, tmp_path, monkeypatch):
@@ -563,10 +568,5 @@ POWER_CASES: list[tuple[str, list[str], str]] = [
 )
 def test_power_refuses_bad_values_in_one_line(capsys, tmp_path, monkeypatch, argv, expected):
     monkeypatch.chdir(tmp_path)
-    code = run_cli(["power", *argv])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
-    assert expected in lines[0], lines[0]
+    assert_one_line_exit_2(capsys, ["power", *argv], expected)
     assert list(tmp_path.iterdir()) == []
