@@ -15,7 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from flows.assembly import assemble_cube, cube_location
+from flows.assembly import assemble, cube_location
 from flows.cluster import ClusterError, check_workers
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import (
@@ -32,16 +32,19 @@ from storage import StoreWriteError
 
 
 def sweep_summary(
-    plan: SweepPlan, cubes: dict[str, str], computed: int, seconds: float
+    plan: SweepPlan, sweeps: dict[str, dict[str, Any]], computed: int, seconds: float
 ) -> dict[str, Any]:
     """A finished sweep's summary, as ``eskin sweep --json`` prints it.
 
-    Keys: ``root``, ``cubes`` (each cube's location by sweep name), ``points`` (distinct),
-    ``cache_hits``, ``computed`` and ``seconds`` (the sweep's wall time, s).
+    ``sweeps`` holds the summary of each assembled cube by sweep name
+    (:func:`flows.assembly.summarize`). Keys: ``root``, ``cubes`` (each cube's location by sweep
+    name), ``sweeps`` (``sweeps``), ``points`` (distinct), ``cache_hits``, ``computed`` and
+    ``seconds`` (the sweep's wall time, s).
     """
     return {
         "root": plan.root,
-        "cubes": cubes,
+        "cubes": {name: cube_location(plan, name) for name in sweeps},
+        "sweeps": sweeps,
         "points": len(plan.scenes),
         "cache_hits": len(plan.cached),
         "computed": computed,
@@ -137,16 +140,16 @@ def run_sweep(
                         if failure:
                             failed[key] = failure
                 dashboard = dask.dashboard_link if dask is not None else None
-            cubes = {}
-            for spec in plan.grid.sweeps:
+            sweeps = {
+                spec.name: assemble(plan, spec.name)
+                for spec in plan.grid.sweeps
                 # A sweep with a failed point has no cube: a cube never holds a hole.
-                if not failed.keys() & set(plan.sweep_keys[spec.name]):
-                    assemble_cube(plan, spec.name)
-                    cubes[spec.name] = cube_location(plan, spec.name)
+                if not failed.keys() & set(plan.sweep_keys[spec.name])
+            }
         except StoreWriteError as error:
             raise SweepStopped(stopped_message(plan, error)) from None
     if failed:
         raise SweepFailed(failure_message(list(failed.values()), len(plan.scenes), plan.root))
-    summary = sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+    summary = sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
     log_sweep_run(plan, summary)
     return summary | {"dashboard": dashboard}

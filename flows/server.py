@@ -193,21 +193,28 @@ def prefect_server(*, show_progress: bool = True) -> Iterator[str]:
 
 @contextlib.contextmanager
 def _using(info: ServerInfo, auth: str) -> Iterator[None]:
-    """Point Prefect at ``info``, with its auth string, for the block, whether or not Prefect
-    is imported yet."""
+    """Point Prefect at ``info``, with its auth string, for the block, and send it no flow-run
+    heartbeats.
+
+    Heartbeats only feed automations that mark silent runs as crashed, and the local server
+    has none; Prefect's heartbeat thread, which wakes once a second, would still hold up the
+    end of every flow run by up to a second. A server named by ``PREFECT_API_URL`` keeps
+    Prefect's own setting.
+    """
     settings = {
         "PREFECT_API_URL": info.api_url,
         "PREFECT_UI_URL": info.ui_url,
         CLIENT_AUTH_ENV: auth,
     }
     with restored_environment(settings):
+        # Set before Prefect is imported too: it reads the environment when imported.
         os.environ.update(settings)
-        if "prefect" not in sys.modules:  # it reads the environment when imported
-            yield
-            return
         import prefect.settings as names
 
-        with names.temporary_settings({getattr(names, k): v for k, v in settings.items()}):
+        with names.temporary_settings(
+            {getattr(names, k): v for k, v in settings.items()}
+            | {names.PREFECT_FLOWS_HEARTBEAT_FREQUENCY: None}
+        ):
             yield
 
 

@@ -37,7 +37,7 @@ from prefect.states import Cancelled, Failed, State
 from prefect.task_runners import ThreadPoolTaskRunner
 from prefect.utilities.annotations import quote
 
-from flows.assembly import assemble_cube, best_points, cube_location
+from flows.assembly import assemble, cube_location
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import (
     SweepFailed,
@@ -88,8 +88,9 @@ def plan_task(grid: Grid, root: str) -> SweepPlan:
 
 
 @task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
-def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str | State:
-    """Wait for the sweep's points, assemble its cube, publish its best points as a table.
+def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str, Any] | State:
+    """Wait for the sweep's points, assemble its cube, publish its best points as a table;
+    return the cube's summary (:func:`flows.assembly.summarize`).
 
     A sweep stopped by a failed write (its points cancelled, or one failed so, or its cube
     not written: then the state holds the :class:`storage.StoreWriteError`) ends Cancelled: a
@@ -114,10 +115,10 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str | Sta
     if failed:
         raise SweepFailed(failure_message(failed, len(keys), plan.root))
     try:
-        cube = assemble_cube(plan, name)
+        summary = assemble(plan, name)
     except StoreWriteError as error:
         return Cancelled(message=str(error), data=error)
-    rows = best_points(cube)
+    rows = summary["best"]
     create_table_artifact(
         key=artifact_key(plan.grid.name, name, "best"),
         table=[{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
@@ -127,7 +128,7 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str | Sta
     for r in rows:
         at = ", ".join(f"{dim}={value}" for dim, value in r["at"].items())
         logger.info("%s: best %s %.1f %% at %s", name, r["model"], 100 * r["accuracy"], at)
-    return cube_location(plan, name)
+    return summary
 
 
 @task(name="report", cache_policy=NO_CACHE)
@@ -216,8 +217,8 @@ def sweep(
         failed = [run.state.message for run in runs if not run.state.is_completed()]
         if failed:
             raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
-        cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
-    summary |= sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+        sweeps = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
+    summary |= sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
     log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
     if report:
         summary["report"] = report_task(plan.root)

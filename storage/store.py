@@ -376,6 +376,11 @@ class SweepStore:
         batch = index.index(self.path / name).get(index.checked_key(name, key))
         return None if batch is None else self.path / name / batch
 
+    def entry_batches(self, kind: Kind) -> dict[str, str]:
+        """Key -> name of the batch that holds it, for every complete entry of ``kind`` (one
+        listing). Batches never change once in place: a name stands for the bytes it holds."""
+        return index.index(self.path / _kind_name(kind))
+
     def discard(self, kind: Kind, key: str) -> bool:
         """Remove the entry ``kind/key`` (e.g. a corrupt one, to recompute it).
 
@@ -455,12 +460,25 @@ class SweepStore:
     # -----------------------------------------------------------------------------------------
     # Cubes (storage.cube_files)
 
-    def write_cube(self, name: str, cube: xr.Dataset) -> None:
-        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically
+    def write_cube(
+        self,
+        name: str,
+        cube: xr.Dataset,
+        *,
+        source: str | None = None,
+        note: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically,
+        with the digest ``source`` of what it was built from and a JSON ``note`` if given
         (:func:`storage.cube_files.write_cube`); :class:`StoreWriteError` as
         :meth:`write_entries`."""
         with self._writing():
-            cube_files.write_cube(self.path / CUBES, name, cube)
+            cube_files.write_cube(self.path / CUBES, name, cube, source=source, note=note)
+
+    def current_note(self, name: str, source: str) -> dict[str, Any] | None:
+        """The note of cube ``name`` if it is intact and was written with ``source``, else None
+        (:func:`storage.cube_files.current_note`)."""
+        return cube_files.current_note(self.path / CUBES, name, source)
 
     def cube_names(self) -> list[str]:
         """Names of the stored cubes, sorted."""

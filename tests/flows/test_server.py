@@ -46,14 +46,22 @@ def api_status(url: str, auth: str | None = None) -> int:
 
 
 def test_started_once_reused_and_stopped(state):
+    from prefect.settings import get_current_settings
+
     assert server.status(state) is None
+    heartbeat_s = get_current_settings().flows.heartbeat_frequency
+    assert heartbeat_s is not None
     with server.prefect_server(show_progress=False) as url:
         first = server.status(state)
         assert first is not None and url == first.api_url
         assert url.startswith("http://127.0.0.1:")
         assert os.environ["PREFECT_API_URL"] == url
+        assert get_current_settings().api.url == url
+        # Nothing on the local server reads heartbeats: flow runs send none.
+        assert get_current_settings().flows.heartbeat_frequency is None
         auth = (state / server.AUTH_FILE).read_text().strip()
         assert os.environ[server.CLIENT_AUTH_ENV] == auth and len(auth) >= 40
+        assert get_current_settings().api.auth_string.get_secret_value() == auth
         assert stat.S_IMODE((state / server.AUTH_FILE).stat().st_mode) == 0o600
         assert stat.S_IMODE(state.stat().st_mode) == 0o700
         # Only the string's holders get in; the health check stays open.
@@ -62,6 +70,7 @@ def test_started_once_reused_and_stopped(state):
         assert server.healthy(url)
     assert "PREFECT_API_URL" not in os.environ, "the block's settings leaked"
     assert server.CLIENT_AUTH_ENV not in os.environ, "the block's settings leaked"
+    assert get_current_settings().flows.heartbeat_frequency == heartbeat_s
     with server.prefect_server(show_progress=False) as again:
         assert again == url
     assert server.status(state).pid == first.pid, "a second use started another server"

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from flows.assembly import summarize
 from flows.cli import main
 from pipeline.run.stages import SPIKES
 from storage import SweepStore, open_results
@@ -23,6 +24,7 @@ def test_cold_run_summary(smoke_sweep):
     assert set(summary) == {
         "root",
         "cubes",
+        "sweeps",
         "points",
         "cache_hits",
         "computed",
@@ -30,6 +32,8 @@ def test_cold_run_summary(smoke_sweep):
         "flow_run_url",
         "dashboard",
     }
+    cubes = open_results(root)
+    assert summary["sweeps"] == {name: summarize(cube) for name, cube in cubes.items()}
     assert summary["flow_run_url"].startswith("http://127.0.0.1:")
     assert "/runs/flow-run/" in summary["flow_run_url"]
     assert summary["dashboard"].startswith("http://127.0.0.1:")
