@@ -2,6 +2,7 @@
 and names and paths from scene and grid files cannot leave their root."""
 
 import ast
+import contextlib
 import os
 import socket
 import ssl
@@ -157,14 +158,16 @@ def test_a_running_sweeps_scheduler_refuses_clients_without_its_credentials(tmp_
         ):
             with pytest.raises(OSError):
                 Client(attempt, timeout=5, security=security).close()
-        with pytest.raises(ssl.SSLError, match="CERTIFICATE_REQUIRED|certificate required"):
-            tls_without_certificate(address, client.security.tls_ca_file)
+        # Refused with an alert or a dropped connection; one let in would wait for a Dask
+        # message (the read times out) or answer.
+        with contextlib.suppress(ssl.SSLError):
+            assert tls_without_certificate(address, client.security.tls_ca_file) == b""
         assert len(client.scheduler_info()["workers"]) == 1
 
 
 def tls_without_certificate(address: str, ca_pem: str) -> bytes:
     """Open a TLS connection to ``address`` that trusts ``ca_pem`` and shows no certificate;
-    return the first byte the server sends."""
+    return the first byte the server sends (none if it closes the connection)."""
     host, port = address.removeprefix("tls://").rsplit(":", 1)
     context = ssl.create_default_context(cadata=ca_pem)
     context.check_hostname = False
