@@ -59,3 +59,16 @@ def test_a_tls_address_without_credentials_is_one_line_before_connecting():
         dask_client(address="tls://127.0.0.1:9", timeout_s=60),
     ):
         pytest.fail("connected")
+
+
+def test_only_the_kill_of_a_worker_still_exiting_is_left_unsaid():
+    import logging
+
+    from flows.cluster import _exiting_worker_killed
+
+    def record(message):
+        return logging.LogRecord("distributed.nanny", logging.WARNING, "", 0, message, (), None)
+
+    killed = record("Worker process still alive after 4.0 seconds, killing")
+    assert not _exiting_worker_killed(killed)
+    assert _exiting_worker_killed(record("Restarting worker"))
