@@ -1283,6 +1283,21 @@ def test_lock_refuses_a_second_process_naming_root_and_pid(store):
         pass
 
 
+def test_lock_on_a_full_disk_is_taken_without_its_holder_note(store, monkeypatch):
+    import storage.locking
+
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(storage.locking.os, "write", full)
+    with store.lock():
+        monkeypatch.undo()
+        child = subprocess.run(
+            [sys.executable, "-c", HOLD_LOCK, str(store.root)], capture_output=True, text=True
+        )
+    assert child.returncode != 0 and "in use by another sweep (PID unknown)" in child.stderr
+
+
 def test_lock_nests_within_one_process_and_is_released_by_the_outermost(store):
     with store.lock(), SweepStore.open(store.root).lock():
         pass
