@@ -4,29 +4,20 @@ A cube is rebuilt from the plan's cached results and the results computed since;
 the cube already stored (a re-run with nothing new) is left as it is, not written again.
 
 A cube is stored with its summary (:func:`summarize`: its swept dimensions and best points)
-and the digest of what it was built from (:func:`cube_source`): the grid's base scene and the
-sweep, the names of the batches that hold its points' results (a batch never changes once in
-place, and a result computed again lands in a new one), and the code and dependency versions.
-A re-run that computes nothing for a sweep whose stored cube has that digest, every file of it
-as written (:meth:`storage.SweepStore.current_note`), keeps the cube and takes its summary as
-stored (:func:`assemble`); a damaged or outdated cube is built again.
+and the digest of what it was built from (:func:`flows.planning.cube_source`). A cube that
+planning finds current is kept and its summary taken as stored (:func:`assemble`); a damaged
+or outdated cube is built again.
 """
 
 from __future__ import annotations
 
-import functools
-import hashlib
-import json
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-import pipeline
-import storage
-from flows.planning import SweepPlan
+from flows.planning import SweepPlan, cube_source
 from pipeline.run.stages import RESULTS
 from storage import StoreError, SweepStore
 
@@ -34,21 +25,15 @@ from storage import StoreError, SweepStore
 def assemble(plan: SweepPlan, name: str) -> dict[str, Any]:
     """Make the stored cube of sweep ``name`` current; return its summary (:func:`summarize`).
 
-    A stored cube built from the same source (:func:`cube_source`), every file of it intact,
-    with nothing computed since planning, is kept and its stored summary returned without
-    reading it; any other is built again (:func:`assemble_cube`).
+    A cube that planning found current (:attr:`flows.planning.SweepPlan.current`) is kept and
+    its stored summary returned without reading it; any other is built (:func:`assemble_cube`).
 
     Raises
     ------
     As :func:`assemble_cube`.
     """
-    store = SweepStore.open(plan.root)
-    computed = any(key not in plan.records for key in plan.sweep_keys[name])
-    source = cube_source(plan, name, store.entry_batches(RESULTS.record))
-    if not computed and source is not None:
-        note = store.current_note(name, source)
-        if note is not None:
-            return note
+    if name in plan.current:
+        return plan.current[name]
     return summarize(assemble_cube(plan, name))
 
 
@@ -81,50 +66,12 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
         )
     records = {key: plan.records[key] if key in plan.records else read[key] for key in keys}
     cube = build_cube(plan.grid, spec, records)
-    source = cube_source(plan, name, store.entry_batches(RESULTS.record))
+    source = cube_source(plan.grid, name, keys, store.entry_batches(RESULTS.record))
     note = summarize(cube)
     current = source is not None and store.current_note(name, source) == note
     if not (current and _stored_as(store, name, cube)):
         store.write_cube(name, cube, source=source, note=note)
     return cube
-
-
-def cube_source(plan: SweepPlan, name: str, batches: dict[str, str]) -> str | None:
-    """The digest of what the cube of sweep ``name`` is built from, or None while a point of it
-    has no stored result.
-
-    ``batches`` maps result keys to the batches holding them
-    (:meth:`storage.SweepStore.entry_batches`).
-    """
-    keys = plan.sweep_keys[name]
-    if any(key not in batches for key in keys):
-        return None
-    spec = next(s for s in plan.grid.sweeps if s.name == name)
-    described = {
-        "grid": plan.grid.name,
-        "base": repr(plan.grid.base),
-        "sweep": repr(spec),
-        "results": [[key, batches[key]] for key in keys],
-        "code": _code_digest(),
-    }
-    return hashlib.sha256(json.dumps(described).encode()).hexdigest()
-
-
-@functools.cache
-def _code_digest() -> str:
-    """sha256 of this package's version, its dependencies' versions and the source of the
-    packages that build and store a cube (an edited module changes it)."""
-    from pipeline.results.cube import DEPENDENCY_VERSIONS
-
-    found = hashlib.sha256(
-        json.dumps([metadata.version("eskin-sweep"), DEPENDENCY_VERSIONS]).encode()
-    )
-    for package in (pipeline, storage):
-        folder = Path(next(iter(package.__path__)))
-        for path in sorted(folder.rglob("*.py")):
-            found.update(path.relative_to(folder).as_posix().encode() + b"\0")
-            found.update(path.read_bytes())
-    return found.hexdigest()
 
 
 def _stored_as(store: SweepStore, name: str, cube: xr.Dataset) -> bool:

@@ -175,11 +175,16 @@ def current_note(folder: Path, name: str, source: str) -> dict[str, Any] | None:
 
 def _manifest(path: Path) -> dict[str, str]:
     """sha256 of every file under the cube folder ``path`` but its group metadata, by path."""
-    return {
-        file.relative_to(path).as_posix(): hashlib.sha256(file.read_bytes()).hexdigest()
-        for file in sorted(path.rglob("*"))
-        if file.is_file() and file != path / _METADATA
-    }
+    found = {}
+    for folder, _, files in os.walk(path):
+        relative = os.path.relpath(folder, path)
+        for name in files:
+            if relative == "." and name == _METADATA:
+                continue
+            with open(os.path.join(folder, name), "rb") as file:
+                digest_ = hashlib.sha256(file.read()).hexdigest()
+            found[name if relative == "." else f"{relative}/{name}"] = digest_
+    return dict(sorted(found.items()))
 
 
 def cube_path(folder: Path, name: str) -> Path:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from flows.assembly import assemble, assemble_cube, summarize
-from flows.planning import SweepPlan
+from flows.planning import SweepPlan, plan_sweep
 from pipeline.design.grid import Grid
 from pipeline.run.records import RecordingsInfo, ResultEntry
 from pipeline.run.stages import RESULTS
@@ -95,13 +95,8 @@ def test_a_re_run_keeps_a_current_cube_and_takes_its_summary_without_building_it
     for i, key in enumerate(scenes):
         write_result(store, key, ResultEntry({"ffnn": np.array([0.25 + i / 2])}, {}, METRICS))
 
-    def planned() -> SweepPlan:  # as planning reads them: every stored result
-        return SweepPlan(
-            grid,
-            str(store.root),
-            scenes,
-            store.read_many(RESULTS.record, scenes, discard_corrupt=False),
-        )
+    def planned() -> SweepPlan:
+        return plan_sweep(grid, store.root)
 
     built = []
     build_cube = cube_module.build_cube
@@ -114,7 +109,9 @@ def test_a_re_run_keeps_a_current_cube_and_takes_its_summary_without_building_it
         "best": [{"model": "ffnn", "accuracy": 0.75, "at": {"threshold_v": 0.1}}],
     }
     assert summarize(store.read_cube("t")) == summary
-    assert assemble(planned(), "t") == summary
+    plan = planned()
+    assert plan.current == {"t": summary} and plan.records == {} and plan.missing == []
+    assert assemble(plan, "t") == summary
     assert built == ["t"]
     # A point computed since planning: built again.
     assemble(SweepPlan(grid, str(store.root), scenes, {}), "t")
@@ -144,3 +141,15 @@ def test_a_re_run_keeps_a_current_cube_and_takes_its_summary_without_building_it
     assemble(SweepPlan(other, str(store.root), scenes, planned().records), "t")
     assert built == ["t", "t", "t", "t", "t"]
     assert store.read_cube("t").attrs["title"] == "renamed"
+    # A damaged result batch is not read while the cubes built from it are current; once it is
+    # needed, planning discards it and plans its points again.
+    assemble(planned(), "t")
+    assert set(planned().current) == {"t"}
+    batch = store.entry_location(RESULTS.record, first_key)
+    chunk = next(p for p in batch.rglob("*") if p.is_file() and p.name != "zarr.json")
+    chunk.write_bytes(chunk.read_bytes()[::-1])
+    assert set(planned().current) == {"t"}
+    with pytest.warns(RuntimeWarning, match="recomputing its entries"):
+        plan = plan_sweep(other, store.root)
+    assert plan.current == {} and plan.missing == [first_key]
+    assert set(plan.records) == set(scenes) - {first_key}
