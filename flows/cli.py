@@ -2,7 +2,8 @@
 
 ``eskin run`` simulates one scene; ``eskin sweep`` runs the Prefect flow ``sweep`` on Dask;
 ``eskin server`` starts, shows or stops the local Prefect server sweeps use; ``eskin serve``
-serves the flow as a deployment; ``eskin report`` writes a run root's report.
+serves the flow as a deployment; ``eskin report`` writes a run root's report; ``eskin power``
+prints both readouts' power and data rate for an array and an event rate, without a sweep.
 
 Exit status: 0 on success, 2 for bad input or usage (one line ``eskin: error: ...`` on stderr
 naming what and where), 1 for a run that failed on good input (a point that failed more often
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import sys
@@ -25,11 +27,24 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from flows import cluster
-from flows.report import DEFAULT_ADC_BITS, ENERGY_OPTIONS, energy_argument
+from flows.report import DEFAULT_ADC_BITS
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
+from pipeline.results.hardware import MAX_BITS
 
 EXIT_USER_ERROR = 2
+
+
+_POWER_TEXT = {
+    "help": "both readouts' power (static and dynamic) and data rate for an array and an event "
+    "rate, without a sweep",
+    "description": "Estimate the power and data rate of the event readout of an array of N "
+    "taxels sending R events/s in all, and of a frame readout of the same array (a B-bit ADC "
+    "sampling every taxel at F Hz), from the energy model (static bias of the front end and "
+    "comparators, energy per event, per link bit and per ADC conversion).",
+    "epilog": "The defaults are calibrated on the chip of Alea et al., IEEE TBioCAS 2024: "
+    "--taxels 192 --event-rate-hz 2200 gives about 12.2 nW per taxel (the chip: 12.33).",
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -135,8 +150,17 @@ def build_parser() -> argparse.ArgumentParser:
         f"{cluster.available_cores()} here)",
     )
     where.add_argument(
-        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
+        "--address",
+        metavar="tcp|tls://HOST:PORT",
+        help="use an existing Dask scheduler instead (tls:// with the three --tls-* files, or "
+        "Dask's distributed.comm.tls settings)",
     )
+    for option, what in (
+        ("--tls-ca-file", "the CA certificate that signed the scheduler's certificate"),
+        ("--tls-cert", "this client's certificate"),
+        ("--tls-key", "this client's private key"),
+    ):
+        sweep.add_argument(option, metavar="FILE", help=f"{what} (PEM), for --address tls://")
     sweep.add_argument(
         "--dataset",
         metavar="NAME|PATH",
@@ -162,7 +186,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Sweeps use the Prefect server named by PREFECT_API_URL, or else a local "
         "one (127.0.0.1, state in $ESKIN_SERVER_DIR, default runs/.prefect) that the first "
         "sweep starts and later sweeps reuse; it stops by itself after $ESKIN_SERVER_IDLE_S "
-        "seconds (default 1800) without a sweep.",
+        "seconds (default 1800) without a sweep. It asks every client for the auth string "
+        "in <state>/auth-string (only its owner may read it), which the UI asks for too.",
     )
     server.add_argument("action", choices=["start", "status", "stop"])
     server.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -212,9 +237,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     describe.set_defaults(handler=_describe)
 
+    energy = _energy_options()
     report = commands.add_parser(
         "report",
-        parents=[common],
+        parents=[common, energy],
         help="turn a sweep's cubes into the cheapest design as accurate as the best, the paper's "
         "claims, figures and Table I, and the cost of accuracy",
         description="Write figures (PNG, SVG), report.md and a self-contained report.html from "
@@ -241,24 +267,97 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="HZ",
         help="its frame rate per taxel (default: the recordings' sampling rate)",
     )
-    from pipeline.results.hardware import EnergyModel
-
-    defaults = EnergyModel()
-    for option, what, unit in (
-        ("--event-energy-pj", "energy per spike event of the event readout", "pJ"),
-        ("--adc-fom-fj", "Walden figure of merit of the frame readout's ADC", "fJ per step"),
-        ("--link-energy-pj-per-bit", "energy per bit sent on the link (both readouts)", "pJ"),
-    ):
-        field, factor = ENERGY_OPTIONS[option]
-        report.add_argument(
-            option,
-            type=energy_argument(option),
-            metavar=unit.split()[0].upper(),
-            help=f"{what}, in {unit}, for the readout power estimate (default "
-            f"{getattr(defaults, field) / factor:g}, an order-of-magnitude assumption)",
-        )
     report.set_defaults(handler=_report)
+
+    power = commands.add_parser("power", parents=[common, energy], **_POWER_TEXT)
+    power.add_argument(
+        "--taxels",
+        required=True,
+        type=_checked("--taxels", whole=True),
+        metavar="N",
+        help="taxels in the array",
+    )
+    power.add_argument(
+        "--event-rate-hz",
+        required=True,
+        type=_checked("--event-rate-hz"),
+        metavar="R",
+        help="events per second of the whole array",
+    )
+    power.add_argument(
+        "--bits",
+        type=_checked("--bits", at_most=MAX_BITS),
+        default=DEFAULT_ADC_BITS,
+        metavar="B",
+        help=f"resolution of the frame readout's ADC (default {DEFAULT_ADC_BITS})",
+    )
+    power.add_argument(
+        "--sampling-rate-hz",
+        type=_checked("--sampling-rate-hz", positive=True),
+        metavar="F",
+        help="samples per second per taxel of the frame readout (default: none; the frame "
+        "readout is then unknown)",
+    )
+    power.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object on stdout (an unknown figure is null)",
+    )
+    power.set_defaults(handler=_power)
     return parser
+
+
+def _energy_options() -> argparse.ArgumentParser:
+    """The energy model's constants as options, each declared once on its field."""
+    from pipeline.results.hardware import PARAMETERS, EnergyModel
+
+    parent = argparse.ArgumentParser(add_help=False)
+    group = parent.add_argument_group(
+        "energy model (defaults calibrated on the chip of Alea et al., IEEE TBioCAS 2024, and "
+        "taken from the literature: see the README)"
+    )
+    defaults = EnergyModel()
+    for name, p in PARAMETERS.items():
+        group.add_argument(
+            p.option,
+            dest=name,
+            type=_checked(p.option, whole=p.count),
+            metavar=p.unit.split()[0].upper() if not p.count else "N",
+            help=f"{p.what}, in {p.unit} (default {getattr(defaults, name) / p.scale:g})",
+        )
+    return parent
+
+
+def _checked(
+    option: str, *, whole: bool = False, positive: bool = False, at_most: float = math.inf
+):
+    """An argparse ``type``: a finite number >= 0 (a whole number >= 1, or > 0; at most
+    ``at_most``), named in argparse's one-line error."""
+    from pipeline.results.hardware import Parameter
+
+    rule = Parameter(option, "", 1.0, "", "", count=whole)
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        problem = rule.problem(value)
+        if problem is None and positive and value == 0:
+            problem = f"{option} 0: need a number > 0"
+        if problem is None and value > at_most:
+            problem = f"{option} {value:g}: need at most {at_most:g}"
+        if problem is not None:
+            raise argparse.ArgumentTypeError(problem.removeprefix(f"{option} "))
+        return int(value) if whole else value
+
+    return parse
+
+
+def _energy(args: argparse.Namespace):
+    from pipeline.results.hardware import PARAMETERS, EnergyModel
+
+    return EnergyModel.from_options({name: getattr(args, name) for name in PARAMETERS})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -298,6 +397,18 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    import dask
+
+    files = {
+        option: getattr(args, option.lstrip("-").replace("-", "_"))
+        for option in cluster.TLS_OPTIONS
+    }
+    # The TLS files as Dask's own settings: the flow's client reads them as any Dask client does.
+    with dask.config.set(cluster.tls_config(args.address, files)):
+        return _sweep_checked(args)
+
+
+def _sweep_checked(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
     from flows.dry_run import dry_run, format_dry_run
     from flows.environment import hermetic_environment
@@ -385,6 +496,8 @@ def _server(args: argparse.Namespace) -> int:
         with server.prefect_server(show_progress=not args.quiet) as api_url:
             pass
         info = {"running": True, "api_url": api_url, "ui_url": api_url.removesuffix("/api")}
+        if server.auth_file().is_file() and "PREFECT_API_URL" not in os.environ:
+            info["auth_string_file"] = str(server.auth_file())
     elif args.action == "stop":
         stopped = server.stop()
         info = {
@@ -397,6 +510,7 @@ def _server(args: argparse.Namespace) -> int:
         info = {"running": found is not None, "state_dir": str(server.server_dir())}
         if found is not None:
             info |= {"api_url": found.api_url, "ui_url": found.ui_url, "pid": found.pid}
+            info["auth_string_file"] = str(server.auth_file())
     if args.json:
         print(json.dumps(info, indent=2))
     elif args.action == "stop":
@@ -405,6 +519,8 @@ def _server(args: argparse.Namespace) -> int:
         print(
             f"Prefect server: {info['ui_url']}" + (f" (PID {info['pid']})" if "pid" in info else "")
         )
+        if "auth_string_file" in info:
+            print(f"The UI asks for the auth string in {info['auth_string_file']}")
     else:
         print(f"no Prefect server running (state in {info['state_dir']})")
     return 0
@@ -423,12 +539,27 @@ def _report(args: argparse.Namespace) -> int:
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,
-        event_energy_pj=args.event_energy_pj,
-        adc_fom_fj=args.adc_fom_fj,
-        link_energy_pj_per_bit=args.link_energy_pj_per_bit,
+        energy=_energy(args),
         show_progress=not args.quiet,
     )
     print(path)
+    return 0
+
+
+def _power(args: argparse.Namespace) -> int:
+    from flows.summaries import format_power
+    from pipeline.results.hardware import power_budget
+
+    try:
+        budget = power_budget(
+            args.taxels, args.event_rate_hz, args.bits, args.sampling_rate_hz, _energy(args)
+        )
+    except ValueError as exc:
+        raise EskinError(str(exc)) from None
+    if args.json:
+        print(json.dumps(budget.to_json(), indent=2, allow_nan=False))
+    else:
+        print(format_power(budget))
     return 0
 
 

@@ -13,13 +13,17 @@ import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from storage.errors import write_failure
+
 STATE_DIR = ".state"
 
 
 def hermetic_environment(root: Path, *, prefect: bool = True) -> None:
     """Point Prefect, Dask and matplotlib at folders under ``root/.state``; keep them offline.
 
-    Must run before Prefect is imported (it reads its settings at import).
+    Must run before Prefect is imported (it reads its settings at import). A root where those
+    folders cannot be made for want of space or permission raises
+    :class:`storage.StoreWriteError`.
     """
     state = Path(root) / STATE_DIR
     defaults = {
@@ -37,7 +41,13 @@ def hermetic_environment(root: Path, *, prefect: bool = True) -> None:
         if name in os.environ:
             continue
         if isinstance(value, Path):  # the tools do not create their folders' parents
-            value.mkdir(parents=True, exist_ok=True)
+            try:
+                value.mkdir(parents=True, exist_ok=True)
+            except OSError as error:  # a root without space or permission: one line
+                failure = write_failure(error, root)
+                if failure is None:
+                    raise
+                raise failure from error
         os.environ[name] = str(value)
 
 

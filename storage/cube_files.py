@@ -2,7 +2,13 @@
 swapped in atomically, every chunk with a CRC-32C and every variable with a sha256.
 
 Cubes carry ``eskin_sha256`` (digests of their variables; NaN payloads are canonicalized because
-xarray's CF decoding of cubes rewrites them), removed again on reading. Strings are stored as
+xarray's CF decoding of cubes rewrites them), removed again on reading.
+
+A writer may also give a cube its ``source`` (an opaque digest of what it was built from) and a
+small JSON ``note``. Both are kept in the cube's group metadata with a manifest (the sha256 of
+every other file of the cube), so that :func:`current_note` can tell, from the files' bytes and
+without decoding the cube, that the cube stored under a name is intact and was built from a
+given source. Strings are stored as
 Zarr's variable-length ``string`` type and read back as numpy ``<U`` arrays.
 """
 
@@ -11,15 +17,18 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import hashlib
+import json
 import os
 import re
 import shutil
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import xarray as xr
+import zarr
 from zarr.codecs import Crc32cCodec, ZstdCodec
 
 from storage.batches import digest
@@ -28,13 +37,28 @@ from storage.errors import CorruptEntryError, StoreError, one_line
 from storage.layout import PARTIAL_PREFIX
 
 CUBE_DIGESTS = "eskin_sha256"
+CUBE_SOURCE = "eskin_source"
+CUBE_NOTE = "eskin_note"
+CUBE_FILES = "eskin_files"
+_RESERVED = (CUBE_DIGESTS, CUBE_SOURCE, CUBE_NOTE, CUBE_FILES)
+_METADATA = "zarr.json"
 _CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
 _OPEN_ZARR = {"consolidated": False, "zarr_format": 3}
 
 
-def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
+def write_cube(
+    folder: Path,
+    name: str,
+    cube: xr.Dataset,
+    *,
+    source: str | None = None,
+    note: Mapping[str, Any] | None = None,
+) -> None:
     """Store ``cube`` as ``<folder>/<name>``, replacing an older cube of that name atomically.
+
+    ``source`` and ``note`` (JSON-serialisable), when given, are kept with the cube for
+    :func:`current_note`.
 
     The new cube is written in full under a partial name, then swapped in with one
     ``renameat2(RENAME_EXCHANGE)`` (Linux), so the name always refers to a complete cube,
@@ -48,14 +72,15 @@ def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
     Raises
     ------
     ValueError
-        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses the reserved attribute
-        ``eskin_sha256``.
+        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses a reserved attribute
+        (``eskin_sha256``, ``eskin_source``, ``eskin_note``, ``eskin_files``).
     """
     path = cube_path(folder, name)
     if not isinstance(cube, xr.Dataset):
         raise TypeError(f"cube {name!r}: expected an xarray.Dataset, got {type(cube)}")
-    if CUBE_DIGESTS in cube.attrs:
-        raise ValueError(f"cube {name!r}: attribute {CUBE_DIGESTS!r} is reserved")
+    for reserved in _RESERVED:
+        if reserved in cube.attrs:
+            raise ValueError(f"cube {name!r}: attribute {reserved!r} is reserved")
     cube = cube.compute().drop_encoding()
     digests = {str(n): digest(v.values, canonical_nan=True) for n, v in cube.variables.items()}
     cube = _strings_to_objects(cube)
@@ -66,6 +91,11 @@ def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
     partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
     try:
         cube.to_zarr(str(partial), mode="w-", encoding=encoding, **_TO_ZARR)
+        if source is not None:
+            # The group's metadata is written last, with the manifest of everything else.
+            zarr.open_group(str(partial), mode="r+", zarr_format=3).attrs.update(
+                {CUBE_SOURCE: source, CUBE_NOTE: dict(note or {}), CUBE_FILES: _manifest(partial)}
+            )
         replace_folder(partial, path)
     finally:
         shutil.rmtree(partial, ignore_errors=True)
@@ -107,11 +137,14 @@ def read_cube(folder: Path, name: str, *, lazy: bool = False) -> xr.Dataset:
     try:
         if lazy:
             cube = _objects_to_strings(xr.open_zarr(str(path), **_OPEN_ZARR, chunks={}))
-            cube.attrs.pop(CUBE_DIGESTS, None)
+            for reserved in _RESERVED:
+                cube.attrs.pop(reserved, None)
             return cube
         with xr.open_zarr(str(path), **_OPEN_ZARR, chunks=None) as opened:
             cube = _objects_to_strings(opened.load())
         digests = cube.attrs.pop(CUBE_DIGESTS)
+        for reserved in _RESERVED:
+            cube.attrs.pop(reserved, None)
         if not isinstance(digests, dict) or set(digests) != {str(n) for n in cube.variables}:
             raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
         for var, variable in cube.variables.items():
@@ -122,6 +155,36 @@ def read_cube(folder: Path, name: str, *, lazy: bool = False) -> xr.Dataset:
     except Exception as error:
         raise CorruptEntryError(f"corrupt {where}: {one_line(error)}") from error
     return cube
+
+
+def current_note(folder: Path, name: str, source: str) -> dict[str, Any] | None:
+    """The note of cube ``name`` if it was written with ``source`` and every file of it is as
+    written (its manifest); else None (no such cube, another source, no manifest, or a file
+    missing, added or changed). Reads the files' bytes, never decodes the cube."""
+    path = cube_path(folder, name)
+    try:
+        attributes = json.loads((path / _METADATA).read_bytes())["attributes"]
+        if attributes[CUBE_SOURCE] != source:
+            return None
+        files, note = attributes[CUBE_FILES], attributes[CUBE_NOTE]
+        intact = isinstance(note, dict) and files == _manifest(path)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return note if intact else None
+
+
+def _manifest(path: Path) -> dict[str, str]:
+    """sha256 of every file under the cube folder ``path`` but its group metadata, by path."""
+    found = {}
+    for folder, _, files in os.walk(path):
+        relative = os.path.relpath(folder, path)
+        for name in files:
+            if relative == "." and name == _METADATA:
+                continue
+            with open(os.path.join(folder, name), "rb") as file:
+                digest_ = hashlib.sha256(file.read()).hexdigest()
+            found[name if relative == "." else f"{relative}/{name}"] = digest_
+    return dict(sorted(found.items()))
 
 
 def cube_path(folder: Path, name: str) -> Path:

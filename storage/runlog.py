@@ -3,8 +3,9 @@
 ``<root>/sweep-runs.jsonl`` holds objects ``{"finished", "grid", "points", "cache_hits",
 "computed", "seconds"}`` (``finished`` an ISO 8601 UTC time, ``seconds`` the sweep's wall time).
 Each record is appended with one ``write`` on a file opened with ``O_APPEND``, so concurrent sweeps
-on one root do not interleave their lines; a line that does not parse (a torn write after a power
-loss) is skipped when reading.
+on one root do not interleave their lines; a line that is not a JSON object (a torn write after a
+power loss) is skipped when reading. What a record means is the report's business
+(:func:`pipeline.report.cost.sweep_runs`).
 """
 
 from __future__ import annotations
@@ -15,8 +16,6 @@ from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
-
-from pipeline.report.cost import SweepRun, sweep_run_from_record
 
 RUN_LOG = "sweep-runs.jsonl"
 
@@ -35,15 +34,17 @@ def append_sweep_run(root: str | Path, summary: Mapping[str, Any]) -> None:
         os.close(fd)
 
 
-def read_sweep_runs(root: str | Path) -> list[SweepRun]:
-    """The logged sweeps of ``root``, oldest first (none if there is no log)."""
+def read_sweep_records(root: str | Path) -> list[dict[str, Any]]:
+    """The logged sweeps of ``root`` as JSON objects, oldest first (none if there is no log)."""
     path = Path(root) / RUN_LOG
     if not path.is_file():
         return []
-    runs = []
+    records = []
     for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
         try:
-            runs.append(sweep_run_from_record(json.loads(line)))
-        except (ValueError, KeyError, TypeError):
+            record = json.loads(line)
+        except ValueError:
             continue
-    return runs
+        if isinstance(record, dict):
+            records.append(record)
+    return records

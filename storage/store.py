@@ -73,8 +73,8 @@ import shutil
 import time
 import uuid
 import warnings
-from collections.abc import Iterable, Mapping
-from contextlib import AbstractContextManager
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -89,7 +89,9 @@ from storage.errors import (
     StoreBusyError,
     StoreError,
     StoreLayoutError,
+    StoreWriteError,
     one_line,
+    write_failure,
 )
 from storage.layout import (
     CUBES,
@@ -109,6 +111,7 @@ __all__ = [
     "StoreBusyError",
     "StoreError",
     "StoreLayoutError",
+    "StoreWriteError",
     "SweepStore",
     "open_results",
     "replace_folder",
@@ -335,20 +338,24 @@ class SweepStore:
             An entry is not of the kind's entry type.
         ValueError
             An invalid key; or as :func:`storage.codec.to_record` raises.
+        StoreWriteError
+            The root has no space (or quota) left or is not writable; nothing of the batch
+            is left behind.
         """
         name = _kind_name(kind)
         records = [to_record(kind, index.checked_key(name, key), e) for key, e in entries.items()]
         if not records:
             return
         folder = self.path / name
-        ensure_group(folder)
         batch = f"{BATCH_PREFIX}{uuid.uuid4().hex}"
         partial = folder / f"{PARTIAL_PREFIX}{batch}"
-        try:
-            write_batch(partial, name, records)
-            os.rename(partial, folder / batch)
-        finally:
-            shutil.rmtree(partial, ignore_errors=True)
+        with self._writing():
+            ensure_group(folder)
+            try:
+                write_batch(partial, name, records)
+                os.rename(partial, folder / batch)
+            finally:
+                shutil.rmtree(partial, ignore_errors=True)
 
     def has(self, kind: Kind, key: str) -> bool:
         """True only if a complete entry ``kind/key`` exists (partial batches are invisible)."""
@@ -368,6 +375,11 @@ class SweepStore:
         name = _kind_name(kind)
         batch = index.index(self.path / name).get(index.checked_key(name, key))
         return None if batch is None else self.path / name / batch
+
+    def entry_batches(self, kind: Kind) -> dict[str, str]:
+        """Key -> name of the batch that holds it, for every complete entry of ``kind`` (one
+        listing). Batches never change once in place: a name stands for the bytes it holds."""
+        return index.index(self.path / _kind_name(kind))
 
     def discard(self, kind: Kind, key: str) -> bool:
         """Remove the entry ``kind/key`` (e.g. a corrupt one, to recompute it).
@@ -418,6 +430,17 @@ class SweepStore:
             removed += 1
         return removed
 
+    @contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Raise a write's lack of space or permission as :class:`StoreWriteError`."""
+        try:
+            yield
+        except Exception as error:  # an OSError, or one a library raised from it
+            failure = write_failure(error, self.root)
+            if failure is None:
+                raise
+            raise failure from error
+
     def _read_batch(self, kind: Declaration, batch: str) -> dict[str, Any]:
         """Every entry of one batch, by key; any failure to read or verify it is corruption."""
         name = _kind_name(kind)
@@ -437,10 +460,25 @@ class SweepStore:
     # -----------------------------------------------------------------------------------------
     # Cubes (storage.cube_files)
 
-    def write_cube(self, name: str, cube: xr.Dataset) -> None:
-        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically
-        (:func:`storage.cube_files.write_cube`)."""
-        cube_files.write_cube(self.path / CUBES, name, cube)
+    def write_cube(
+        self,
+        name: str,
+        cube: xr.Dataset,
+        *,
+        source: str | None = None,
+        note: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically,
+        with the digest ``source`` of what it was built from and a JSON ``note`` if given
+        (:func:`storage.cube_files.write_cube`); :class:`StoreWriteError` as
+        :meth:`write_entries`."""
+        with self._writing():
+            cube_files.write_cube(self.path / CUBES, name, cube, source=source, note=note)
+
+    def current_note(self, name: str, source: str) -> dict[str, Any] | None:
+        """The note of cube ``name`` if it is intact and was written with ``source``, else None
+        (:func:`storage.cube_files.current_note`)."""
+        return cube_files.current_note(self.path / CUBES, name, source)
 
     def cube_names(self) -> list[str]:
         """Names of the stored cubes, sorted."""

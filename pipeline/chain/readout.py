@@ -73,9 +73,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from pipeline.chain.jit import kernel
 from pipeline.design.scene import (
     AmplifierNoise,
     AmplifierOffset,
@@ -124,14 +124,14 @@ def effect_rng(seed: int, effect: Effect, taxel: int, recording: int | None = No
 # Ideal encoder
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _level(k, u):  # pragma: no cover - compiled
     """``clip(k, floor(u), ceil(u))``, branch-free; a NaN ``u`` gives NaN (so it is an event)."""
     at_least = k if k > np.floor(u) else np.floor(u)
     return at_least if at_least < np.ceil(u) else np.ceil(u)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _scan_lane(v, v0, inv_threshold, i, k, events, out):  # pragma: no cover - compiled
     """One sample of a lane: the new level, and where the next event index goes."""
     k_new = _level(k, (v[i] - v0) * inv_threshold)
@@ -139,7 +139,7 @@ def _scan_lane(v, v0, inv_threshold, i, k, events, out):  # pragma: no cover - c
     return k_new, out + (k_new != k)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _emit(v, v0, inv_threshold, i, k, times, polarity, out):  # pragma: no cover - compiled
     """Apply sample ``i`` to level ``k``: write its spikes while they fit; return the new level
     and count, or NaN and ``-(i + 1)`` for a non-finite sample."""
@@ -165,7 +165,7 @@ def _emit(v, v0, inv_threshold, i, k, times, polarity, out):  # pragma: no cover
     return k_new, out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _encode_block(
     v, v0, inv_threshold, start, stop, k, events, times, polarity, out
 ):  # pragma: no cover - compiled
@@ -215,7 +215,7 @@ def _encode_block(
     return k, out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _ideal_kernel(v, inv_threshold, times, polarity):  # pragma: no cover - compiled
     """Emit the ideal train into ``times``/``polarity`` while it fits; return the full count.
 
@@ -318,14 +318,14 @@ def reference_level_crossings(
 # Decaying-threshold encoder
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _gap(x0, m, theta_min, swing, s_ref, tau, s):  # pragma: no cover - compiled
     """``f(s) = x0 + m * s - theta(s)``: how far the signal is past the level at local time
     ``s``, with ``theta(s) = theta_min + swing * exp((s_ref - s) / tau)``."""
     return x0 + m * s - (theta_min + swing * math.exp((s_ref - s) / tau))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _first_reach(x0, m, theta_min, swing, s_ref, tau, lo):  # pragma: no cover - compiled
     """The first ``s`` in ``[lo, 1]`` where ``f(s) = x0 + m * s - theta(s) >= 0``
     (:func:`_gap`), or -1.0 if there is none.
@@ -365,7 +365,7 @@ def _first_reach(x0, m, theta_min, swing, s_ref, tau, lo):  # pragma: no cover -
     return hi
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _decaying_kernel(
     v,
     up0_v,
@@ -503,7 +503,7 @@ def _decaying_train(v, fs_hz, up, down, tau_s, max_spikes, floor_v=0.0, noise=No
 # General (non-ideal) encoder
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _general_kernel(
     v, up_v, down_v, floor_v, noise_rng, noise_sigma_v, limit, times, polarity
 ):  # pragma: no cover - compiled
@@ -541,7 +541,7 @@ def _general_kernel(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _amplified(x, offset_v, noise_rng, noise_sigma_v, rail_v):  # pragma: no cover - compiled
     """``clip(x + offset_v + noise_sigma_v * z, -rail_v, rail_v)`` with ``z`` drawn from
     ``noise_rng`` sample by sample (none when it is ``None``); the same numbers, in the same
