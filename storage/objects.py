@@ -148,10 +148,14 @@ class S3Objects(Objects):
     def list(self, prefix: str) -> list[ObjectInfo]:
         import obstore
 
+        # obstore lists whole path segments: list the folder, keep the keys with the prefix.
+        folder = prefix.rpartition("/")[0]
         with _s3_errors(self.where(prefix)):
-            found = obstore.list(self._store, prefix or None).collect()
+            found = obstore.list(self._store, folder or None).collect()
         return [
-            ObjectInfo(o["path"], o["last_modified"].timestamp(), o["e_tag"] or "") for o in found
+            ObjectInfo(o["path"], o["last_modified"].timestamp(), o["e_tag"] or "")
+            for o in found
+            if o["path"].startswith(prefix)
         ]
 
     def get(self, key: str) -> tuple[bytes, str]:
@@ -168,7 +172,7 @@ class S3Objects(Objects):
         return self._put(key, data, "create")
 
     def put_if_match(self, key: str, data: bytes, etag: str) -> str:
-        return self._put(key, data, {"e_tag": etag, "version": None})
+        return self._put(key, data, {"e_tag": etag})
 
     def _put(self, key: str, data: bytes, mode: Any) -> str:
         import obstore
@@ -191,18 +195,20 @@ class S3Objects(Objects):
         return zarr.storage.ObjectStore(_s3_store(self.where(prefix)), read_only=read_only)
 
 
-_S3_STORES: dict[str, Any] = {}
+_S3_STORES: dict[tuple[str, ...], Any] = {}
 _S3_GUARD = threading.Lock()
 
 
 def _s3_store(url: str) -> Any:
-    """obstore's S3 store of ``url`` (one per URL and process), configured from the environment."""
+    """obstore's S3 store of ``url``, configured from the environment (``AWS_*``): one per URL
+    and configuration in a process."""
     from obstore.store import S3Store
 
+    config = tuple(sorted(f"{k}={v}" for k, v in os.environ.items() if k.startswith("AWS_")))
     with _S3_GUARD:
-        if url not in _S3_STORES:
-            _S3_STORES[url] = S3Store.from_url(url)
-        return _S3_STORES[url]
+        if (url, *config) not in _S3_STORES:
+            _S3_STORES[(url, *config)] = S3Store.from_url(url)
+        return _S3_STORES[(url, *config)]
 
 
 @contextlib.contextmanager

@@ -177,8 +177,8 @@ class SweepStore:
         """
         if is_object_url(root):
             store = cls(root)
-            if not store._remote.has_store():
-                store._remote.create()
+            if not store._objects.has_store():
+                store._objects.create()
             return store
         root = Path(root)
         if root.exists() or root.is_symlink():
@@ -211,7 +211,7 @@ class SweepStore:
         """
         if is_object_url(root):
             store = cls(root)
-            if not store._remote.has_store():
+            if not store._objects.has_store():
                 raise StoreError(f"not a sweep store: {store.root} holds nothing")
             return store
         root = Path(root)
@@ -244,7 +244,7 @@ class SweepStore:
         """
         if is_object_url(root):
             store = cls(root)
-            return store if store._remote.has_store() else None
+            return store if store._objects.has_store() else None
         root = Path(root)
         if not root.exists() and not root.is_symlink():
             return None
