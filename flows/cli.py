@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from flows import cluster
-from flows.report import DEFAULT_ADC_BITS
+from flows.report import DEFAULT_ADC_BITS, needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 from pipeline.results.hardware import MAX_BITS
@@ -415,6 +415,7 @@ def _sweep_checked(args: argparse.Namespace) -> int:
     from flows.planning import check_grid, default_root, load_sweep_grid
     from flows.server import prefect_server
     from storage import SweepStore
+    from storage.objects import run_root
 
     workers = args.workers or cluster.available_cores()
     # The grid is loaded and checked once, here, before the store is created and Prefect
@@ -423,7 +424,9 @@ def _sweep_checked(args: argparse.Namespace) -> int:
     check_grid(grid)
     if args.address is not None:
         probe_scheduler(args.address)
-    root = Path(args.root) if args.root else default_root(grid, args.dataset)
+    root = run_root(args.root) if args.root else default_root(grid, args.dataset)
+    if args.report and (problem := needs_report_folder(root)):
+        raise EskinError(f"--report: {problem}")
     if args.dry_run:
         plan = dry_run(grid, root, workers)
         print(
@@ -534,8 +537,10 @@ def _report(args: argparse.Namespace) -> int:
     from flows.report import write_run_report
 
     out = Path(args.out) if args.out else None
+    from storage.objects import run_root
+
     path = write_run_report(
-        Path(args.root),
+        run_root(args.root),
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,

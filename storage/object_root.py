@@ -8,7 +8,7 @@ Object layout (keys relative to the root URL)::
     store.zarr/<kind>/batch-<hex>/...         a batch; complete once its zarr.json exists
     store.zarr/cubes/<name>/current           the cube's version, e.g. "v-<hex>"
     store.zarr/cubes/<name>/v-<hex>/...       one written version of the cube
-    sweep-runs/<time>-<hex>.json              the run log, one object per sweep
+    sweep-runs/<time ns>-<hex>.json           the run log, one object per sweep
 
 * **A batch appears whole or not at all.** It is written into memory first, then every object
   but its group ``zarr.json`` is PUT (concurrently), then ``zarr.json`` last: one PUT is atomic
@@ -281,8 +281,8 @@ class ObjectRoot:
     # The run log
 
     def append_run(self, line: bytes) -> None:
-        stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
-        self.objects.put(f"{RUN_LOG}{stamp}-{uuid.uuid4().hex}.json", line)
+        # Named by the time in ns, so that a listing's order is the order of writing.
+        self.objects.put(f"{RUN_LOG}{time.time_ns():020d}-{uuid.uuid4().hex}.json", line)
 
     def run_lines(self) -> list[bytes]:
         keys = sorted(info.key for info in self.objects.list(RUN_LOG))

@@ -154,6 +154,17 @@ class SweepStore:
             raise TypeError(f"the object root {self.root} has no path")
         return self.root / STORE_NAME
 
+    def identity(self) -> str:
+        """The root as one string naming it wherever it is read: an object root's URL, a folder
+        root's resolved absolute path."""
+        return self.root if isinstance(self.root, str) else str(self.root.resolve())
+
+    def cube_location(self, name: str) -> str:
+        """Where the cube ``name`` is stored (a folder, or the URL of its prefix)."""
+        if isinstance(self.root, str):
+            return f"{self.root}/{STORE_NAME}/{CUBES}/{name}"
+        return str(self.path / CUBES / name)
+
     # -----------------------------------------------------------------------------------------
     # Opening
 
