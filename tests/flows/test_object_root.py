@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
+from flows.run import run_sweep
 from storage import SweepStore
 from storage.locking import LOCK_NAME
+from storage.runlog import read_sweep_records
 from tests.flows.helpers import BIN, assert_same_cubes, eskin, hermetic_env, stop, wait_for
 from tests.object_store import bucket, s3_env, s3_server  # noqa: F401  (fixtures)
-
-pytestmark = pytest.mark.slow
 
 POINTS = 7  # the smoke grid's distinct points
 
@@ -55,6 +55,18 @@ def start_cluster(tmp_path: Path, env: dict[str, str]) -> tuple[str, list[subpro
     return address, processes
 
 
+def test_a_sweep_on_an_object_root_cannot_write_its_report_there(tmp_path):
+    env = hermetic_env(tmp_path)
+    root = "s3://nowhere/run"
+    proc = eskin("sweep", "--grid", "smoke", "--root", root, "--report", env=env)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.strip().splitlines() == [
+        f"eskin: error: --report: run root {root} is on object storage: write its report to a "
+        f"local folder with eskin report --root {root} --out DIR"
+    ]
+
+
+@pytest.mark.slow
 def test_a_sweep_on_an_object_root(smoke_sweep, bucket, s3_server, tmp_path):  # noqa: F811
     env = hermetic_env(tmp_path, **s3_env(s3_server), XDG_CACHE_HOME=str(tmp_path / "cache"))
     root = f"{bucket}/runs/smoke"
@@ -103,6 +115,9 @@ def test_a_sweep_on_an_object_root(smoke_sweep, bucket, s3_server, tmp_path):  #
     finally:
         stop(*reversed(cluster))
     assert_same_cubes(smoke_sweep[0], root)
+    in_process = run_sweep("smoke", root)  # all cached: no cluster
+    assert (in_process["cache_hits"], in_process["computed"]) == (POINTS, 0)
+    assert [r["computed"] for r in read_sweep_records(root)][1:] == [0, 0]  # the killed one: none
     assert not list(tmp_path.rglob("store.zarr")), "the store was written to a file system"
 
     no_folder = eskin("report", "--root", root, env=env)

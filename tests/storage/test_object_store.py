@@ -134,6 +134,30 @@ def test_entries_round_trip_and_pickle_to_workers(s3_store, spike_entry):  # noq
     assert location.startswith(f"{s3_store.root}/store.zarr/results/batch-")
 
 
+def test_batches_and_cubes_are_published_with_their_group_metadata_last(
+    s3_store,
+    spike_entry,  # noqa: F811
+    monkeypatch,
+):
+    written = []
+    put = S3Objects.put
+
+    def recorded(self, key, data):
+        written.append(key)
+        return put(self, key, data)
+
+    monkeypatch.setattr(S3Objects, "put", recorded)
+    s3_store.write_entries(SPIKES.record, {KEY: spike_entry})
+    batch = [k for k in written if "/batch-" in k]
+    assert len(batch) > 2 and batch[-1].endswith("/zarr.json") and batch[-1].count("/") == 3
+    written.clear()
+    s3_store.write_cube("c", make_cube())
+    assert written[-1] == "store.zarr/cubes/c/current"
+    version = written[-2].split("/")[3]
+    assert written[-2] == f"store.zarr/cubes/c/{version}/zarr.json"
+    assert all(k.startswith(f"store.zarr/cubes/c/{version}/") for k in written[:-1])
+
+
 def test_a_batch_without_its_metadata_is_invisible_and_cleaned(s3_store, spike_entry):  # noqa: F811
     s3_store.write_entries(SPIKES.record, {KEY: spike_entry})
     objects = s3_store._objects.objects
