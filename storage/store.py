@@ -26,6 +26,10 @@ A batch's attrs hold ``sha256``: one hex digest per stored array, over its dtype
 bytes, plus ``"@entries"`` over the canonical JSON of its entry list. Cubes carry
 ``eskin_sha256`` (:mod:`storage.cube_files`).
 
+A run root may also be an object store's URL (``s3://bucket/prefix``): the same layout, with
+the guarantees that rename and ``flock`` give here made of objects instead
+(:mod:`storage.object_root`, :mod:`storage.lease`, through :mod:`storage.objects`).
+
 Its jobs live in modules of their own: :mod:`storage.layout` (the root, opening, older
 layouts), :mod:`storage.locking` (the sweep lock), :mod:`storage.index` (which keys a kind's
 batches hold), :mod:`storage.batches` (a batch on disk), :mod:`storage.codec` (entries as
