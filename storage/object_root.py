@@ -37,7 +37,7 @@ from typing import Any
 import xarray as xr
 import zarr
 
-from storage import cube_files
+from storage import cube_files, index
 from storage.batches import BATCH_PREFIX, Record, metadata_keys, read_batch, write_batch
 from storage.errors import StoreError, one_line
 from storage.layout import CUBES, MARKER, STORE_NAME, VERSION, check_metadata
@@ -51,9 +51,6 @@ RUN_LOG = "sweep-runs/"
 _GROUP = {"zarr_format": 3, "node_type": "group"}
 _BATCH_METADATA = re.compile(rf"([a-z][a-z0-9_]*)/({BATCH_PREFIX}[0-9a-f]{{32}})/zarr\.json")
 _VERSION = re.compile(rf"{VERSION_PREFIX}[0-9a-f]{{32}}")
-
-# Keys of the batches this process has read, by batch URL (batches never change once complete).
-_BATCH_KEYS: dict[str, tuple[str, ...]] = {}
 
 
 class ObjectRoot:
@@ -125,14 +122,11 @@ class ObjectRoot:
 
     def batch_keys(self, kind: str, batch: str) -> tuple[str, ...]:
         """The keys of a complete batch (read once per process); none if unreadable."""
-        name = self.objects.where(self._key(kind, batch))
-        if name not in _BATCH_KEYS:
-            try:
-                data, _ = self.objects.get(self._key(kind, batch, cube_files.METADATA))
-                _BATCH_KEYS[name] = metadata_keys(data)
-            except (OSError, StoreError, ValueError, KeyError, TypeError):
-                return ()
-        return _BATCH_KEYS[name]
+        metadata = self._key(kind, batch, cube_files.METADATA)
+        return index.cached_keys(
+            self.objects.where(self._key(kind, batch)),
+            lambda: metadata_keys(self.objects.get(metadata)[0]),
+        )
 
     def write_batch(self, kind: str, records: list[Record]) -> None:
         """Publish ``records`` as a new batch of ``kind``, its group metadata last."""
@@ -176,6 +170,8 @@ class ObjectRoot:
             if kind == CUBES:
                 removed += self._clean_versions(name, infos, now, max(older_than_s, GRACE_S))
                 continue
+            if not index.BATCH.fullmatch(name):
+                continue  # not ours to remove
             complete = any(i.key.endswith(f"{name}/{cube_files.METADATA}") for i in infos)
             if complete and self.batch_keys(kind, name):
                 continue

@@ -31,7 +31,7 @@ from typing import Any
 
 import zarr
 
-from storage.errors import StoreError, one_line
+from storage.errors import StoreError
 
 #: The URL schemes of object roots.
 SCHEMES = ("s3://",)
@@ -192,7 +192,8 @@ class S3Objects(Objects):
                 obstore.delete(self._store, keys)
 
     def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
-        return zarr.storage.ObjectStore(_s3_store(self.where(prefix)), read_only=read_only)
+        with _s3_errors(self.where(prefix)):
+            return zarr.storage.ObjectStore(_s3_store(self.where(prefix)), read_only=read_only)
 
 
 _S3_STORES: dict[tuple[str, ...], Any] = {}
@@ -221,7 +222,9 @@ def _s3_errors(where: str) -> Iterator[None]:
     except (FileNotFoundError, AlreadyExistsError, PreconditionError):
         raise
     except BaseError as error:
-        raise StoreError(f"object store {where}: {one_line(error)}") from error
+        # obstore appends its Rust debug dump of the error: the sentence before it says it all.
+        text = " ".join(str(error).split("Debug source:")[0].split())
+        raise StoreError(f"object store {where}: {type(error).__name__}: {text}") from error
 
 
 # ---------------------------------------------------------------------------------------------

@@ -327,3 +327,16 @@ def test_the_run_log_of_an_object_root(s3_store):
     records = read_sweep_records(s3_store.root)
     assert [r["computed"] for r in records] == [2, 0]
     assert set(records[0]) == {"finished", "grid", "points", "cache_hits", "computed", "seconds"}
+
+
+def test_an_unreachable_object_store_is_one_short_line(monkeypatch):
+    monkeypatch.setenv("AWS_ENDPOINT_URL", "http://127.0.0.1:1")  # nothing listens on port 1
+    monkeypatch.setenv("AWS_ALLOW_HTTP", "true")
+    monkeypatch.setenv("AWS_ACCESS_KEY_ID", "testing")
+    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", "testing")
+    monkeypatch.setenv("AWS_REGION", "us-east-1")
+    with pytest.raises(StoreError) as refused:
+        open_results("s3://eskin-nowhere/run")
+    message = str(refused.value)
+    assert message.startswith("object store s3://eskin-nowhere/run/store.zarr/zarr.json: ")
+    assert "\n" not in message and "Debug" not in message and len(message) < 400
