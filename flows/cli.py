@@ -138,8 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument(
         "--root",
         metavar="DIR",
-        help="where the store goes (default: runs/<grid name>, or runs/<grid name>-<dataset "
-        "name> with --dataset)",
+        help="where the store goes, a folder or s3://bucket/prefix (default: runs/<grid name>, "
+        "or runs/<grid name>-<dataset name> with --dataset)",
     )
     where = sweep.add_mutually_exclusive_group()
     where.add_argument(
@@ -249,9 +249,13 @@ def build_parser() -> argparse.ArgumentParser:
         "whose accuracy is not significantly below the run's best, against a frame-based ADC "
         "readout of the same array.",
     )
-    report.add_argument("--root", required=True, metavar="DIR", help="the run root of a sweep")
     report.add_argument(
-        "--out", metavar="DIR", help="the report folder (default: <root>/report; replaced whole)"
+        "--root", required=True, metavar="DIR", help="the run root of a sweep (or s3://...)"
+    )
+    report.add_argument(
+        "--out",
+        metavar="DIR",
+        help="the report folder (default: <root>/report, required for s3://; replaced whole)",
     )
     report.add_argument(
         "--adc-bits",

@@ -186,7 +186,8 @@ def sweep(
     if show_progress and summary["flow_run_url"]:
         print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
     # One sweep per root: a second one is refused here (the command line takes the lock before
-    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
+    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed
+    # (an object root's lease expires).
     with store.lock():
         plan = plan_task(grid, str(store.root))
         futures: dict[str, Any] = {}

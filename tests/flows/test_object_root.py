@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from flows.environment import state_folder
 from flows.run import run_sweep
 from storage import SweepStore
 from storage.locking import LOCK_NAME
@@ -53,6 +54,14 @@ def start_cluster(tmp_path: Path, env: dict[str, str]) -> tuple[str, list[subpro
             )
         )
     return address, processes
+
+
+def test_tool_state_of_an_object_root_is_in_the_users_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    folder = state_folder("s3://bucket/run")
+    assert folder.parent == tmp_path / "cache" / "eskin-sweep" / "state"
+    assert len(folder.name) == 12 and state_folder("s3://bucket/other") != folder
+    assert state_folder(tmp_path / "run") == tmp_path / "run" / ".state"
 
 
 def test_a_sweep_on_an_object_root_cannot_write_its_report_there(tmp_path):
