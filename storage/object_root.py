@@ -14,7 +14,9 @@ Object layout (keys relative to the root URL)::
   but its group ``zarr.json`` is PUT (concurrently), then ``zarr.json`` last: one PUT is atomic
   and listings and reads follow writes, so "complete" is "its ``zarr.json`` exists", and
   listing a kind lists its ``batch-<hex>/zarr.json`` objects. Leftovers without one are removed
-  by the sweep that holds the lease (:meth:`ObjectRoot.clean_partials`). Discarding a batch
+  by the sweep that holds the lease once :data:`PARTIAL_AGE_S` old
+  (:meth:`ObjectRoot.clean_partials`; a worker of a killed sweep may still be publishing a
+  younger one). Discarding a batch
   deletes its ``zarr.json`` first (it disappears at once), then the rest.
 * **A cube is swapped by a pointer.** A cube is written whole under a new version prefix, then
   the small object ``current`` is replaced with one PUT naming it; a reader reads ``current``
@@ -45,6 +47,9 @@ from storage.objects import Conflict, Objects
 
 #: Seconds a cube version stays after it stopped being current (readers may still read it).
 GRACE_S = 600.0
+#: Seconds since its last object was written after which a batch without its group metadata is
+#: a leftover: a worker of a killed sweep may still be publishing a younger one.
+PARTIAL_AGE_S = 600.0
 POINTER = "current"
 VERSION_PREFIX = "v-"
 RUN_LOG = "sweep-runs/"
@@ -157,8 +162,8 @@ class ObjectRoot:
 
     def clean_partials(self, *, older_than_s: float) -> int:
         """Remove batches without (readable) group metadata and cube versions no longer
-        current, each once older than ``older_than_s`` (versions: at least :data:`GRACE_S`);
-        return how many."""
+        current, each once older than ``older_than_s`` and at least :data:`PARTIAL_AGE_S`
+        (versions: :data:`GRACE_S`); return how many."""
         now = time.time()
         groups: dict[tuple[str, ...], list[Any]] = {}
         for info in self.objects.list(f"{STORE_NAME}/"):
@@ -175,7 +180,7 @@ class ObjectRoot:
             complete = any(i.key.endswith(f"{name}/{cube_files.METADATA}") for i in infos)
             if complete and self.batch_keys(kind, name):
                 continue
-            if now - max(i.modified_s for i in infos) < older_than_s:
+            if now - max(i.modified_s for i in infos) < max(older_than_s, PARTIAL_AGE_S):
                 continue
             self.discard_batch(kind, name)
             removed += 1

@@ -457,8 +457,9 @@ class SweepStore:
             Only remove partials whose directory was last modified at least this many seconds
             ago. The default 0 removes every partial, including those of writers still running:
             use it only when no writer is active, else a threshold well above the longest write.
-            On an object root, cube versions no longer current are removed once older than
-            :data:`storage.object_root.GRACE_S`.
+            On an object root, partial batches are removed once older than
+            :data:`storage.object_root.PARTIAL_AGE_S` too, cube versions no longer current once
+            older than :data:`storage.object_root.GRACE_S`.
         """
         if self._objects is not None:
             return self._objects.clean_partials(older_than_s=older_than_s)
