@@ -98,16 +98,16 @@ class ObjectRoot:
         return True
 
     def create(self) -> None:
-        """Create the store (its cubes group, then its marked group metadata, unless another
-        sweep created it first)."""
-        group = json.dumps({**_GROUP, "attributes": {}}).encode()
-        self.objects.put(self._key(CUBES, cube_files.METADATA), group)
+        """Create the store: its marked group metadata (unless another sweep created it first;
+        the first object, so that a killed creation leaves a store, not a foreign root), then
+        its cubes group."""
         marked = json.dumps({**_GROUP, "attributes": {MARKER: VERSION}}).encode()
         try:
             self.objects.put_if_absent(self._key(cube_files.METADATA), marked)
         except Conflict:
             pass
         self.has_store()
+        self._ensure_group(CUBES)
 
     # -----------------------------------------------------------------------------------------
     # Batches
