@@ -18,6 +18,7 @@ hold the folder's ``flock``), so the object layout runs, and is tested, without 
 
 from __future__ import annotations
 
+import abc
 import concurrent.futures
 import contextlib
 import fcntl
@@ -66,39 +67,39 @@ def run_root(root: str | Path) -> str | Path:
     return Path(root)
 
 
-class Objects:
+class Objects(abc.ABC):
     """The object operations of a run root (see the module docstring); keys relative to it."""
 
     url: str
 
+    @abc.abstractmethod
     def list(self, prefix: str) -> list[ObjectInfo]:
         """Every object whose key starts with ``prefix``, at any depth."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def get(self, key: str) -> tuple[bytes, str]:
         """The object's bytes and ETag; FileNotFoundError if there is none."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def put(self, key: str, data: bytes) -> str:
         """Write the object whole (replacing any); return its ETag."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def put_if_absent(self, key: str, data: bytes) -> str:
         """Write the object only if there is none; its ETag, or :class:`Conflict`."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def put_if_match(self, key: str, data: bytes, etag: str) -> str:
         """Replace the object only if its ETag is still ``etag``; the new ETag, or
         :class:`Conflict`."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def delete(self, keys: list[str]) -> None:
         """Remove the objects (missing ones are fine)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
         """A Zarr store whose keys live under ``prefix``."""
-        raise NotImplementedError
 
     def where(self, key: str = "") -> str:
         """The URL or path of ``key``, for messages."""
