@@ -346,3 +346,19 @@ def test_an_unreachable_object_store_is_one_short_line(monkeypatch):
     message = str(refused.value)
     assert message.startswith("object store s3://eskin-nowhere/run/store.zarr/zarr.json: ")
     assert "\n" not in message and "Debug" not in message and len(message) < 400
+
+
+def test_the_lease_on_either_implementation(objects):
+    def foreign(expires_s: float) -> None:
+        body = {"holder": "PID 1 on elsewhere", "token": "t", "expires_s": expires_s}
+        objects.put(LOCK_NAME, json.dumps(body).encode())
+
+    foreign(time.time() + 60)
+    with pytest.raises(StoreBusyError, match="in use by another sweep"):
+        with lease.hold_lease(objects):
+            pass
+    foreign(time.time() - 1)
+    with lease.hold_lease(objects):
+        assert lease_body(objects)["token"] != "t"
+    with pytest.raises(FileNotFoundError):
+        objects.get(LOCK_NAME)
