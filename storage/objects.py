@@ -32,7 +32,7 @@ from typing import Any
 
 import zarr
 
-from storage.errors import StoreError
+from storage.errors import StoreError, StoreWriteError
 
 #: The URL schemes of object roots.
 SCHEMES = ("s3://",)
@@ -180,7 +180,7 @@ class S3Objects(Objects):
         from obstore.exceptions import AlreadyExistsError, PreconditionError
 
         try:
-            with _s3_errors(self.where(key)):
+            with _s3_errors(self.where(key), root=self.url):
                 return obstore.put(self._store, key, data, mode=mode)["e_tag"] or ""
         except (AlreadyExistsError, PreconditionError) as error:
             raise Conflict(self.where(key)) from error
@@ -189,7 +189,7 @@ class S3Objects(Objects):
         import obstore
 
         if keys:
-            with _s3_errors(self.where()):
+            with _s3_errors(self.where(), root=self.url):
                 obstore.delete(self._store, keys)
 
     def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
@@ -214,18 +214,34 @@ def _s3_store(url: str) -> Any:
 
 
 @contextlib.contextmanager
-def _s3_errors(where: str) -> Iterator[None]:
-    """obstore's errors other than a missing object as one-line :class:`StoreError`."""
-    from obstore.exceptions import AlreadyExistsError, BaseError, PreconditionError
+def _s3_errors(where: str, *, root: str | None = None) -> Iterator[None]:
+    """obstore's errors other than a missing object as one-line :class:`StoreError`; with the
+    ``root`` written to, a refused write as :class:`StoreWriteError` (every later one would be
+    refused too)."""
+    from obstore.exceptions import (
+        AlreadyExistsError,
+        BaseError,
+        PermissionDeniedError,
+        PreconditionError,
+        UnauthenticatedError,
+    )
 
     try:
         yield
     except (FileNotFoundError, AlreadyExistsError, PreconditionError):
         raise
+    except (PermissionDeniedError, UnauthenticatedError) as error:
+        if root is None:
+            raise StoreError(f"object store {where}: {_short(error)}") from error
+        raise StoreWriteError(root, "permission denied") from error
     except BaseError as error:
-        # obstore appends its Rust debug dump of the error: the sentence before it says it all.
-        text = " ".join(str(error).split("Debug source:")[0].split())
-        raise StoreError(f"object store {where}: {type(error).__name__}: {text}") from error
+        raise StoreError(f"object store {where}: {_short(error)}") from error
+
+
+def _short(error: BaseException) -> str:
+    # obstore appends its Rust debug dump of the error: the sentence before it says it all.
+    text = " ".join(str(error).split("Debug source:")[0].split())
+    return f"{type(error).__name__}: {text}"
 
 
 # ---------------------------------------------------------------------------------------------

@@ -13,7 +13,15 @@ import pytest
 import xarray as xr
 
 from pipeline.run.stages import RESULTS, SPIKES
-from storage import StoreBusyError, StoreError, SweepStore, lease, object_root, open_results
+from storage import (
+    StoreBusyError,
+    StoreError,
+    StoreWriteError,
+    SweepStore,
+    lease,
+    object_root,
+    open_results,
+)
 from storage.locking import LOCK_NAME
 from storage.objects import Conflict, PosixObjects, S3Objects, is_object_url, run_root
 from storage.runlog import append_sweep_run, read_sweep_records
@@ -362,3 +370,18 @@ def test_the_lease_on_either_implementation(objects):
         assert lease_body(objects)["token"] != "t"
     with pytest.raises(FileNotFoundError):
         objects.get(LOCK_NAME)
+
+
+def test_a_refused_write_to_an_object_root_stops_like_a_full_disk(s3_store, monkeypatch):
+    import obstore
+    from obstore.exceptions import PermissionDeniedError
+
+    def refused(*args, **kwargs):
+        raise PermissionDeniedError("Access Denied")
+
+    monkeypatch.setattr(obstore, "put", refused)
+    with pytest.raises(StoreWriteError) as stopped:
+        s3_store.write_entries(RESULTS.record, {KEY: result_entry(1)})
+    assert str(stopped.value) == f"cannot write to run root {s3_store.root}: permission denied"
+    with pytest.raises(StoreWriteError):
+        s3_store.write_cube("c", make_cube())
