@@ -11,7 +11,6 @@ or outdated cube is built again.
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -91,7 +90,7 @@ def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
 
 
 def cube_location(plan: SweepPlan, name: str) -> str:
-    return str(Path(plan.root) / "store.zarr" / "cubes" / name)
+    return SweepStore(plan.root).cube_location(name)
 
 
 def summarize(cube: xr.Dataset) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from flows import cluster
-from flows.report import DEFAULT_ADC_BITS
+from flows.report import DEFAULT_ADC_BITS, needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
 from pipeline.results.hardware import MAX_BITS
@@ -138,8 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument(
         "--root",
         metavar="DIR",
-        help="where the store goes (default: runs/<grid name>, or runs/<grid name>-<dataset "
-        "name> with --dataset)",
+        help="where the store goes, a folder or s3://bucket/prefix (default: runs/<grid name>, "
+        "or runs/<grid name>-<dataset name> with --dataset)",
     )
     where = sweep.add_mutually_exclusive_group()
     where.add_argument(
@@ -249,9 +249,13 @@ def build_parser() -> argparse.ArgumentParser:
         "whose accuracy is not significantly below the run's best, against a frame-based ADC "
         "readout of the same array.",
     )
-    report.add_argument("--root", required=True, metavar="DIR", help="the run root of a sweep")
     report.add_argument(
-        "--out", metavar="DIR", help="the report folder (default: <root>/report; replaced whole)"
+        "--root", required=True, metavar="DIR", help="the run root of a sweep (or s3://...)"
+    )
+    report.add_argument(
+        "--out",
+        metavar="DIR",
+        help="the report folder (default: <root>/report, required for s3://; replaced whole)",
     )
     report.add_argument(
         "--adc-bits",
@@ -415,6 +419,7 @@ def _sweep_checked(args: argparse.Namespace) -> int:
     from flows.planning import check_grid, default_root, load_sweep_grid
     from flows.server import prefect_server
     from storage import SweepStore
+    from storage.objects import run_root
 
     workers = args.workers or cluster.available_cores()
     # The grid is loaded and checked once, here, before the store is created and Prefect
@@ -423,7 +428,9 @@ def _sweep_checked(args: argparse.Namespace) -> int:
     check_grid(grid)
     if args.address is not None:
         probe_scheduler(args.address)
-    root = Path(args.root) if args.root else default_root(grid, args.dataset)
+    root = run_root(args.root) if args.root else default_root(grid, args.dataset)
+    if args.report and (problem := needs_report_folder(root)):
+        raise EskinError(f"--report: {problem}")
     if args.dry_run:
         plan = dry_run(grid, root, workers)
         print(
@@ -534,8 +541,10 @@ def _report(args: argparse.Namespace) -> int:
     from flows.report import write_run_report
 
     out = Path(args.out) if args.out else None
+    from storage.objects import run_root
+
     path = write_run_report(
-        Path(args.root),
+        run_root(args.root),
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,

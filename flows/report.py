@@ -28,7 +28,7 @@ DEFAULT_ADC_BITS = 12
 
 
 def write_run_report(
-    root: Path,
+    root: str | Path,
     out: Path | None = None,
     *,
     adc_bits: int = DEFAULT_ADC_BITS,
@@ -69,6 +69,8 @@ def write_run_report(
         problems.append(f"--adc-bits {adc_bits}: need 1 to {MAX_BITS}")
     if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
         problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
+    if out is None and (problem := needs_report_folder(root)):
+        problems.append(problem)
     if problems:
         raise EskinError("; ".join(problems))
     store = SweepStore.open(root)
@@ -97,6 +99,19 @@ def write_run_report(
     folder = out if out is not None else store.root / "report"
     check_report_folder(folder)  # before the figures: a refused folder costs nothing
     return write_report(folder, report, draw_report(report), show_progress=show_progress)
+
+
+def needs_report_folder(root: str | Path) -> str | None:
+    """Why the report of ``root`` needs a folder given (``--out``), or None: an object root
+    holds no report, which is a local folder."""
+    from storage.objects import is_object_url
+
+    if not is_object_url(root):
+        return None
+    return (
+        f"run root {root} is on object storage: write its report to a local folder with "
+        f"eskin report --root {root} --out DIR"
+    )
 
 
 def write_report(

@@ -60,11 +60,12 @@ def log_sweep_run(
     A log that cannot be written does not fail the sweep: ``warn`` (default: this module's
     logger) is called with a %-format message instead.
     """
+    from storage import StoreError
     from storage.runlog import append_sweep_run
 
     try:
         append_sweep_run(plan.root, {**summary, "grid": plan.grid.name})
-    except OSError as error:
+    except (OSError, StoreError) as error:
         (warn or logging.getLogger(__name__).warning)(
             "sweep not logged in %s: %s", plan.root, error
         )

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -152,7 +151,8 @@ def format_sweep_summary(
             lines.append(
                 f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
             )
-    lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
+    # A root may be a URL (s3://...), which Path would mangle.
+    lines.append(f"cubes: {str(summary['root']).rstrip('/')}/store.zarr/cubes")
     lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
     if summary.get("report"):
         lines.append(f"report: {summary['report']}")

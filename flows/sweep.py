@@ -49,9 +49,11 @@ from flows.progress import (
     stopped_message,
     write_error,
 )
+from flows.report import needs_report_folder
 from flows.run import log_sweep_run, sweep_summary
 from flows.scheduling import submit_missing, sweep_client
 from pipeline.design.grid import Grid
+from pipeline.errors import EskinError
 from storage import StoreWriteError
 
 #: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
@@ -177,12 +179,15 @@ def sweep(
     logger = get_run_logger()
     if not isinstance(grid, Grid) or dataset is not None:
         grid = checked_grid(grid, dataset)
+    if report and root is not None and (problem := needs_report_folder(root)):
+        raise EskinError(f"report: {problem}")
     store = open_root(grid, root, dataset)
     summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
     if show_progress and summary["flow_run_url"]:
         print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
     # One sweep per root: a second one is refused here (the command line takes the lock before
-    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
+    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed
+    # (an object root's lease expires).
     with store.lock():
         plan = plan_task(grid, str(store.root))
         futures: dict[str, Any] = {}

@@ -4,8 +4,9 @@
 "computed", "seconds"}`` (``finished`` an ISO 8601 UTC time, ``seconds`` the sweep's wall time).
 Each record is appended with one ``write`` on a file opened with ``O_APPEND``, so concurrent sweeps
 on one root do not interleave their lines; a line that is not a JSON object (a torn write after a
-power loss) is skipped when reading. What a record means is the report's business
-(:func:`pipeline.report.cost.sweep_runs`).
+power loss) is skipped when reading. An object root cannot append: each record is an object of
+its own there (:meth:`storage.object_root.ObjectRoot.append_run`). What a record means is the
+report's business (:func:`pipeline.report.cost.sweep_runs`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from storage.object_root import ObjectRoot
+from storage.objects import is_object_url, objects_for
+
 RUN_LOG = "sweep-runs.jsonl"
 
 
@@ -27,6 +31,9 @@ def append_sweep_run(root: str | Path, summary: Mapping[str, Any]) -> None:
         **{k: summary[k] for k in ("grid", "points", "cache_hits", "computed", "seconds")},
     }
     line = (json.dumps(record, sort_keys=True) + "\n").encode()
+    if is_object_url(root):
+        ObjectRoot(objects_for(root)).append_run(line)
+        return
     fd = os.open(Path(root) / RUN_LOG, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
     try:
         os.write(fd, line)
@@ -36,11 +43,15 @@ def append_sweep_run(root: str | Path, summary: Mapping[str, Any]) -> None:
 
 def read_sweep_records(root: str | Path) -> list[dict[str, Any]]:
     """The logged sweeps of ``root`` as JSON objects, oldest first (none if there is no log)."""
-    path = Path(root) / RUN_LOG
-    if not path.is_file():
-        return []
+    if is_object_url(root):
+        text = b"".join(ObjectRoot(objects_for(root)).run_lines()).decode(errors="replace")
+    else:
+        path = Path(root) / RUN_LOG
+        if not path.is_file():
+            return []
+        text = path.read_text(encoding="utf-8", errors="replace")
     records = []
-    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+    for line in text.splitlines():
         try:
             record = json.loads(line)
         except ValueError:
