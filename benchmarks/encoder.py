@@ -1,5 +1,6 @@
 """Encoders on the built-in data: the ideal one against a plain memory copy (the memory-bound
-limit) and a pure-Python loop, and the non-ideal one with every effect on against the ideal one."""
+limit) and a pure-Python loop, the non-ideal one with every effect on against the ideal one, and
+the ideal decaying-threshold encoder against the ideal fixed one."""
 
 from __future__ import annotations
 
@@ -7,7 +8,12 @@ import numpy as np
 
 from benchmarks.timing import median_seconds
 from pipeline.chain.frontend import fit_front_end
-from pipeline.chain.readout import level_crossings, real_train, reference_level_crossings
+from pipeline.chain.readout import (
+    decaying_crossings,
+    level_crossings,
+    real_train,
+    reference_level_crossings,
+)
 from pipeline.design.scene import Effect, Scene
 from pipeline.recordings.synthetic import synthetic_recordings
 
@@ -49,6 +55,13 @@ def run(repeat: int = 7) -> list[dict]:
         lambda: real_train(signal, FS_HZ, every_effect, seed=paper.seed, taxel=0, recording=0),
         repeat=repeat,
     )
+    decay = paper.replace(**{"readout.encoder": "decaying"}).readout.decay
+    fixed_s, decaying_s = median_seconds(
+        ideal,
+        lambda: decaying_crossings(signal, FS_HZ, threshold, decay.theta_min_v, decay.tau_s),
+        repeat=repeat,
+    )
+    spikes = len(decaying_crossings(signal, FS_HZ, threshold, decay.theta_min_v, decay.tau_s)[0])
     return [
         {
             "benchmark": "ideal encoder vs memory copy",
@@ -72,6 +85,16 @@ def run(repeat: int = 7) -> list[dict]:
             "detail": (
                 f"{n / real_s / 1e6:.0f} M samples/s vs {n / ideal_s / 1e6:.0f} M samples/s "
                 "(two Gaussian draws per sample)"
+            ),
+        },
+        {
+            "benchmark": "decaying-threshold encoder vs fixed (ideal)",
+            "ratio": decaying_s / fixed_s,
+            "target": "-",
+            "detail": (
+                f"{n / decaying_s / 1e6:.0f} M samples/s vs {n / fixed_s / 1e6:.0f} M samples/s "
+                f"(theta {threshold} -> {decay.theta_min_v} V, tau {decay.tau_s} s: "
+                f"{spikes / n:.3f} spikes per sample, each a bracketed Newton solve)"
             ),
         },
     ]

@@ -3,9 +3,10 @@
 The floor is what any sweep pays before it does anything: a fresh interpreter importing its
 stack, ``python -c "import numpy, xarray, zarr, distributed, prefect"``. The warm re-run is
 ``eskin sweep --grid paper --json`` on a root that holds every point already, as a user re-runs
-a finished sweep to get its cubes and summary: it plans, finds nothing missing, starts no Dask
-cluster, records the flow run on the local Prefect server (started once by this suite, its state
-in a temporary folder) and checks the cubes. Both run as subprocesses, interleaved (floor, warm,
+a finished sweep to get its cubes and summary: it plans, finds nothing missing and every cube
+current (each file checked against its cube's manifest), starts no Dask cluster, and records
+the flow run, its tasks and their artifacts on the local Prefect server (started once by this
+suite, its state in a temporary folder). Both run as subprocesses, interleaved (floor, warm,
 floor, ...) after one uncounted round each; the row quotes their medians and their ratio.
 
 The root is cached between runs, ``runs/bench/<grid>`` by default (``--root`` or

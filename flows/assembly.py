@@ -2,27 +2,46 @@
 
 A cube is rebuilt from the plan's cached results and the results computed since; one equal to
 the cube already stored (a re-run with nothing new) is left as it is, not written again.
+
+A cube is stored with its summary (:func:`summarize`: its swept dimensions and best points)
+and the digest of what it was built from (:func:`flows.planning.cube_source`). A cube that
+planning finds current is kept and its summary taken as stored (:func:`assemble`); a damaged
+or outdated cube is built again.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from flows.planning import SweepPlan
+from flows.planning import SweepPlan, cube_source
 from pipeline.run.stages import RESULTS
 from storage import StoreError, SweepStore
+
+
+def assemble(plan: SweepPlan, name: str) -> dict[str, Any]:
+    """Make the stored cube of sweep ``name`` current; return its summary (:func:`summarize`).
+
+    A cube that planning found current (:attr:`flows.planning.SweepPlan.current`) is kept and
+    its stored summary returned without reading it; any other is built (:func:`assemble_cube`).
+
+    Raises
+    ------
+    As :func:`assemble_cube`.
+    """
+    if name in plan.current:
+        return plan.current[name]
+    return summarize(assemble_cube(plan, name))
 
 
 def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
     """Build the cube of the sweep ``name`` from the store, write it and return it.
 
     The points cached at planning come from the plan; the others are read from the store, each
-    batch once. A stored cube identical to the new one (values, coordinates and attributes) is
-    kept instead of being written again.
+    batch once. A stored cube identical to the new one (values, coordinates and attributes),
+    stored with its source and summary, is kept instead of being written again.
 
     Raises
     ------
@@ -46,8 +65,11 @@ def assemble_cube(plan: SweepPlan, name: str) -> xr.Dataset:
         )
     records = {key: plan.records[key] if key in plan.records else read[key] for key in keys}
     cube = build_cube(plan.grid, spec, records)
-    if not _stored_as(store, name, cube):
-        store.write_cube(name, cube)
+    source = cube_source(plan.grid, name, keys, store.entry_batches(RESULTS.record))
+    note = summarize(cube)
+    current = source is not None and store.current_note(name, source) == note
+    if not (current and _stored_as(store, name, cube)):
+        store.write_cube(name, cube, source=source, note=note)
     return cube
 
 
@@ -61,14 +83,28 @@ def _stored_as(store: SweepStore, name: str, cube: xr.Dataset) -> bool:
 
 
 def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
-    """Build every sweep's cube from the store and write it; return where each cube is."""
+    """Make every sweep's stored cube current (:func:`assemble`); return where each cube is."""
     for spec in plan.grid.sweeps:
-        assemble_cube(plan, spec.name)
+        assemble(plan, spec.name)
     return {spec.name: cube_location(plan, spec.name) for spec in plan.grid.sweeps}
 
 
 def cube_location(plan: SweepPlan, name: str) -> str:
-    return str(Path(plan.root) / "store.zarr" / "cubes" / name)
+    return SweepStore(plan.root).cube_location(name)
+
+
+def summarize(cube: xr.Dataset) -> dict[str, Any]:
+    """What a sweep's summary states of its cube, in plain JSON values.
+
+    Returns
+    -------
+    dict
+        ``{"dims": {dim: size}, "best": best_points(cube)}``, ``dims`` the swept dimensions
+        of ``accuracy_mean`` in order.
+    """
+    mean = cube["accuracy_mean"]
+    dims = {str(dim): int(cube.sizes[dim]) for dim in mean.dims if dim != "model"}
+    return {"dims": dims, "best": best_points(cube)}
 
 
 def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
@@ -78,13 +114,16 @@ def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
     -------
     list of dict
         ``{"model", "accuracy", "at"}`` per model, ``at`` mapping each swept dimension to its
-        value at the best point (the first of equals, in the cube's order).
+        value at the best point (the first of equals, in the cube's order); a model with no
+        finite accuracy has no row.
     """
     mean = cube["accuracy_mean"]
     rows = []
     for model in cube["model"].values:
         per_model = mean.sel(model=model)
-        flat = int(np.nanargmax(per_model.values)) if per_model.size else 0
+        if not np.isfinite(per_model.values).any():
+            continue
+        flat = int(np.nanargmax(per_model.values))
         index = np.unravel_index(flat, per_model.shape)
         at = {
             dim: per_model[dim].values[i].item()

@@ -3,7 +3,8 @@
 ``eskin run`` simulates one scene; ``eskin sweep`` runs the Prefect flow ``sweep`` on Dask;
 ``eskin optimize`` runs the flow ``optimize``, a search of a design space on the same machinery;
 ``eskin server`` starts, shows or stops the local Prefect server sweeps use; ``eskin serve``
-serves the flow as a deployment; ``eskin report`` writes a run root's report.
+serves the flow as a deployment; ``eskin report`` writes a run root's report; ``eskin power``
+prints both readouts' power and data rate for an array and an event rate, without a sweep.
 
 Exit status: 0 on success, 2 for bad input or usage (one line ``eskin: error: ...`` on stderr
 naming what and where), 1 for a run that failed on good input (a point that failed more often
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import sys
@@ -27,14 +29,27 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from flows import cluster
-from flows.report import DEFAULT_ADC_BITS, ENERGY_OPTIONS, energy_argument
+from flows.report import DEFAULT_ADC_BITS, needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
+from pipeline.results.hardware import MAX_BITS
 
 if TYPE_CHECKING:
     from storage import SweepStore
 
 EXIT_USER_ERROR = 2
+
+
+_POWER_TEXT = {
+    "help": "both readouts' power (static and dynamic) and data rate for an array and an event "
+    "rate, without a sweep",
+    "description": "Estimate the power and data rate of the event readout of an array of N "
+    "taxels sending R events/s in all, and of a frame readout of the same array (a B-bit ADC "
+    "sampling every taxel at F Hz), from the energy model (static bias of the front end and "
+    "comparators, energy per event, per link bit and per ADC conversion).",
+    "epilog": "The defaults are calibrated on the chip of Alea et al., IEEE TBioCAS 2024: "
+    "--taxels 192 --event-rate-hz 2200 gives about 12.2 nW per taxel (the chip: 12.33).",
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -87,7 +102,8 @@ def _scene_fields_epilog() -> str:
 
 
 def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None:
-    """``--workers N`` (``workers`` says what they are) or ``--address``, not both."""
+    """``--workers N`` (``workers`` says what they are) or ``--address``, not both, and the
+    ``--tls-*`` files of a ``tls://`` address (:data:`flows.cluster.TLS_OPTIONS`)."""
     where = command.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
@@ -96,8 +112,17 @@ def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None
         help=f"{workers} (default: the cores available, {cluster.available_cores()} here)",
     )
     where.add_argument(
-        "--address", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler instead"
+        "--address",
+        metavar="tcp|tls://HOST:PORT",
+        help="use an existing Dask scheduler instead (tls:// with the three --tls-* files, or "
+        "Dask's distributed.comm.tls settings)",
     )
+    for option, what in (
+        ("--tls-ca-file", "the CA certificate that signed the scheduler's certificate"),
+        ("--tls-cert", "this client's certificate"),
+        ("--tls-key", "this client's private key"),
+    ):
+        command.add_argument(option, metavar="FILE", help=f"{what} (PEM), for --address tls://")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -157,8 +182,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument(
         "--root",
         metavar="DIR",
-        help="where the store goes (default: runs/<grid name>, or runs/<grid name>-<dataset "
-        "name> with --dataset)",
+        help="where the store goes, a folder or s3://bucket/prefix (default: runs/<grid name>, "
+        "or runs/<grid name>-<dataset name> with --dataset)",
     )
     _add_cluster_options(sweep, "local Dask workers, 1 thread each")
     sweep.add_argument(
@@ -177,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--report", action="store_true", help="write the report (<root>/report) at the end"
     )
     sweep.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    sweep.set_defaults(handler=_sweep)
+    sweep.set_defaults(handler=_on_cluster(_sweep_checked))
 
     optimize = commands.add_parser(
         "optimize",
@@ -195,7 +220,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--space", required=True, metavar="FILE", help="a space TOML file (see the README)"
     )
     optimize.add_argument(
-        "--root", metavar="DIR", help="where the store goes (default: runs/<space name>)"
+        "--root",
+        metavar="DIR",
+        help="where the store goes, a folder (not s3://; default: runs/<space name>)",
     )
     budget = optimize.add_mutually_exclusive_group()
     budget.add_argument(
@@ -215,7 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--report", action="store_true", help="write the report (<root>/report) at the end"
     )
     optimize.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    optimize.set_defaults(handler=_optimize)
+    optimize.set_defaults(handler=_on_cluster(_optimize_checked))
 
     server = commands.add_parser(
         "server",
@@ -224,7 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Sweeps use the Prefect server named by PREFECT_API_URL, or else a local "
         "one (127.0.0.1, state in $ESKIN_SERVER_DIR, default runs/.prefect) that the first "
         "sweep starts and later sweeps reuse; it stops by itself after $ESKIN_SERVER_IDLE_S "
-        "seconds (default 1800) without a sweep.",
+        "seconds (default 1800) without a sweep. It asks every client for the auth string "
+        "in <state>/auth-string (only its owner may read it), which the UI asks for too.",
     )
     server.add_argument("action", choices=["start", "status", "stop"])
     server.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -282,9 +310,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     describe.set_defaults(handler=_describe)
 
+    energy = _energy_options()
     report = commands.add_parser(
         "report",
-        parents=[common],
+        parents=[common, energy],
         help="turn a sweep's cubes into the cheapest design as accurate as the best, the paper's "
         "claims, figures and Table I, and the cost of accuracy",
         description="Write figures (PNG, SVG), report.md and a self-contained report.html from "
@@ -293,9 +322,13 @@ def build_parser() -> argparse.ArgumentParser:
         "whose accuracy is not significantly below the run's best, against a frame-based ADC "
         "readout of the same array.",
     )
-    report.add_argument("--root", required=True, metavar="DIR", help="the run root of a sweep")
     report.add_argument(
-        "--out", metavar="DIR", help="the report folder (default: <root>/report; replaced whole)"
+        "--root", required=True, metavar="DIR", help="the run root of a sweep (or s3://...)"
+    )
+    report.add_argument(
+        "--out",
+        metavar="DIR",
+        help="the report folder (default: <root>/report, required for s3://; replaced whole)",
     )
     report.add_argument(
         "--adc-bits",
@@ -311,24 +344,97 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="HZ",
         help="its frame rate per taxel (default: the recordings' sampling rate)",
     )
-    from pipeline.results.hardware import EnergyModel
-
-    defaults = EnergyModel()
-    for option, what, unit in (
-        ("--event-energy-pj", "energy per spike event of the event readout", "pJ"),
-        ("--adc-fom-fj", "Walden figure of merit of the frame readout's ADC", "fJ per step"),
-        ("--link-energy-pj-per-bit", "energy per bit sent on the link (both readouts)", "pJ"),
-    ):
-        field, factor = ENERGY_OPTIONS[option]
-        report.add_argument(
-            option,
-            type=energy_argument(option),
-            metavar=unit.split()[0].upper(),
-            help=f"{what}, in {unit}, for the readout power estimate (default "
-            f"{getattr(defaults, field) / factor:g}, an order-of-magnitude assumption)",
-        )
     report.set_defaults(handler=_report)
+
+    power = commands.add_parser("power", parents=[common, energy], **_POWER_TEXT)
+    power.add_argument(
+        "--taxels",
+        required=True,
+        type=_checked("--taxels", whole=True),
+        metavar="N",
+        help="taxels in the array",
+    )
+    power.add_argument(
+        "--event-rate-hz",
+        required=True,
+        type=_checked("--event-rate-hz"),
+        metavar="R",
+        help="events per second of the whole array",
+    )
+    power.add_argument(
+        "--bits",
+        type=_checked("--bits", at_most=MAX_BITS),
+        default=DEFAULT_ADC_BITS,
+        metavar="B",
+        help=f"resolution of the frame readout's ADC (default {DEFAULT_ADC_BITS})",
+    )
+    power.add_argument(
+        "--sampling-rate-hz",
+        type=_checked("--sampling-rate-hz", positive=True),
+        metavar="F",
+        help="samples per second per taxel of the frame readout (default: none; the frame "
+        "readout is then unknown)",
+    )
+    power.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object on stdout (an unknown figure is null)",
+    )
+    power.set_defaults(handler=_power)
     return parser
+
+
+def _energy_options() -> argparse.ArgumentParser:
+    """The energy model's constants as options, each declared once on its field."""
+    from pipeline.results.hardware import PARAMETERS, EnergyModel
+
+    parent = argparse.ArgumentParser(add_help=False)
+    group = parent.add_argument_group(
+        "energy model (defaults calibrated on the chip of Alea et al., IEEE TBioCAS 2024, and "
+        "taken from the literature: see the README)"
+    )
+    defaults = EnergyModel()
+    for name, p in PARAMETERS.items():
+        group.add_argument(
+            p.option,
+            dest=name,
+            type=_checked(p.option, whole=p.count),
+            metavar=p.unit.split()[0].upper() if not p.count else "N",
+            help=f"{p.what}, in {p.unit} (default {getattr(defaults, name) / p.scale:g})",
+        )
+    return parent
+
+
+def _checked(
+    option: str, *, whole: bool = False, positive: bool = False, at_most: float = math.inf
+):
+    """An argparse ``type``: a finite number >= 0 (a whole number >= 1, or > 0; at most
+    ``at_most``), named in argparse's one-line error."""
+    from pipeline.results.hardware import Parameter
+
+    rule = Parameter(option, "", 1.0, "", "", count=whole)
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        problem = rule.problem(value)
+        if problem is None and positive and value == 0:
+            problem = f"{option} 0: need a number > 0"
+        if problem is None and value > at_most:
+            problem = f"{option} {value:g}: need at most {at_most:g}"
+        if problem is not None:
+            raise argparse.ArgumentTypeError(problem.removeprefix(f"{option} "))
+        return int(value) if whole else value
+
+    return parse
+
+
+def _energy(args: argparse.Namespace):
+    from pipeline.results.hardware import PARAMETERS, EnergyModel
+
+    return EnergyModel.from_options({name: getattr(args, name) for name in PARAMETERS})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -367,11 +473,30 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sweep(args: argparse.Namespace) -> int:
+def _on_cluster(checked: Callable[[argparse.Namespace], int]) -> Callable[..., int]:
+    """The handler of a command with :func:`_add_cluster_options`: ``checked(args)`` with the
+    ``--tls-*`` files as Dask's own settings (the flow's client reads them as any Dask client
+    does)."""
+
+    def handler(args: argparse.Namespace) -> int:
+        import dask
+
+        files = {
+            option: getattr(args, option.lstrip("-").replace("-", "_"))
+            for option in cluster.TLS_OPTIONS
+        }
+        with dask.config.set(cluster.tls_config(args.address, files)):
+            return checked(args)
+
+    return handler
+
+
+def _sweep_checked(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
     from flows.dry_run import dry_run, format_dry_run
     from flows.planning import check_grid, default_root, load_sweep_grid
     from storage import SweepStore
+    from storage.objects import run_root
 
     workers = args.workers or cluster.available_cores()
     # The grid is loaded and checked once, here, before the store is created and Prefect
@@ -380,7 +505,9 @@ def _sweep(args: argparse.Namespace) -> int:
     check_grid(grid)
     if args.address is not None:
         probe_scheduler(args.address)
-    root = Path(args.root) if args.root else default_root(grid, args.dataset)
+    root = run_root(args.root) if args.root else default_root(grid, args.dataset)
+    if args.report and (problem := needs_report_folder(root)):
+        raise EskinError(f"--report: {problem}")
     if args.dry_run:
         plan = dry_run(grid, root, workers)
         print(
@@ -434,9 +561,9 @@ def _run_flow(
     return 0
 
 
-def _optimize(args: argparse.Namespace) -> int:
+def _optimize_checked(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
-    from flows.search import check_space, default_search_root
+    from flows.search import check_search_root, check_space, default_search_root
     from flows.summaries import format_search_summary
     from pipeline.design.space import load_space
     from storage import SweepStore
@@ -461,7 +588,7 @@ def _optimize(args: argparse.Namespace) -> int:
             show_progress=not args.quiet,
         )
 
-    root = Path(args.root) if args.root else default_search_root(space)
+    root = check_search_root(args.root) if args.root else default_search_root(space)
     return _run_flow(args, SweepStore.open_or_create(root), run, format_search_summary)
 
 
@@ -501,6 +628,8 @@ def _server(args: argparse.Namespace) -> int:
         with server.prefect_server(show_progress=not args.quiet) as api_url:
             pass
         info = {"running": True, "api_url": api_url, "ui_url": api_url.removesuffix("/api")}
+        if server.auth_file().is_file() and "PREFECT_API_URL" not in os.environ:
+            info["auth_string_file"] = str(server.auth_file())
     elif args.action == "stop":
         stopped = server.stop()
         info = {
@@ -513,6 +642,7 @@ def _server(args: argparse.Namespace) -> int:
         info = {"running": found is not None, "state_dir": str(server.server_dir())}
         if found is not None:
             info |= {"api_url": found.api_url, "ui_url": found.ui_url, "pid": found.pid}
+            info["auth_string_file"] = str(server.auth_file())
     if args.json:
         print(json.dumps(info, indent=2))
     elif args.action == "stop":
@@ -521,6 +651,8 @@ def _server(args: argparse.Namespace) -> int:
         print(
             f"Prefect server: {info['ui_url']}" + (f" (PID {info['pid']})" if "pid" in info else "")
         )
+        if "auth_string_file" in info:
+            print(f"The UI asks for the auth string in {info['auth_string_file']}")
     else:
         print(f"no Prefect server running (state in {info['state_dir']})")
     return 0
@@ -534,17 +666,34 @@ def _report(args: argparse.Namespace) -> int:
     from flows.report import write_run_report
 
     out = Path(args.out) if args.out else None
+    from storage.objects import run_root
+
     path = write_run_report(
-        Path(args.root),
+        run_root(args.root),
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,
-        event_energy_pj=args.event_energy_pj,
-        adc_fom_fj=args.adc_fom_fj,
-        link_energy_pj_per_bit=args.link_energy_pj_per_bit,
+        energy=_energy(args),
         show_progress=not args.quiet,
     )
     print(path)
+    return 0
+
+
+def _power(args: argparse.Namespace) -> int:
+    from flows.summaries import format_power
+    from pipeline.results.hardware import power_budget
+
+    try:
+        budget = power_budget(
+            args.taxels, args.event_rate_hz, args.bits, args.sampling_rate_hz, _energy(args)
+        )
+    except ValueError as exc:
+        raise EskinError(str(exc)) from None
+    if args.json:
+        print(json.dumps(budget.to_json(), indent=2, allow_nan=False))
+    else:
+        print(format_power(budget))
     return 0
 
 

@@ -1,5 +1,8 @@
 """Keep runs hermetic and offline: tool state under the run root, no telemetry.
 
+An object root (``s3://...``) holds no tool state: its state goes to a local folder of the user's
+cache instead (:func:`state_folder`).
+
 Settings the user already made win (``setdefault``): a user with a real Prefect server keeps
 ``PREFECT_API_URL`` and their ``PREFECT_HOME``.
 """
@@ -9,19 +12,36 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
+import hashlib
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from storage.errors import write_failure
+from storage.objects import is_object_url
+
 STATE_DIR = ".state"
 
 
-def hermetic_environment(root: Path, *, prefect: bool = True) -> None:
-    """Point Prefect, Dask and matplotlib at folders under ``root/.state``; keep them offline.
+def state_folder(root: str | Path) -> Path:
+    """Where the tools keep their state for the run root ``root``: ``<root>/.state`` for a
+    folder; for an object root, ``<cache>/eskin-sweep/state/<12 hex of its URL>`` in the user's
+    cache (``XDG_CACHE_HOME``, default ``~/.cache``)."""
+    if not is_object_url(root):
+        return Path(root) / STATE_DIR
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return cache / "eskin-sweep" / "state" / hashlib.sha256(str(root).encode()).hexdigest()[:12]
 
-    Must run before Prefect is imported (it reads its settings at import).
+
+def hermetic_environment(root: str | Path, *, prefect: bool = True) -> None:
+    """Point Prefect, Dask and matplotlib at folders under :func:`state_folder` of ``root``;
+    keep them offline.
+
+    Must run before Prefect is imported (it reads its settings at import). A root where those
+    folders cannot be made for want of space or permission raises
+    :class:`storage.StoreWriteError`.
     """
-    state = Path(root) / STATE_DIR
+    state = state_folder(root)
     defaults = {
         "DASK_TEMPORARY_DIRECTORY": state / "dask",
         "MPLCONFIGDIR": state / "matplotlib",
@@ -37,7 +57,13 @@ def hermetic_environment(root: Path, *, prefect: bool = True) -> None:
         if name in os.environ:
             continue
         if isinstance(value, Path):  # the tools do not create their folders' parents
-            value.mkdir(parents=True, exist_ok=True)
+            try:
+                value.mkdir(parents=True, exist_ok=True)
+            except OSError as error:  # a root without space or permission: one line
+                failure = write_failure(error, root)
+                if failure is None:
+                    raise
+                raise failure from error
         os.environ[name] = str(value)
 
 

@@ -4,15 +4,30 @@ A command loads its grid once (:func:`load_sweep_grid`) and checks it once again
 recordings (:func:`check_grid`) before anything is written or Prefect imported; the checked
 :class:`pipeline.design.grid.Grid` is then handed on, and :func:`plan_sweep` turns it into the
 :class:`SweepPlan` that every later step takes (scheduling, progress, assembly).
+
+A stored cube is *current* when it was built from what a sweep of this grid would build it
+from now, its *source* (:func:`cube_source`): the grid's base scene and the sweep, the names of
+the batches that hold its points' results (a batch never changes once in place, and a result
+computed again lands in a new one), and the code and dependency versions; and when every file
+of it is as written (:meth:`storage.SweepStore.current_note`). Planning reads the cached results
+of the other sweeps only: a re-run with every cube current reads none.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import hashlib
+import json
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
+from importlib import metadata
 from pathlib import Path
+from typing import Any
 
+import pipeline
+import storage
 from flows.environment import machine_memory_bytes
 from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid, plannable_points
 from pipeline.design.scene import DatasetSpec, Scene
@@ -30,28 +45,37 @@ class SweepPlan:
 
     ``records`` holds the result entries of the cached points as planning read (and checked)
     them, so that assembling the cubes reads from the store only the points computed since.
+    ``current`` holds the stored summary of each sweep whose cube is current (see the module
+    docstring): its points count as cached, and their results are read only where another
+    sweep needs them.
     """
 
     grid: Grid
     root: str
     scenes: dict[str, Scene]  # distinct points by result key
     records: dict[str, ResultEntry]
+    current: Mapping[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
-    @property
+    @functools.cached_property
     def cached(self) -> frozenset[str]:
-        return frozenset(self.records)
+        return frozenset(self.records).union(*(self.sweep_keys[name] for name in self.current))
 
     @property
     def missing(self) -> list[str]:
-        return [key for key in self.scenes if key not in self.records]
+        return [key for key in self.scenes if key not in self.cached]
 
     @functools.cached_property
     def sweep_keys(self) -> dict[str, tuple[str, ...]]:
         """The distinct result keys of each named sweep, in the order of its points."""
-        keys: dict[str, dict[str, None]] = {s.name: {} for s in self.grid.sweeps}
-        for point in self.grid.points():
-            keys[point.sweep][point.key] = None
-        return {name: tuple(found) for name, found in keys.items()}
+        return sweep_keys(self.grid)
+
+
+def sweep_keys(grid: Grid) -> dict[str, tuple[str, ...]]:
+    """The distinct result keys of each named sweep of ``grid``, in the order of its points."""
+    keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
+    for point in grid.points():
+        keys[point.sweep][point.key] = None
+    return {name: tuple(found) for name, found in keys.items()}
 
 
 def default_root(grid: Grid, dataset: str | None = None) -> Path:
@@ -142,15 +166,79 @@ def open_root(grid: Grid, root: str | Path | None, dataset: str | Path | None = 
 
 
 def plan_sweep(grid: Grid, root: str | Path) -> SweepPlan:
-    """Tidy the store at ``root`` and find which of the (checked) grid's points are cached.
+    """Tidy the store at ``root``, find which of the (checked) grid's points are cached and
+    which stored cubes are current.
 
     Call it holding the root's lock (:meth:`storage.SweepStore.lock`): no other sweep writes to
     the root then, so every partial entry is a leftover of a killed run and is removed. A
-    cached result that fails its checksum is discarded (with a warning) and planned again.
+    cached result that fails its checksum is discarded (with a warning) and planned again, and
+    the cubes built from its batch are no longer current.
     """
     store = SweepStore.open(root)
     store.clean_partials()
     scenes = grid.unique_points()
-    found = store.read_many(RESULTS.record, scenes, discard_corrupt=True)
-    records = {key: found[key] for key in scenes if key in found}
-    return SweepPlan(grid, str(store.root), scenes, records)
+    keys = sweep_keys(grid)
+    records: dict[str, ResultEntry] = {}
+    while True:
+        batches = store.entry_batches(RESULTS.record)
+        current = {
+            name: note
+            for name, own in keys.items()
+            if (source := cube_source(grid, name, own, batches)) is not None
+            and (note := store.current_note(name, source)) is not None
+        }
+        needed = {key for name, own in keys.items() if name not in current for key in own}
+        wanted = [key for key in scenes if key in needed and key in batches]
+        records |= store.read_many(
+            RESULTS.record, [key for key in wanted if key not in records], discard_corrupt=True
+        )
+        after = store.entry_batches(RESULTS.record)
+        if after == batches:  # nothing discarded: what was found current still is
+            break
+        records = {key: entry for key, entry in records.items() if key in after}
+    return SweepPlan(
+        grid,
+        str(store.root),
+        scenes,
+        {key: records[key] for key in scenes if key in records},
+        current,
+    )
+
+
+def cube_source(
+    grid: Grid, name: str, keys: tuple[str, ...], batches: Mapping[str, str]
+) -> str | None:
+    """The digest of what the cube of sweep ``name`` of ``grid`` is built from, or None while
+    one of its points (result ``keys``) has no stored result.
+
+    ``batches`` maps result keys to the batches holding them
+    (:meth:`storage.SweepStore.entry_batches`).
+    """
+    if any(key not in batches for key in keys):
+        return None
+    spec = next(s for s in grid.sweeps if s.name == name)
+    described = {
+        "grid": grid.name,
+        "base": repr(grid.base),
+        "sweep": repr(spec),
+        "results": [[key, batches[key]] for key in keys],
+        "code": _code_digest(),
+    }
+    return hashlib.sha256(json.dumps(described).encode()).hexdigest()
+
+
+@functools.cache
+def _code_digest() -> str:
+    """sha256 of this package's version, its dependencies' versions and the source of the
+    packages that build and store a cube (an edited module changes it)."""
+    from pipeline.results.cube import DEPENDENCY_VERSIONS
+
+    found = hashlib.sha256(
+        json.dumps([metadata.version("eskin-sweep"), DEPENDENCY_VERSIONS]).encode()
+    )
+    for package in (pipeline, storage):
+        folder = Path(next(iter(package.__path__)))
+        for path in sorted(folder.rglob("*.py")):
+            found.update(path.relative_to(folder).as_posix().encode() + b"\0")
+            found.update(path.read_bytes())
+    return found.hexdigest()

@@ -3,6 +3,11 @@
 :func:`completed_points` yields every point once its task is done, with the reason it failed
 (:func:`point_failures`), and gives up on a cluster left without workers; a sweep whose points
 failed ends with :class:`SweepFailed` (:func:`failure_message`).
+
+A write that failed for want of space or permission (:class:`storage.StoreWriteError`) is not
+a failed point: every later write would fail alike. The first one cancels the work left and
+stops the sweep, which ends with :class:`SweepStopped`, one line saying what the root keeps
+(:func:`stopped_message`).
 """
 
 from __future__ import annotations
@@ -13,6 +18,8 @@ from typing import Any
 
 from flows.planning import SweepPlan
 from pipeline.errors import EskinError
+from pipeline.run.stages import RESULTS
+from storage import StoreWriteError, SweepStore
 
 POLL_S = 2.0
 NO_WORKER_TIMEOUT_S = 120.0
@@ -22,6 +29,34 @@ class SweepFailed(EskinError):
     """Some points of a sweep failed; the others are in the store (exit status 1)."""
 
     exit_status = 1
+
+
+class SweepStopped(SweepFailed):
+    """A write to the run root failed for want of space or permission: the sweep stopped early,
+    keeping the points written before (exit status 1)."""
+
+
+def stopped_message(plan: SweepPlan, error: StoreWriteError) -> str:
+    """One line: the root and the cause of ``error``, how many points the root keeps, and that
+    a re-run resumes."""
+    try:
+        stored = SweepStore.open(plan.root).complete_keys(RESULTS.name)
+    except OSError:  # a root we may no longer read: what planning found
+        stored = frozenset()
+    kept = len(plan.cached | (stored & plan.scenes.keys()))
+    return (
+        f"{error}; the sweep stopped, {kept} of {len(plan.scenes)} points are kept, "
+        f"and running it again resumes from them"
+    )
+
+
+def write_error(future: Any) -> StoreWriteError | None:
+    """The finished task ``future``'s :class:`storage.StoreWriteError`, if that is how it
+    failed."""
+    if future.status != "error":
+        return None
+    error = future.exception()
+    return error if isinstance(error, StoreWriteError) else None
 
 
 def progress_bar(plan: SweepPlan, show_progress: bool) -> Any:
@@ -52,7 +87,13 @@ def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str
     A task that stored some of its points and failed others (:class:`flows.work.PointsFailed`)
     counts only those as failed; a task that failed as a whole fails all its points.
 
-    Raises :class:`SweepFailed` if the cluster has had no worker for ``NO_WORKER_TIMEOUT_S``.
+    Raises
+    ------
+    StoreWriteError
+        A task could not write to the root (no space, no permission); the tasks left are
+        cancelled first.
+    SweepFailed
+        The cluster has had no worker for ``NO_WORKER_TIMEOUT_S``.
     """
     if not futures:
         return
@@ -70,6 +111,11 @@ def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str
             done = set()
         for future in done:
             pending.discard(future)
+            if (error := write_error(future)) is not None:
+                # Every later write would fail alike: keep what is written and stop now. The
+                # failed tasks go too: a re-run on this client would be handed their errors.
+                client.cancel(list(points))
+                raise error
             failures = point_failures(future, points[future])
             for key in points[future]:
                 yield key, failures.get(key)

@@ -4,16 +4,14 @@ It wires three layers together: :mod:`pipeline.report` turns the cubes into the 
 claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.figures`) and renders the files of the report
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
-line's frame-readout and energy options become a :class:`~pipeline.report.FrameReadout` and a
-:class:`~pipeline.results.hardware.EnergyModel` here, checked before anything is read or written.
+line's frame-readout options become a :class:`~pipeline.report.FrameReadout` here, checked
+before anything is read or written; its energy options arrive as an
+:class:`~pipeline.results.hardware.EnergyModel`.
 """
 
 from __future__ import annotations
 
-import argparse
-import math
 import sys
-from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -27,83 +25,15 @@ if TYPE_CHECKING:
     from pipeline.results.hardware import EnergyModel
 
 DEFAULT_ADC_BITS = 12
-# The energy options, in the units the command line takes them, and the EnergyModel field (in
-# SI units) each sets: option -> (field, factor to SI).
-ENERGY_OPTIONS = {
-    "--event-energy-pj": ("event_energy_j", 1e-12),
-    "--adc-fom-fj": ("adc_fom_j_per_step", 1e-15),
-    "--link-energy-pj-per-bit": ("link_energy_j_per_bit", 1e-12),
-}
-
-
-def energy_problem(option: str, value: float) -> str | None:
-    """Why ``value`` is not a valid ``option`` (one of :data:`ENERGY_OPTIONS`), or None."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return f"{option} {value!r}: need a number >= 0"
-    if not math.isfinite(value) or value < 0:
-        return f"{option} {value:g}: need a finite number >= 0"
-    return None
-
-
-def energy_argument(option: str) -> Callable[[str], float]:
-    """An argparse ``type`` for an energy option: a finite number >= 0 (argparse names the
-    option in its one-line error)."""
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        problem = energy_problem(option, value)
-        if problem is not None:
-            raise argparse.ArgumentTypeError(problem.removeprefix(f"{option} "))
-        return value
-
-    return parse
-
-
-def energy_model(
-    event_energy_pj: float | None = None,
-    adc_fom_fj: float | None = None,
-    link_energy_pj_per_bit: float | None = None,
-) -> EnergyModel:
-    """The energy model of the command line's options (None: the default of that constant).
-
-    Raises
-    ------
-    EskinError
-        A value is not a finite number >= 0; the message names every such option.
-    """
-    from pipeline.results.hardware import EnergyModel
-
-    given = dict(
-        zip(ENERGY_OPTIONS, (event_energy_pj, adc_fom_fj, link_energy_pj_per_bit), strict=True)
-    )
-    problems = [
-        problem
-        for option, value in given.items()
-        if value is not None and (problem := energy_problem(option, value)) is not None
-    ]
-    if problems:
-        raise EskinError("; ".join(problems))
-    return EnergyModel(
-        **{
-            ENERGY_OPTIONS[option][0]: value * ENERGY_OPTIONS[option][1]
-            for option, value in given.items()
-            if value is not None
-        }
-    )
 
 
 def write_run_report(
-    root: Path,
+    root: str | Path,
     out: Path | None = None,
     *,
     adc_bits: int = DEFAULT_ADC_BITS,
     adc_rate_hz: float | None = None,
-    event_energy_pj: float | None = None,
-    adc_fom_fj: float | None = None,
-    link_energy_pj_per_bit: float | None = None,
+    energy: EnergyModel | None = None,
     show_progress: bool = False,
 ) -> Path:
     """Write the report of the sweep store at ``root``; return the path of its ``report.html``.
@@ -119,15 +49,14 @@ def write_run_report(
         The frame-based ADC readout the answer, Table I and the fronts compare with: bits per
         sample and frame rate per taxel in Hz (default: the recordings' sampling rate, as the
         cubes state it).
-    event_energy_pj, adc_fom_fj, link_energy_pj_per_bit
-        The readout power estimate's constants: energy per event (pJ), the ADC's Walden figure
-        of merit (fJ per conversion step), energy per link bit (pJ); None takes the default of
-        :class:`pipeline.results.hardware.EnergyModel`.
+    energy
+        The readout power estimate's constants (default: those of
+        :class:`pipeline.results.hardware.EnergyModel`, calibrated on a chip).
 
     Raises
     ------
     EskinError
-        Bad ADC or energy figures (before anything is read or written), a root that is not a
+        Bad ADC figures (before anything is read or written), a root that is not a
         sweep store, or a store with no cubes.
     """
     from flows.environment import hermetic_environment
@@ -140,10 +69,8 @@ def write_run_report(
         problems.append(f"--adc-bits {adc_bits}: need 1 to {MAX_BITS}")
     if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
         problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
-    try:
-        energy = energy_model(event_energy_pj, adc_fom_fj, link_energy_pj_per_bit)
-    except EskinError as exc:
-        problems.append(str(exc))
+    if out is None and (problem := needs_report_folder(root)):
+        problems.append(problem)
     if problems:
         raise EskinError("; ".join(problems))
     store = SweepStore.open(root)
@@ -153,13 +80,16 @@ def write_run_report(
     with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
         hermetic_environment(store.root, prefect=False)
     from pipeline.report import FrameReadout, build_report, sampling_rate_hz
+    from pipeline.report.cost import sweep_runs
     from pipeline.report.figures import draw_report
     from storage.report import check_report_folder
-    from storage.runlog import read_sweep_runs
+    from storage.runlog import read_sweep_records
 
     rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
     frame = FrameReadout(adc_bits, rate_hz) if rate_hz else None
-    report = build_report(cubes, frame=frame, energy=energy, runs=read_sweep_runs(store.root))
+    report = build_report(
+        cubes, frame=frame, energy=energy, runs=sweep_runs(read_sweep_records(store.root))
+    )
     if rate_hz is None:
         print(
             "eskin: warning: the cubes do not state the recordings' sampling rate; the report "
@@ -169,6 +99,19 @@ def write_run_report(
     folder = out if out is not None else store.root / "report"
     check_report_folder(folder)  # before the figures: a refused folder costs nothing
     return write_report(folder, report, draw_report(report), show_progress=show_progress)
+
+
+def needs_report_folder(root: str | Path) -> str | None:
+    """Why the report of ``root`` needs a folder given (``--out``), or None: an object root
+    holds no report, which is a local folder."""
+    from storage.objects import is_object_url
+
+    if not is_object_url(root):
+        return None
+    return (
+        f"run root {root} is on object storage: write its report to a local folder with "
+        f"eskin report --root {root} --out DIR"
+    )
 
 
 def write_report(

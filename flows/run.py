@@ -15,25 +15,36 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from flows.assembly import assemble_cube, cube_location
+from flows.assembly import assemble, cube_location
 from flows.cluster import ClusterError, check_workers
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
-from flows.progress import SweepFailed, completed_points, failure_message, progress_bar
+from flows.progress import (
+    SweepFailed,
+    SweepStopped,
+    completed_points,
+    failure_message,
+    progress_bar,
+    stopped_message,
+)
 from flows.scheduling import submit_missing, sweep_client
 from pipeline.design.grid import Grid
+from storage import StoreWriteError
 
 
 def sweep_summary(
-    plan: SweepPlan, cubes: dict[str, str], computed: int, seconds: float
+    plan: SweepPlan, sweeps: dict[str, dict[str, Any]], computed: int, seconds: float
 ) -> dict[str, Any]:
     """A finished sweep's summary, as ``eskin sweep --json`` prints it.
 
-    Keys: ``root``, ``cubes`` (each cube's location by sweep name), ``points`` (distinct),
-    ``cache_hits``, ``computed`` and ``seconds`` (the sweep's wall time, s).
+    ``sweeps`` holds the summary of each assembled cube by sweep name
+    (:func:`flows.assembly.summarize`). Keys: ``root``, ``cubes`` (each cube's location by sweep
+    name), ``sweeps`` (``sweeps``), ``points`` (distinct), ``cache_hits``, ``computed`` and
+    ``seconds`` (the sweep's wall time, s).
     """
     return {
         "root": plan.root,
-        "cubes": cubes,
+        "cubes": {name: cube_location(plan, name) for name in sweeps},
+        "sweeps": sweeps,
         "points": len(plan.scenes),
         "cache_hits": len(plan.cached),
         "computed": computed,
@@ -49,11 +60,12 @@ def log_sweep_run(
     A log that cannot be written does not fail the sweep: ``warn`` (default: this module's
     logger) is called with a %-format message instead.
     """
+    from storage import StoreError
     from storage.runlog import append_sweep_run
 
     try:
         append_sweep_run(plan.root, {**summary, "grid": plan.grid.name})
-    except OSError as error:
+    except (OSError, StoreError) as error:
         (warn or logging.getLogger(__name__).warning)(
             "sweep not logged in %s: %s", plan.root, error
         )
@@ -106,6 +118,9 @@ def run_sweep(
         another sweep holds (:class:`storage.StoreBusyError`).
     SweepFailed
         Some points failed; the cubes of the sweeps they are not in are written.
+    SweepStopped
+        A write to the root failed for want of space or permission: the work left was
+        cancelled, what was written is kept, and a re-run resumes from it.
     """
     start = time.perf_counter()
     if workers is not None:
@@ -117,22 +132,25 @@ def run_sweep(
     with store.lock():
         plan = plan_sweep(checked, store.root)
         failed: dict[str, str] = {}
-        with sweep_client(plan, client, workers) as dask:
-            futures = submit_missing(plan, dask) if dask is not None else {}
-            with progress_bar(plan, show_progress) as bar:
-                for key, failure in completed_points(dask, futures):
-                    bar.update(1)
-                    if failure:
-                        failed[key] = failure
-            dashboard = dask.dashboard_link if dask is not None else None
-        cubes = {}
-        for spec in plan.grid.sweeps:
-            # A sweep with a failed point has no cube: a cube never holds a hole.
-            if not failed.keys() & set(plan.sweep_keys[spec.name]):
-                assemble_cube(plan, spec.name)
-                cubes[spec.name] = cube_location(plan, spec.name)
+        try:
+            with sweep_client(plan, client, workers) as dask:
+                futures = submit_missing(plan, dask) if dask is not None else {}
+                with progress_bar(plan, show_progress) as bar:
+                    for key, failure in completed_points(dask, futures):
+                        bar.update(1)
+                        if failure:
+                            failed[key] = failure
+                dashboard = dask.dashboard_link if dask is not None else None
+            sweeps = {
+                spec.name: assemble(plan, spec.name)
+                for spec in plan.grid.sweeps
+                # A sweep with a failed point has no cube: a cube never holds a hole.
+                if not failed.keys() & set(plan.sweep_keys[spec.name])
+            }
+        except StoreWriteError as error:
+            raise SweepStopped(stopped_message(plan, error)) from None
     if failed:
         raise SweepFailed(failure_message(list(failed.values()), len(plan.scenes), plan.root))
-    summary = sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+    summary = sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
     log_sweep_run(plan, summary)
     return summary | {"dashboard": dashboard}

@@ -13,7 +13,6 @@ import contextlib
 import hashlib
 import math
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 from flows.cluster import dask_client
@@ -58,7 +57,7 @@ def sweep_client(
     elif client is not None:
         yield client
     else:
-        hermetic_environment(Path(plan.root), prefect=False)
+        hermetic_environment(plan.root, prefect=False)
         with dask_client(workers, address) as fresh:
             yield fresh
 
@@ -88,7 +87,7 @@ def submit_missing(
     from flows import work
 
     store = SweepStore.open(plan.root)
-    root = hashlib.sha256(str(Path(plan.root).resolve()).encode()).hexdigest()[:12]
+    root = hashlib.sha256(store.identity().encode()).hexdigest()[:12]
     cost = {key: training_cost(plan.scenes[key]) for key in plan.missing}
     size = points_per_task or default_points_per_task(len(cost), sum(client.nthreads().values()))
     memo: CanonicalMemo = {}  # the points share scene parts: each is written once

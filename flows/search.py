@@ -61,6 +61,7 @@ from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
+from storage.objects import is_object_url, run_root
 from storage.search_log import SearchJournal
 
 #: Trials of a search without a budget.
@@ -329,6 +330,23 @@ def default_search_root(space: Space) -> Path:
     return DEFAULT_RUNS_DIR / space.name
 
 
+def check_search_root(root: str | Path) -> Path:
+    """``root`` as a search's run root, a folder.
+
+    Raises
+    ------
+    StoreError
+        ``root`` is an object root (``s3://...``): the search's journal is appended to in
+        place, which an object cannot be.
+    """
+    if is_object_url(root):
+        raise StoreError(
+            f"root {run_root(root)}: a search needs a folder root (its journal is appended to "
+            "in place, which an object root cannot do); sweep to s3:// roots, search in a folder"
+        )
+    return Path(root)
+
+
 def check_space(space: Space) -> None:
     """Check the space's extremes against its recordings (:func:`flows.planning.check_grid` of
     its corners: every bound and choice of each field, with the others at theirs), before any
@@ -431,7 +449,7 @@ def run_optimize(
     if not isinstance(space, Space):
         space = load_space(space)
     check_space(space)
-    store = SweepStore.open_or_create(root or default_search_root(space))
+    store = SweepStore.open_or_create(check_search_root(root or default_search_root(space)))
     cache_hits = computed = 0
     failed: dict[int, str] = {}
     with store.lock():
@@ -473,7 +491,6 @@ def search_summary(
     runs), ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
     batches), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
     :meth:`Search.seconds_spent`), ``cubes`` and ``front`` (:meth:`Search.front_rows`)."""
-    location = Path(search.root) / "store.zarr" / "cubes"
     return {
         "root": search.root,
         "space": search.space.name,
@@ -483,6 +500,6 @@ def search_summary(
         "computed": computed,
         "seconds": seconds,
         "search_seconds": search.seconds_spent(),
-        "cubes": {name: str(location / name) for name in (TRIALS, FRONT)},
+        "cubes": {name: SweepStore(search.root).cube_location(name) for name in (TRIALS, FRONT)},
         "front": search.front_rows(),
     }

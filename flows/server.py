@@ -12,6 +12,15 @@ Start-up waits as long as the machine needs: a first start sets up the database,
 fails only when the server process exits, or after ``ESKIN_SERVER_START_TIMEOUT_S`` (15 minutes
 by default), with a :class:`ServerError` naming the log to read.
 
+The local server asks every client for an auth string (Prefect's basic authentication): on
+its first start ``eskin`` draws one (:func:`secrets.token_urlsafe`) and keeps it in
+``<state>/auth-string``, readable by its owner alone (mode 0600, in a folder only its owner
+enters), starts the server with it (``PREFECT_SERVER_API_AUTH_STRING``) and hands it to every
+client of its own (``PREFECT_API_AUTH_STRING``). Another user of the machine who reaches the
+port can neither read nor start nor cancel runs. The UI asks for the string once per browser;
+``eskin server status`` says where it is. A server named by ``PREFECT_API_URL`` is the user's:
+their own ``PREFECT_API_AUTH_STRING``, if any, is used as it is.
+
 Who uses the server is told by leases: a process that uses it holds a shared ``flock`` on
 ``leases.lock`` for as long as it does. The server's idle monitor tries for an exclusive lock
 now and then; it gets it only when no lease is held, and once that has been so for the idle
@@ -27,6 +36,7 @@ import contextlib
 import fcntl
 import json
 import os
+import secrets
 import signal
 import subprocess
 import sys
@@ -47,6 +57,11 @@ DEFAULT_SERVER_DIR = Path("runs") / ".prefect"
 DEFAULT_IDLE_S = 1800.0
 DEFAULT_START_TIMEOUT_S = 900.0
 HOST = "127.0.0.1"
+#: The file of the state folder that holds the local server's auth string.
+AUTH_FILE = "auth-string"
+#: The settings that carry it: the server's, and every client's.
+SERVER_AUTH_ENV = "PREFECT_SERVER_API_AUTH_STRING"
+CLIENT_AUTH_ENV = "PREFECT_API_AUTH_STRING"
 #: In the server's command line; a PID whose command line lacks it is not our server.
 MARKER = "flows.server"
 STOP_GRACE_S = 30.0
@@ -78,6 +93,41 @@ class ServerInfo:
 def server_dir() -> Path:
     """The local server's state folder: ``$ESKIN_SERVER_DIR`` or ``runs/.prefect``."""
     return Path(os.environ.get(SERVER_DIR_ENV) or DEFAULT_SERVER_DIR).absolute()
+
+
+def auth_file(state: Path | None = None) -> Path:
+    """The file that holds the local server's auth string (which the UI asks for)."""
+    return (state or server_dir()) / AUTH_FILE
+
+
+def auth_string(state: Path) -> str:
+    """The local server's auth string: read from :func:`auth_file`, or drawn and written
+    there (mode 0600, created exclusively) on first use.
+
+    Raises
+    ------
+    ServerError
+        The file is readable by others than its owner, or empty.
+    """
+    path = auth_file(state)
+    try:
+        handle = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        handle = None
+    if handle is not None:
+        text = secrets.token_urlsafe(32)
+        with os.fdopen(handle, "w", encoding="utf-8") as file:
+            file.write(text + "\n")
+        return text
+    if path.stat().st_mode & 0o077:
+        raise ServerError(
+            f"{path}: others may read the Prefect server's auth string (chmod 600 it, or "
+            "delete it to draw a new one)"
+        )
+    text = path.read_text(encoding="utf-8").strip()
+    if not text:
+        raise ServerError(f"{path}: empty (delete it to draw a new auth string)")
+    return text
 
 
 def _seconds_from_env(name: str, default: float) -> float:
@@ -130,28 +180,41 @@ def prefect_server(*, show_progress: bool = True) -> Iterator[str]:
         yield named
         return
     state = server_dir()
-    state.mkdir(parents=True, exist_ok=True)
+    state.mkdir(mode=0o700, parents=True, exist_ok=True)  # its database, log and auth string
     with open(state / "leases.lock", "a+") as lease:
         # Blocks only while an idle server shuts down (its monitor holds the lock exclusively).
         fcntl.flock(lease, fcntl.LOCK_SH)
         with _exclusive(state / "start.lock"):
-            info = status(state) or _start(state, show_progress=show_progress)
-        with _using(info):
+            auth = auth_string(state)
+            info = status(state) or _start(state, auth, show_progress=show_progress)
+        with _using(info, auth):
             yield info.api_url
 
 
 @contextlib.contextmanager
-def _using(info: ServerInfo) -> Iterator[None]:
-    """Point Prefect at ``info`` for the block, whether or not Prefect is imported yet."""
-    urls = {"PREFECT_API_URL": info.api_url, "PREFECT_UI_URL": info.ui_url}
-    with restored_environment(urls):
-        os.environ.update(urls)
-        if "prefect" not in sys.modules:  # it reads the environment when imported
-            yield
-            return
-        from prefect.settings import PREFECT_API_URL, PREFECT_UI_URL, temporary_settings
+def _using(info: ServerInfo, auth: str) -> Iterator[None]:
+    """Point Prefect at ``info``, with its auth string, for the block, and send it no flow-run
+    heartbeats.
 
-        with temporary_settings({PREFECT_API_URL: info.api_url, PREFECT_UI_URL: info.ui_url}):
+    Heartbeats only feed automations that mark silent runs as crashed, and the local server
+    has none; Prefect's heartbeat thread, which wakes once a second, would still hold up the
+    end of every flow run by up to a second. A server named by ``PREFECT_API_URL`` keeps
+    Prefect's own setting.
+    """
+    settings = {
+        "PREFECT_API_URL": info.api_url,
+        "PREFECT_UI_URL": info.ui_url,
+        CLIENT_AUTH_ENV: auth,
+    }
+    with restored_environment(settings):
+        # Set before Prefect is imported too: it reads the environment when imported.
+        os.environ.update(settings)
+        import prefect.settings as names
+
+        with names.temporary_settings(
+            {getattr(names, k): v for k, v in settings.items()}
+            | {names.PREFECT_FLOWS_HEARTBEAT_FREQUENCY: None}
+        ):
             yield
 
 
@@ -172,8 +235,9 @@ def stop(state: Path | None = None) -> ServerInfo | None:
     return info
 
 
-def _start(state: Path, *, show_progress: bool) -> ServerInfo:
-    """Start the local server and wait until it answers (as long as a busy machine needs)."""
+def _start(state: Path, auth: str, *, show_progress: bool) -> ServerInfo:
+    """Start the local server, asking clients for ``auth``, and wait until it answers (as long
+    as a busy machine needs)."""
     from tqdm import tqdm
 
     timeout_s = _seconds_from_env(START_TIMEOUT_ENV, DEFAULT_START_TIMEOUT_S)
@@ -188,8 +252,9 @@ def _start(state: Path, *, show_progress: bool) -> ServerInfo:
         "PREFECT_SERVER_ANALYTICS_ENABLED": "false",
         "DO_NOT_TRACK": "1",
         "MPLCONFIGDIR": str(state / "matplotlib"),
+        SERVER_AUTH_ENV: auth,
     }
-    for name in ("PREFECT_API_URL", "PREFECT_UI_URL"):
+    for name in ("PREFECT_API_URL", "PREFECT_UI_URL", CLIENT_AUTH_ENV):
         env.pop(name, None)
     with open(log_path, "ab") as log:
         process = subprocess.Popen(

@@ -4,21 +4,22 @@ A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.run.s
 into the JSON-able dict of ``eskin run --json``, :func:`format_summary` prints it as
 ``eskin run`` does, and :func:`format_sweep_summary` prints a sweep's summary (what
 :func:`flows.run.run_sweep` and the ``sweep`` flow return) with the best point per model
-of each cube. :func:`json_safe` writes infinite numbers as the strings ``"inf"`` and ``"-inf"``
-(JSON has none; ``float("inf")`` reads them back).
+of each cube; :func:`format_power` prints ``eskin power``. :func:`json_safe` writes infinite
+numbers as the strings ``"inf"`` and ``"-inf"`` (JSON has none; ``float("inf")`` reads them back).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 if TYPE_CHECKING:  # the command line imports this module; xarray loads only when a sweep prints
     import xarray as xr
+
+    from pipeline.results.hardware import PowerBudget
 
 
 def result_summary(result: Any) -> dict[str, Any]:
@@ -125,36 +126,44 @@ def format_sweep_summary(
     ----------
     summary
         A sweep's summary: ``root``, ``cubes`` (names in order), ``points``, ``cache_hits``,
-        ``computed`` and ``seconds``, optionally ``report`` and ``flow_run_url``.
+        ``computed`` and ``seconds``, optionally ``sweeps`` (each cube's summary,
+        :func:`flows.assembly.summarize`), ``report`` and ``flow_run_url``.
     cubes
-        The sweep's cubes by name; default: read from ``summary["root"]``
-        (:func:`storage.open_results`).
+        The sweep's cubes by name, summarized when ``summary`` has no ``sweeps``; default:
+        read from ``summary["root"]`` (:func:`storage.open_results`).
     """
-    from flows.assembly import best_points
+    from flows.assembly import summarize
     from storage import open_results
 
-    if cubes is None:
-        cubes = open_results(summary["root"])
+    sweeps = summary.get("sweeps")
+    if sweeps is None:
+        cubes = open_results(summary["root"]) if cubes is None else cubes
+        sweeps = {name: summarize(cubes[name]) for name in summary["cubes"]}
     lines = [
         f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
         f"computed) in {summary['seconds']:.1f} s",
         f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
     ]
     for name in summary["cubes"]:
-        cube = cubes[name]
-        dims = ", ".join(f"{d}={cube.sizes[d]}" for d in cube["accuracy_mean"].dims[:-1])
-        for row in best_points(cube):
-            at = ", ".join(f"{d}={v:g}" for d, v in row["at"].items())
+        dims = ", ".join(f"{d}={size}" for d, size in sweeps[name]["dims"].items())
+        for row in sweeps[name]["best"]:
+            at = ", ".join(f"{d}={_coordinate(v)}" for d, v in row["at"].items())
             lines.append(
                 f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
             )
-    lines.append(f"cubes: {Path(summary['root']) / 'store.zarr' / 'cubes'}")
+    # A root may be a URL (s3://...), which Path would mangle.
+    lines.append(f"cubes: {str(summary['root']).rstrip('/')}/store.zarr/cubes")
     lines.append(f"open with: storage.open_results({str(summary['root'])!r})")
     if summary.get("report"):
         lines.append(f"report: {summary['report']}")
     if summary.get("flow_run_url"):
         lines.append(f"Prefect flow run: {summary['flow_run_url']}")
     return "\n".join(lines)
+
+
+def _coordinate(value: Any) -> str:
+    """A coordinate's value: a number in short form, an option (``"decaying"``) as is."""
+    return f"{value:g}" if isinstance(value, int | float) else str(value)
 
 
 def json_safe(value: Any) -> Any:
@@ -191,4 +200,38 @@ def format_search_summary(summary: Mapping[str, Any]) -> str:
     for key, label in (("report", "report"), ("flow_run_url", "Prefect flow run")):
         if summary.get(key):
             lines.append(f"{label}: {summary[key]}")
+    return "\n".join(lines)
+
+
+def format_power(budget: PowerBudget) -> str:
+    """``eskin power``'s lines: each readout's power (static and dynamic), per taxel, data rate."""
+    from pipeline.report.text import rate, si
+
+    n = budget.n_taxels
+    lines = [f"{n} taxel{'' if n == 1 else 's'}, {budget.event_rate_hz:g} events/s in all"]
+    readouts = [("event readout", budget.event, budget.event_data_rate_bps, "address events")]
+    if budget.frame is not None and budget.frame_data_rate_bps is not None:
+        readouts.append(
+            (
+                "frame readout",
+                budget.frame,
+                budget.frame_data_rate_bps,
+                f"{budget.bits:g}-bit ADC at {budget.sampling_rate_hz:g} Hz per taxel, "
+                f"{budget.model.taxels_per_adc} taxels per ADC",
+            )
+        )
+    for name, power, data_rate, how in readouts:
+        lines.append(
+            f"{name:<14} {si(power.total_w, 'W'):>9} ({si(power.total_w / n, 'W')} per taxel; "
+            f"static {si(power.static_w, 'W')}, dynamic {si(power.dynamic_w, 'W')}), "
+            f"{rate(data_rate, 'bit/s')} ({how})"
+        )
+    if budget.frame is None:
+        lines.append("frame readout  unknown: give --sampling-rate-hz")
+    elif budget.event_data_rate_bps > 0:
+        out = budget.to_json()
+        lines.append(
+            f"frame / event: {out['frame_over_event_power']:.3g}x the power, "
+            f"{out['frame_data_rate_bps'] / out['event_data_rate_bps']:.3g}x the data rate"
+        )
     return "\n".join(lines)

@@ -33,21 +33,28 @@ from prefect.artifacts import (
     update_progress_artifact,
 )
 from prefect.cache_policies import NO_CACHE
+from prefect.states import Cancelled, Failed, State
 from prefect.task_runners import ThreadPoolTaskRunner
 from prefect.utilities.annotations import quote
 
-from flows.assembly import assemble_cube, best_points, cube_location
+from flows.assembly import assemble, cube_location
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import (
     SweepFailed,
+    SweepStopped,
     completed_points,
     failure_message,
     point_failures,
     progress_bar,
+    stopped_message,
+    write_error,
 )
+from flows.report import needs_report_folder
 from flows.run import log_sweep_run, sweep_summary
 from flows.scheduling import submit_missing, sweep_client
 from pipeline.design.grid import Grid
+from pipeline.errors import EskinError
+from storage import StoreWriteError
 
 #: Seconds between progress reports to the Prefect API and its log (the bar updates per point).
 REPORT_EVERY_S = 5.0
@@ -83,22 +90,37 @@ def plan_task(grid: Grid, root: str) -> SweepPlan:
 
 
 @task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
-def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
-    """Wait for the sweep's points, assemble its cube, publish its best points as a table."""
+def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str, Any] | State:
+    """Wait for the sweep's points, assemble its cube, publish its best points as a table;
+    return the cube's summary (:func:`flows.assembly.summarize`).
+
+    A sweep stopped by a failed write (its points cancelled, or one failed so, or its cube
+    not written: then the state holds the :class:`storage.StoreWriteError`) ends Cancelled: a
+    state, not an exception, so that the terminal shows no traceback (the flow says it once).
+    """
     logger = get_run_logger()
     keys = plan.sweep_keys[name]
     mine = {futures[key] for key in keys if key in futures}
     if mine:
         from distributed import wait
+        from distributed.client import FuturesCancelledError
 
-        wait(mine)
+        try:
+            wait(mine)
+        except FuturesCancelledError:  # the sweep stopped: its work left was cancelled
+            pass
+    if any(f.status == "cancelled" or write_error(f) for f in mine):
+        return Cancelled(message=f"sweep {name!r} stopped: a write to the run root failed")
     failed = [
         why for f in mine for why in point_failures(f, [k for k in keys if k in futures]).values()
     ]
     if failed:
         raise SweepFailed(failure_message(failed, len(keys), plan.root))
-    cube = assemble_cube(plan, name)
-    rows = best_points(cube)
+    try:
+        summary = assemble(plan, name)
+    except StoreWriteError as error:
+        return Cancelled(message=str(error), data=error)
+    rows = summary["best"]
     create_table_artifact(
         key=artifact_key(plan.grid.name, name, "best"),
         table=[{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
@@ -108,7 +130,7 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> str:
     for r in rows:
         at = ", ".join(f"{dim}={value}" for dim, value in r["at"].items())
         logger.info("%s: best %s %.1f %% at %s", name, r["model"], 100 * r["accuracy"], at)
-    return cube_location(plan, name)
+    return summary
 
 
 @task(name="report", cache_policy=NO_CACHE)
@@ -138,7 +160,7 @@ def sweep(
     dataset: str | None = None,
     report: bool = False,
     show_progress: bool = False,
-) -> dict[str, Any]:
+) -> dict[str, Any] | State:
     """Sweep a grid into labelled cubes under ``root``.
 
     ``grid`` is a built-in name or a TOML file, loaded and checked here, or a
@@ -148,44 +170,72 @@ def sweep(
     cluster of ``workers`` processes (default: one per available core); ``dataset`` (a folder
     or ``synthetic``) replaces the recordings of a grid given by name or file; ``report``
     writes the report under ``<root>/report`` at the end.
+
+    A write to the root that fails for want of space or permission stops the sweep: the work
+    left is cancelled and the run ends Failed; calling the flow raises
+    :class:`flows.progress.SweepStopped`, whose one line says how many points are kept.
     """
     start = time.perf_counter()
     logger = get_run_logger()
     if not isinstance(grid, Grid) or dataset is not None:
         grid = checked_grid(grid, dataset)
+    if report and root is not None and (problem := needs_report_folder(root)):
+        raise EskinError(f"report: {problem}")
     store = open_root(grid, root, dataset)
     summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
     if show_progress and summary["flow_run_url"]:
         print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
     # One sweep per root: a second one is refused here (the command line takes the lock before
-    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed.
+    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed
+    # (an object root's lease expires).
     with store.lock():
         plan = plan_task(grid, str(store.root))
-        with sweep_client(plan, workers=workers, address=address) as client:
-            futures: dict[str, Any] = {}
-            if client is not None:
-                summary["dashboard"] = client.dashboard_link
-                logger.info("Dask dashboard: %s", client.dashboard_link)
-                if show_progress:
-                    print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
-                futures = submit_missing(plan, client)
-            # Quoted: Prefect would walk the plan and the futures for each task's inputs.
-            runs = [
-                sweep_task.submit(quote(plan), s.name, quote(futures)) for s in plan.grid.sweeps
-            ]
-            if futures:
-                _follow(plan, client, futures, show_progress)
-            for run in runs:
-                run.wait()
+        futures: dict[str, Any] = {}
+        runs: list[Any] = []
+        stop: StoreWriteError | None = None
+        try:
+            with sweep_client(plan, workers=workers, address=address) as client:
+                if client is not None:
+                    summary["dashboard"] = client.dashboard_link
+                    logger.info("Dask dashboard: %s", client.dashboard_link)
+                    if show_progress:
+                        print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
+                    futures = submit_missing(plan, client)
+                # Quoted: Prefect would walk the plan and the futures for each task's inputs.
+                runs = [
+                    sweep_task.submit(quote(plan), s.name, quote(futures)) for s in plan.grid.sweeps
+                ]
+                if futures:
+                    _follow(plan, client, futures, show_progress)
+                for run in runs:
+                    run.wait()
+        except StoreWriteError as error:  # the work left is cancelled, the cluster closed
+            stop = error
+        for run in runs:
+            run.wait()
+        stop = stop or next(filter(None, map(_write_failure, runs)), None)
+        if stop is not None:
+            # A state, not an exception: one line on the terminal, no traceback; calling the
+            # flow raises its data.
+            message = stopped_message(plan, stop)
+            return Failed(message=message, data=SweepStopped(message))
         failed = [run.state.message for run in runs if not run.state.is_completed()]
         if failed:
             raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
-        cubes = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
-    summary |= sweep_summary(plan, cubes, len(futures), time.perf_counter() - start)
+        sweeps = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
+    summary |= sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
     log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
     if report:
         summary["report"] = report_task(plan.root)
     return summary
+
+
+def _write_failure(run: Any) -> StoreWriteError | None:
+    """The write failure a finished sweep task's state holds, if it stopped so."""
+    if not run.state.is_cancelled():
+        return None
+    error = run.state.result(raise_on_failure=False)
+    return error if isinstance(error, StoreWriteError) else None
 
 
 def _follow(plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress: bool) -> None:

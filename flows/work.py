@@ -12,7 +12,9 @@ share a spike train (a window sweep at one threshold) reuse it. The levels the s
 keep (the recordings, their front end, the rate matrices) stay in memory, a few per worker.
 
 One failing point does not lose the others of its task: they are stored, and the task then
-raises :class:`PointsFailed` naming the points that failed.
+raises :class:`PointsFailed` naming the points that failed. A write that fails for want of
+space or permission (:class:`storage.StoreWriteError`) ends the task at once: the coordinator
+stops the sweep and says so once, so the worker does not log it with its traceback.
 
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
 oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
@@ -21,6 +23,8 @@ the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
 
 from __future__ import annotations
 
+import functools
+import logging
 import threading
 import time
 from collections import OrderedDict
@@ -33,7 +37,7 @@ from flows.environment import tune_allocator
 from pipeline.design.scene import Scene
 from pipeline.run import stages
 from pipeline.run.stages import Level, Stopwatch
-from storage import SweepStore
+from storage import StoreWriteError, SweepStore
 
 # pipeline.chain.training (torch, scikit-learn) is imported by the results level when it runs: the
 # coordinator imports this module only to name the function it submits, and never trains.
@@ -109,6 +113,7 @@ def ensure_entries(
 
     torch.set_num_threads(1)
     tune_allocator()
+    _quiet_write_failures()
     wanted = stages.level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
@@ -127,6 +132,24 @@ def ensure_entries(
     if failures:
         raise PointsFailed(failures)
     return keys
+
+
+class _WriteFailureFilter(logging.Filter):
+    """Drops a Dask worker's "Compute Failed" record (with its traceback) of a task that a
+    :class:`storage.StoreWriteError` ended: the coordinator reports that once."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        marker = f"{StoreWriteError.__name__}("
+        return not (
+            str(record.msg).startswith("Compute Failed")
+            and any(isinstance(arg, str) and arg.startswith(marker) for arg in record.args or ())
+        )
+
+
+@functools.cache
+def _quiet_write_failures() -> None:
+    """Install :class:`_WriteFailureFilter` on this worker process's Dask logger, once."""
+    logging.getLogger("distributed.worker").addFilter(_WriteFailureFilter())
 
 
 class _Task:

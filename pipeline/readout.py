@@ -6,6 +6,6 @@ this module only re-exports the names that the architecture lists as contracts, 
 A new public readout function is added to the list below, not copied here.
 """
 
-from pipeline.chain.readout import level_crossings
+from pipeline.chain.readout import decaying_crossings, level_crossings
 
-__all__ = ["level_crossings"]
+__all__ = ["decaying_crossings", "level_crossings"]

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
+from zarr.abc.store import Store
 
 #: One entry's variables: name -> (entry-level dims, values, attrs).
 Variables = dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]
@@ -59,8 +60,8 @@ class BatchError(ValueError):
     """A batch's data or metadata is inconsistent (corrupt): its message says what."""
 
 
-def write_batch(path: Path, kind: str, records: Sequence[Record]) -> None:
-    """Write ``records`` as one batch group at ``path`` (which must not exist).
+def write_batch(path: Path | Store, kind: str, records: Sequence[Record]) -> None:
+    """Write ``records`` as one batch group at ``path`` (a folder or a Zarr store; empty).
 
     Raises
     ------
@@ -104,19 +105,23 @@ def write_batch(path: Path, kind: str, records: Sequence[Record]) -> None:
         encoding[name] = {"chunks": (_chunk_length(values),)}
     digests["@entries"] = json_digest(entries)
     attrs = {"eskin_batch": kind, "entries": entries, "sha256": digests}
-    xr.Dataset(data, attrs=attrs).to_zarr(str(path), mode="w-", encoding=encoding, **_TO_ZARR)
+    xr.Dataset(data, attrs=attrs).to_zarr(_target(path), mode="w-", encoding=encoding, **_TO_ZARR)
 
 
 def read_batch_keys(path: Path) -> tuple[str, ...]:
     """The keys of the batch at ``path``, from its group metadata alone (one small file)."""
-    with open(path / "zarr.json", encoding="utf-8") as file:
-        meta = json.load(file)
-    entries = meta["attributes"]["entries"]
+    return metadata_keys((path / "zarr.json").read_bytes())
+
+
+def metadata_keys(metadata: bytes) -> tuple[str, ...]:
+    """The keys of a batch, from the bytes of its group metadata (``zarr.json``)."""
+    entries = json.loads(metadata)["attributes"]["entries"]
     return tuple(str(entry["key"]) for entry in entries)
 
 
-def read_batch(path: Path, kind: str) -> list[Record]:
-    """Every entry of the batch at ``path``, checked against the batch's digests.
+def read_batch(path: Path | Store, kind: str) -> list[Record]:
+    """Every entry of the batch at ``path`` (a folder or a Zarr store), checked against the
+    batch's digests.
 
     Raises
     ------
@@ -126,7 +131,7 @@ def read_batch(path: Path, kind: str) -> list[Record]:
         Whatever Zarr and its codecs raise for a chunk they cannot read or decode (``OSError``,
         ``ValueError``, ``RuntimeError``, ...): corruption too, to the caller.
     """
-    with xr.open_zarr(str(path), **_OPEN_ZARR) as lazy:
+    with xr.open_zarr(_target(path), **_OPEN_ZARR) as lazy:
         ds = lazy.load()
     attrs = dict(ds.attrs)
     if attrs.get("eskin_batch") != kind:
@@ -164,6 +169,10 @@ def read_batch(path: Path, kind: str) -> list[Record]:
     if any(offsets[name] != arrays[name][1].size for name in arrays):
         raise BatchError("a variable holds values of no entry")
     return records
+
+
+def _target(path: Path | Store) -> str | Store:
+    return str(path) if isinstance(path, Path) else path
 
 
 def digest(values: np.ndarray, *, canonical_nan: bool = False) -> str:

@@ -2,7 +2,13 @@
 swapped in atomically, every chunk with a CRC-32C and every variable with a sha256.
 
 Cubes carry ``eskin_sha256`` (digests of their variables; NaN payloads are canonicalized because
-xarray's CF decoding of cubes rewrites them), removed again on reading. Strings are stored as
+xarray's CF decoding of cubes rewrites them), removed again on reading.
+
+A writer may also give a cube its ``source`` (an opaque digest of what it was built from) and a
+small JSON ``note``. Both are kept in the cube's group metadata with a manifest (the sha256 of
+every other file of the cube), so that :func:`current_note` can tell, from the files' bytes and
+without decoding the cube, that the cube stored under a name is intact and was built from a
+given source. Strings are stored as
 Zarr's variable-length ``string`` type and read back as numpy ``<U`` arrays.
 """
 
@@ -11,15 +17,19 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import hashlib
+import json
 import os
 import re
 import shutil
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import xarray as xr
+import zarr
+from zarr.abc.store import Store
 from zarr.codecs import Crc32cCodec, ZstdCodec
 
 from storage.batches import digest
@@ -28,13 +38,28 @@ from storage.errors import CorruptEntryError, StoreError, one_line
 from storage.layout import PARTIAL_PREFIX
 
 CUBE_DIGESTS = "eskin_sha256"
+CUBE_SOURCE = "eskin_source"
+CUBE_NOTE = "eskin_note"
+CUBE_FILES = "eskin_files"
+_RESERVED = (CUBE_DIGESTS, CUBE_SOURCE, CUBE_NOTE, CUBE_FILES)
+METADATA = "zarr.json"
 _CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
 _OPEN_ZARR = {"consolidated": False, "zarr_format": 3}
 
 
-def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
+def write_cube(
+    folder: Path,
+    name: str,
+    cube: xr.Dataset,
+    *,
+    source: str | None = None,
+    note: Mapping[str, Any] | None = None,
+) -> None:
     """Store ``cube`` as ``<folder>/<name>``, replacing an older cube of that name atomically.
+
+    ``source`` and ``note`` (JSON-serialisable), when given, are kept with the cube for
+    :func:`current_note`.
 
     The new cube is written in full under a partial name, then swapped in with one
     ``renameat2(RENAME_EXCHANGE)`` (Linux), so the name always refers to a complete cube,
@@ -48,14 +73,33 @@ def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
     Raises
     ------
     ValueError
-        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses the reserved attribute
-        ``eskin_sha256``.
+        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses a reserved attribute
+        (``eskin_sha256``, ``eskin_source``, ``eskin_note``, ``eskin_files``).
     """
     path = cube_path(folder, name)
+    cube, encoding = prepared(name, cube)
+    partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
+    try:
+        write_group(str(partial), cube, encoding, source, note, lambda: _manifest(partial))
+        replace_folder(partial, path)
+    finally:
+        shutil.rmtree(partial, ignore_errors=True)
+
+
+def prepared(name: str, cube: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
+    """``cube`` as it is stored (computed, its digests in its attributes, strings as objects)
+    and its encoding (every chunk with a CRC-32C); ``cube`` itself is not modified.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Not a Dataset; a reserved attribute.
+    """
     if not isinstance(cube, xr.Dataset):
         raise TypeError(f"cube {name!r}: expected an xarray.Dataset, got {type(cube)}")
-    if CUBE_DIGESTS in cube.attrs:
-        raise ValueError(f"cube {name!r}: attribute {CUBE_DIGESTS!r} is reserved")
+    for reserved in _RESERVED:
+        if reserved in cube.attrs:
+            raise ValueError(f"cube {name!r}: attribute {reserved!r} is reserved")
     cube = cube.compute().drop_encoding()
     digests = {str(n): digest(v.values, canonical_nan=True) for n, v in cube.variables.items()}
     cube = _strings_to_objects(cube)
@@ -63,12 +107,25 @@ def write_cube(folder: Path, name: str, cube: xr.Dataset) -> None:
     # Every chunk carries a CRC-32C, which Zarr checks on each read: a lazy reader, which
     # never reads a whole variable to check its sha256, still never reads a torn chunk.
     encoding = {str(n): {"compressors": (ZstdCodec(), Crc32cCodec())} for n in cube.variables}
-    partial = path.parent / f"{PARTIAL_PREFIX}{name}-{uuid.uuid4().hex}"
-    try:
-        cube.to_zarr(str(partial), mode="w-", encoding=encoding, **_TO_ZARR)
-        replace_folder(partial, path)
-    finally:
-        shutil.rmtree(partial, ignore_errors=True)
+    return cube, encoding
+
+
+def write_group(
+    target: str | Store,
+    cube: xr.Dataset,
+    encoding: dict[str, Any],
+    source: str | None,
+    note: Mapping[str, Any] | None,
+    manifest: Callable[[], dict[str, str]],
+) -> None:
+    """Write the :func:`prepared` ``cube`` as a new group at ``target``; with ``source``, add
+    ``source``, ``note`` and ``manifest()`` (of the files written) to its group metadata."""
+    cube.to_zarr(target, mode="w-", encoding=encoding, **_TO_ZARR)
+    if source is not None:
+        # The group's metadata is written last, with the manifest of everything else.
+        zarr.open_group(target, mode="r+", zarr_format=3).attrs.update(
+            {CUBE_SOURCE: source, CUBE_NOTE: dict(note or {}), CUBE_FILES: manifest()}
+        )
 
 
 def cube_names(folder: Path) -> list[str]:
@@ -76,9 +133,7 @@ def cube_names(folder: Path) -> list[str]:
     if not folder.is_dir():
         return []
     return sorted(
-        p.name
-        for p in folder.iterdir()
-        if _CUBE_NAME.fullmatch(p.name) and (p / "zarr.json").is_file()
+        p.name for p in folder.iterdir() if valid_name(p.name) and (p / "zarr.json").is_file()
     )
 
 
@@ -103,15 +158,22 @@ def read_cube(folder: Path, name: str, *, lazy: bool = False) -> xr.Dataset:
     path = cube_path(folder, name)
     if not (path / "zarr.json").is_file():
         raise StoreError(f"no cube {name!r} in {folder.parent.parent}")
-    where = f"cube {name} in {folder.parent.parent}"
+    return read_group(str(path), f"cube {name} in {folder.parent.parent}", lazy=lazy)
+
+
+def read_group(target: str | Store, where: str, *, lazy: bool) -> xr.Dataset:
+    """The cube stored at ``target`` (:func:`read_cube`); ``where`` names it in errors."""
     try:
         if lazy:
-            cube = _objects_to_strings(xr.open_zarr(str(path), **_OPEN_ZARR, chunks={}))
-            cube.attrs.pop(CUBE_DIGESTS, None)
+            cube = _objects_to_strings(xr.open_zarr(target, **_OPEN_ZARR, chunks={}))
+            for reserved in _RESERVED:
+                cube.attrs.pop(reserved, None)
             return cube
-        with xr.open_zarr(str(path), **_OPEN_ZARR, chunks=None) as opened:
+        with xr.open_zarr(target, **_OPEN_ZARR, chunks=None) as opened:
             cube = _objects_to_strings(opened.load())
         digests = cube.attrs.pop(CUBE_DIGESTS)
+        for reserved in _RESERVED:
+            cube.attrs.pop(reserved, None)
         if not isinstance(digests, dict) or set(digests) != {str(n) for n in cube.variables}:
             raise CorruptEntryError(f"corrupt {where}: variables do not match its checksums")
         for var, variable in cube.variables.items():
@@ -124,10 +186,68 @@ def read_cube(folder: Path, name: str, *, lazy: bool = False) -> xr.Dataset:
     return cube
 
 
+def current_note(folder: Path, name: str, source: str) -> dict[str, Any] | None:
+    """The note of cube ``name`` if it was written with ``source`` and every file of it is as
+    written (its manifest); else None (no such cube, another source, no manifest, or a file
+    missing, added or changed). Reads the files' bytes, never decodes the cube."""
+    path = cube_path(folder, name)
+    return note_of(lambda: (path / METADATA).read_bytes(), source, lambda: _manifest(path))
+
+
+def note_of(
+    metadata: Callable[[], bytes], source: str, manifest: Callable[[], dict[str, str]]
+) -> dict[str, Any] | None:
+    """:func:`current_note` of a cube given its group metadata's bytes and the manifest of its
+    other files, each read only when needed (any OSError or bad JSON: None)."""
+    try:
+        attributes = json.loads(metadata())["attributes"]
+        if attributes[CUBE_SOURCE] != source:
+            return None
+        files, note = attributes[CUBE_FILES], attributes[CUBE_NOTE]
+        intact = isinstance(note, dict) and files == manifest()
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return note if intact else None
+
+
+def _manifest(path: Path) -> dict[str, str]:
+    """sha256 of every file under the cube folder ``path`` but its group metadata, by path."""
+    found = {}
+    for folder, _, files in os.walk(path):
+        relative = os.path.relpath(folder, path)
+        for name in files:
+            if relative == "." and name == METADATA:
+                continue
+            with open(os.path.join(folder, name), "rb") as file:
+                digest_ = hashlib.sha256(file.read()).hexdigest()
+            found[name if relative == "." else f"{relative}/{name}"] = digest_
+    return dict(sorted(found.items()))
+
+
+def manifest_of(files: Mapping[str, bytes]) -> dict[str, str]:
+    """sha256 of every file of a cube (relative name -> bytes) but its group metadata, as
+    :func:`_manifest` gives it for a folder."""
+    return {
+        name: hashlib.sha256(data).hexdigest()
+        for name, data in sorted(files.items())
+        if name != METADATA
+    }
+
+
 def cube_path(folder: Path, name: str) -> Path:
-    if not isinstance(name, str) or not _CUBE_NAME.fullmatch(name):
+    return folder / checked_name(name)
+
+
+def valid_name(name: Any) -> bool:
+    """True if ``name`` can name a cube (``[A-Za-z0-9_-]{1,64}``)."""
+    return isinstance(name, str) and _CUBE_NAME.fullmatch(name) is not None
+
+
+def checked_name(name: Any) -> str:
+    """``name`` if it can name a cube; else ValueError."""
+    if not valid_name(name):
         raise ValueError(f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}")
-    return folder / name
+    return name
 
 
 def _strings_to_objects(ds: xr.Dataset) -> xr.Dataset:

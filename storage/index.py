@@ -13,9 +13,11 @@ import shutil
 import threading
 import uuid
 from collections import OrderedDict
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from storage.batches import BATCH_PREFIX, read_batch_keys
+from storage.errors import StoreError
 from storage.layout import PARTIAL_PREFIX
 
 KEY = re.compile(r"[0-9a-f]{32}")
@@ -64,14 +66,19 @@ _BATCH_KEYS_GUARD = threading.Lock()
 
 def batch_keys(path: Path) -> tuple[str, ...]:
     """The keys of the complete batch at ``path``; none if its metadata is unreadable."""
-    name = str(path)
+    return cached_keys(str(path), lambda: read_batch_keys(path))
+
+
+def cached_keys(name: str, read: Callable[[], Iterable[str]]) -> tuple[str, ...]:
+    """The keys of the complete batch ``name`` (a path or URL), from ``read()`` the first time
+    (remembered while the process lives); none if its metadata is unreadable."""
     with _BATCH_KEYS_GUARD:
         if name in _BATCH_KEYS:
             _BATCH_KEYS.move_to_end(name)
             return _BATCH_KEYS[name]
     try:
-        keys = tuple(key for key in read_batch_keys(path) if KEY.fullmatch(key))
-    except (OSError, ValueError, KeyError, TypeError):
+        keys = tuple(key for key in read() if KEY.fullmatch(key))
+    except (OSError, StoreError, ValueError, KeyError, TypeError):
         # Unreadable metadata: its entries count as absent and are recomputed; reading the
         # batch would report it corrupt.
         return ()

@@ -12,6 +12,7 @@ import time
 import uuid
 import warnings
 from pathlib import Path
+from typing import Any
 
 import zarr
 
@@ -94,6 +95,20 @@ def check_store_root(root: Path, *, need_store: bool) -> None:
             meta = json.load(file)
     except (OSError, ValueError) as error:
         raise StoreError(f"not a sweep store: cannot read {metadata}: {one_line(error)}") from error
+    check_metadata(meta, str(store), str(root))
+
+
+def check_metadata(meta: Any, store: str, root: str) -> None:
+    """Refuse the group metadata ``meta`` of the store ``store`` (of run root ``root``) unless
+    it is a sweep store of this layout.
+
+    Raises
+    ------
+    StoreLayoutError
+        A store of an older layout.
+    StoreError
+        Not a Zarr v3 group, no marker (a foreign store), or an unknown version.
+    """
     if (
         not isinstance(meta, dict)
         or meta.get("zarr_format") != 3

@@ -68,6 +68,10 @@ def _acquire(path: Path, root: Path) -> int:
             f"run root {root} is in use by another sweep (PID {holder[:80]}); wait for it to "
             "finish or give another --root"
         ) from None
-    os.ftruncate(fd, 0)
-    os.write(fd, f"{os.getpid()} on {socket.gethostname()}\n".encode())
+    # The holder, for the message a refused sweep prints. The flock alone is the lock: on a
+    # full disk the note is left out (a refused sweep then names the holder "unknown"), and
+    # the sweep stops at its first write of data instead, saying so.
+    with contextlib.suppress(OSError):
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()} on {socket.gethostname()}\n".encode())
     return fd

@@ -26,6 +26,10 @@ A batch's attrs hold ``sha256``: one hex digest per stored array, over its dtype
 bytes, plus ``"@entries"`` over the canonical JSON of its entry list. Cubes carry
 ``eskin_sha256`` (:mod:`storage.cube_files`).
 
+A run root may also be an object store's URL (``s3://bucket/prefix``): the same layout, with
+the guarantees that rename and ``flock`` give here made of objects instead
+(:mod:`storage.object_root`, :mod:`storage.lease`, through :mod:`storage.objects`).
+
 Its jobs live in modules of their own: :mod:`storage.layout` (the root, opening, older
 layouts), :mod:`storage.locking` (the sweep lock), :mod:`storage.index` (which keys a kind's
 batches hold), :mod:`storage.batches` (a batch on disk), :mod:`storage.codec` (entries as
@@ -73,8 +77,8 @@ import shutil
 import time
 import uuid
 import warnings
-from collections.abc import Iterable, Mapping
-from contextlib import AbstractContextManager
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -89,7 +93,9 @@ from storage.errors import (
     StoreBusyError,
     StoreError,
     StoreLayoutError,
+    StoreWriteError,
     one_line,
+    write_failure,
 )
 from storage.layout import (
     CUBES,
@@ -102,13 +108,17 @@ from storage.layout import (
     ensure_group,
     set_aside,
 )
+from storage.lease import hold_lease
 from storage.locking import hold_lock
+from storage.object_root import ObjectRoot
+from storage.objects import is_object_url, objects_for, run_root
 
 __all__ = [
     "CorruptEntryError",
     "StoreBusyError",
     "StoreError",
     "StoreLayoutError",
+    "StoreWriteError",
     "SweepStore",
     "open_results",
     "replace_folder",
@@ -129,20 +139,35 @@ class SweepStore:
 
     Attributes
     ----------
-    root : Path
-        The run root; the Zarr store is ``root / "store.zarr"``.
+    root : Path or str
+        The run root, a folder or an object root's URL (``s3://bucket/prefix``,
+        :mod:`storage.object_root`); the Zarr store is ``root / "store.zarr"``.
     """
 
-    def __init__(self, root: Path):
-        self.root = Path(root)
+    def __init__(self, root: str | Path):
+        self.root = run_root(root)
+        self._objects = ObjectRoot(objects_for(self.root)) if is_object_url(self.root) else None
 
     def __repr__(self) -> str:
         return f"SweepStore({str(self.root)!r})"
 
     @property
     def path(self) -> Path:
-        """The Zarr store, ``root / "store.zarr"``."""
+        """The Zarr store of a folder root, ``root / "store.zarr"``."""
+        if isinstance(self.root, str):
+            raise TypeError(f"the object root {self.root} has no path")
         return self.root / STORE_NAME
+
+    def identity(self) -> str:
+        """The root as one string naming it wherever it is read: an object root's URL, a folder
+        root's resolved absolute path."""
+        return self.root if isinstance(self.root, str) else str(self.root.resolve())
+
+    def cube_location(self, name: str) -> str:
+        """Where the cube ``name`` is stored (a folder, or the URL of its prefix)."""
+        if isinstance(self.root, str):
+            return f"{self.root}/{STORE_NAME}/{CUBES}/{name}"
+        return str(self.path / CUBES / name)
 
     # -----------------------------------------------------------------------------------------
     # Opening
@@ -158,11 +183,18 @@ class SweepStore:
         refused before anything is written: a file, a non-empty directory without
         ``store.zarr``, a foreign ``store.zarr``, or a directory we cannot write to.
 
+        An object root (``s3://...``) is acceptable when it holds no object or a sweep store.
+
         Raises
         ------
         StoreError
             ``root`` is refused; the message says why.
         """
+        if is_object_url(root):
+            store = cls(root)
+            if not store._objects.has_store():
+                store._objects.create()
+            return store
         root = Path(root)
         if root.exists() or root.is_symlink():
             try:
@@ -192,6 +224,11 @@ class SweepStore:
         StoreError
             ``root`` is missing, not a directory, or holds no ``store.zarr`` with the marker.
         """
+        if is_object_url(root):
+            store = cls(root)
+            if not store._objects.has_store():
+                raise StoreError(f"not a sweep store: {store.root} holds nothing")
+            return store
         root = Path(root)
         if not root.exists():
             raise StoreError(f"not a sweep store: {root} does not exist")
@@ -220,6 +257,9 @@ class SweepStore:
             ``root`` is one that :meth:`open_or_create` refuses: a file, a non-empty directory
             without ``store.zarr``, a foreign or unreadable ``store.zarr``.
         """
+        if is_object_url(root):
+            store = cls(root)
+            return store if store._objects.has_store() else None
         root = Path(root)
         if not root.exists() and not root.is_symlink():
             return None
@@ -241,11 +281,16 @@ class SweepStore:
         unlocks. File descriptors are not inherited by child processes (Python opens them
         non-inheritable), so a Dask worker or server left behind never keeps a root locked.
 
+        On an object root the lock is a lease object instead (:mod:`storage.lease`), which
+        expires when its holder stops renewing it.
+
         Raises
         ------
         StoreBusyError
             Another process holds the lock; the message names the root and the holder's PID.
         """
+        if self._objects is not None:
+            return hold_lease(self._objects.objects)
         return hold_lock(self.root)
 
     # -----------------------------------------------------------------------------------------
@@ -281,7 +326,7 @@ class SweepStore:
         # A key may sit in two batches (two tasks made it); when the one read first is corrupt
         # or gone, the next round reads the other.
         while left:
-            listed = index.index(self.path / name)
+            listed = self._index(name)
             by_batch: dict[str, list[str]] = {}
             for key in left:
                 if key in listed and listed[key] not in tried:
@@ -296,7 +341,7 @@ class SweepStore:
                     if not discard_corrupt:
                         raise
                     warnings.warn(f"{exc}; recomputing its entries", RuntimeWarning, stacklevel=2)
-                    index.discard_batch(self.path / name / batch)
+                    self._discard_batch(name, batch)
                     continue
                 except StoreError:  # removed since it was listed (another worker discarded it)
                     continue
@@ -313,7 +358,7 @@ class SweepStore:
         """
         name = _kind_name(kind)
         keys = [index.checked_key(name, key) for key in keys]
-        listed = index.index(self.path / name)
+        listed = self._index(name)
         found: dict[str, Any] = {}
         for batch in {listed[key] for key in keys if key in listed}:
             try:
@@ -335,25 +380,33 @@ class SweepStore:
             An entry is not of the kind's entry type.
         ValueError
             An invalid key; or as :func:`storage.codec.to_record` raises.
+        StoreWriteError
+            The root has no space (or quota) left or is not writable; nothing of the batch
+            is left behind.
         """
         name = _kind_name(kind)
         records = [to_record(kind, index.checked_key(name, key), e) for key, e in entries.items()]
         if not records:
             return
+        if self._objects is not None:
+            with self._writing():
+                self._objects.write_batch(name, records)
+            return
         folder = self.path / name
-        ensure_group(folder)
         batch = f"{BATCH_PREFIX}{uuid.uuid4().hex}"
         partial = folder / f"{PARTIAL_PREFIX}{batch}"
-        try:
-            write_batch(partial, name, records)
-            os.rename(partial, folder / batch)
-        finally:
-            shutil.rmtree(partial, ignore_errors=True)
+        with self._writing():
+            ensure_group(folder)
+            try:
+                write_batch(partial, name, records)
+                os.rename(partial, folder / batch)
+            finally:
+                shutil.rmtree(partial, ignore_errors=True)
 
     def has(self, kind: Kind, key: str) -> bool:
         """True only if a complete entry ``kind/key`` exists (partial batches are invisible)."""
         name = _kind_name(kind)
-        return index.checked_key(name, key) in index.index(self.path / name)
+        return index.checked_key(name, key) in self._index(name)
 
     def complete_keys(self, kind: Kind) -> frozenset[str]:
         """Keys of the complete entries of ``kind``, from one listing of its batches.
@@ -361,13 +414,23 @@ class SweepStore:
         Each batch's keys are read once per process from its group metadata (batches never
         change once written); partial batches and anything that is not a batch are left out.
         """
-        return frozenset(index.index(self.path / _kind_name(kind)))
+        return frozenset(self._index(_kind_name(kind)))
 
-    def entry_location(self, kind: Kind, key: str) -> Path | None:
-        """The batch folder that holds the entry ``kind/key``, or None if none does."""
+    def entry_location(self, kind: Kind, key: str) -> Path | str | None:
+        """The batch folder (an object root: its URL) that holds the entry ``kind/key``, or None
+        if none does."""
         name = _kind_name(kind)
-        batch = index.index(self.path / name).get(index.checked_key(name, key))
-        return None if batch is None else self.path / name / batch
+        batch = self._index(name).get(index.checked_key(name, key))
+        if batch is None:
+            return None
+        if self._objects is not None:
+            return f"{self.root}/{STORE_NAME}/{name}/{batch}"
+        return self.path / name / batch
+
+    def entry_batches(self, kind: Kind) -> dict[str, str]:
+        """Key -> name of the batch that holds it, for every complete entry of ``kind`` (one
+        listing). Batches never change once in place: a name stands for the bytes it holds."""
+        return self._index(_kind_name(kind))
 
     def discard(self, kind: Kind, key: str) -> bool:
         """Remove the entry ``kind/key`` (e.g. a corrupt one, to recompute it).
@@ -380,8 +443,8 @@ class SweepStore:
         name = _kind_name(kind)
         index.checked_key(name, key)
         removed = False
-        while (batch := index.index(self.path / name).get(key)) is not None:  # every copy
-            removed = index.discard_batch(self.path / name / batch) or removed
+        while (batch := self._index(name).get(key)) is not None:  # every copy
+            removed = self._discard_batch(name, batch) or removed
         return removed
 
     def clean_partials(self, *, older_than_s: float = 0.0) -> int:
@@ -394,7 +457,12 @@ class SweepStore:
             Only remove partials whose directory was last modified at least this many seconds
             ago. The default 0 removes every partial, including those of writers still running:
             use it only when no writer is active, else a threshold well above the longest write.
+            On an object root, partial batches are removed once older than
+            :data:`storage.object_root.PARTIAL_AGE_S` too, cube versions no longer current once
+            older than :data:`storage.object_root.GRACE_S`.
         """
+        if self._objects is not None:
+            return self._objects.clean_partials(older_than_s=older_than_s)
         now = time.time()
         candidates = [p for p in self.root.glob(f"{STORE_PARTIAL_PREFIX}*") if p.is_dir()]
         groups = [p for p in self.path.iterdir() if p.is_dir()] if self.path.is_dir() else []
@@ -418,17 +486,43 @@ class SweepStore:
             removed += 1
         return removed
 
+    @contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Raise a write's lack of space or permission as :class:`StoreWriteError`."""
+        try:
+            yield
+        except Exception as error:  # an OSError, or one a library raised from it
+            failure = write_failure(error, self.root)
+            if failure is None:
+                raise
+            raise failure from error
+
+    def _index(self, name: str) -> dict[str, str]:
+        """Key -> complete batch holding it, for the kind ``name`` (one listing)."""
+        if self._objects is not None:
+            return self._objects.index(name)
+        return index.index(self.path / name)
+
+    def _discard_batch(self, name: str, batch: str) -> bool:
+        if self._objects is not None:
+            return self._objects.discard_batch(name, batch)
+        return index.discard_batch(self.path / name / batch)
+
     def _read_batch(self, kind: Declaration, batch: str) -> dict[str, Any]:
         """Every entry of one batch, by key; any failure to read or verify it is corruption."""
         name = _kind_name(kind)
-        path = self.path / name / batch
-        keys = index.batch_keys(path)
+        remote = self._objects
+        path = self.path / name / batch if remote is None else None
+        keys = index.batch_keys(path) if path is not None else remote.batch_keys(name, batch)
         shown = ", ".join(keys[:3]) + (f" and {len(keys) - 3} more" if len(keys) > 3 else "")
         where = f"{name} batch {batch} (entries {shown or 'unknown'}) in {self.root}"
-        if not (path / "zarr.json").is_file():
+        if not (
+            (path / "zarr.json").is_file() if path is not None else remote.has_batch(name, batch)
+        ):
             raise StoreError(f"no {where}")
         try:
-            return {record.key: from_record(kind, record) for record in read_batch(path, name)}
+            records = read_batch(path, name) if path is not None else remote.read_batch(name, batch)
+            return {record.key: from_record(kind, record) for record in records}
         except FileNotFoundError as error:
             raise StoreError(f"no {where} (removed while reading)") from error
         except Exception as error:
@@ -437,22 +531,47 @@ class SweepStore:
     # -----------------------------------------------------------------------------------------
     # Cubes (storage.cube_files)
 
-    def write_cube(self, name: str, cube: xr.Dataset) -> None:
-        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically
-        (:func:`storage.cube_files.write_cube`)."""
-        cube_files.write_cube(self.path / CUBES, name, cube)
+    def write_cube(
+        self,
+        name: str,
+        cube: xr.Dataset,
+        *,
+        source: str | None = None,
+        note: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically,
+        with the digest ``source`` of what it was built from and a JSON ``note`` if given
+        (:func:`storage.cube_files.write_cube`); :class:`StoreWriteError` as
+        :meth:`write_entries`."""
+        with self._writing():
+            if self._objects is not None:
+                self._objects.write_cube(name, cube, source=source, note=note)
+            else:
+                cube_files.write_cube(self.path / CUBES, name, cube, source=source, note=note)
+
+    def current_note(self, name: str, source: str) -> dict[str, Any] | None:
+        """The note of cube ``name`` if it is intact and was written with ``source``, else None
+        (:func:`storage.cube_files.current_note`)."""
+        if self._objects is not None:
+            return self._objects.current_note(name, source)
+        return cube_files.current_note(self.path / CUBES, name, source)
 
     def cube_names(self) -> list[str]:
         """Names of the stored cubes, sorted."""
+        if self._objects is not None:
+            return self._objects.cube_names()
         return cube_files.cube_names(self.path / CUBES)
 
     def read_cube(self, name: str, *, lazy: bool = False) -> xr.Dataset:
         """The cube ``name``, string variables as ``<U`` (:func:`storage.cube_files.read_cube`)."""
+        if self._objects is not None:
+            return self._objects.read_cube(name, lazy=lazy)
         return cube_files.read_cube(self.path / CUBES, name, lazy=lazy)
 
 
 def open_results(root: str | Path, *, lazy: bool = False) -> dict[str, xr.Dataset]:
-    """Every result cube of the run root ``root``, by sweep name.
+    """Every result cube of the run root ``root`` (a folder or ``s3://bucket/prefix``), by
+    sweep name.
 
     Parameters
     ----------

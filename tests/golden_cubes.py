@@ -155,7 +155,15 @@ RENAMED: dict[str, str] = {
     "readout.effects.threshold_mismatch.sigma_rel": "sigma_rel",
 }
 #: Names cubes have now that the golden grids' files do not.
-ADDED: frozenset[str] = frozenset({"n_windows_used"})
+ADDED: frozenset[str] = frozenset(
+    {
+        "n_windows_used",
+        # The encoder architecture and the decaying encoder's parameters, new scene fields.
+        "readout.encoder",
+        "readout.decay.theta_min_v",
+        "readout.decay.tau_s",
+    }
+)
 # Attributes that name the software that built a cube: they change with every release.
 _VERSION_ATTRS = ("package_version", "version_")
 

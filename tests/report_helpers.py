@@ -107,7 +107,8 @@ def make_cubes(
     Seconds grow with the taxel count and window count; SSNR falls with noise (inf when ideal);
     event and data rates fall with the threshold (``rates(scene)`` gives ``(event_rate_hz,
     data_rate_bps)`` instead, when given). Every point states ``recordings`` (12 classes at
-    2 kHz by default). ``predictions=False`` makes cubes of a run that predates per-recording
+    2 kHz by default) and the windows it used (8 for ``auto``, else ``coding.n_windows``).
+    ``predictions=False`` makes cubes of a run that predates per-recording
     results (fold accuracies only, no intervals)."""
     base = Scene.load("smoke").to_dict()
     base["training"] |= {"models": list(models), "repeats": repeats}
@@ -142,5 +143,6 @@ def make_cubes(
             ),
             recordings=recordings,
             out_of_fold=oof if predictions else None,
+            n_windows_used=8 if scene.coding.n_windows == "auto" else scene.coding.n_windows,
         )
     return {s.name: build_cube(grid, s, records) for s in grid.sweeps}

@@ -144,3 +144,17 @@ def test_the_walk_reaches_every_sub_package():
     } <= names
     assert {"pipeline.chain.readout", "pipeline.run.stages", "pipeline.results.cube"} <= names
     assert {"pipeline.report.analysis", "storage.store", "flows.planning"} <= names
+
+
+def test_storage_knows_no_science_and_pipeline_no_orchestration():
+    """storage/ imports nothing of pipeline/ but its error base; pipeline/ imports nothing of
+    storage/ or flows/."""
+    edges = graph(project_modules())
+    crossings = sorted(
+        f"{source} -> {target}"
+        for source, targets in edges.items()
+        for target in targets
+        if (source.startswith("storage") and target.startswith("pipeline"))
+        or (source.startswith("pipeline") and target.startswith(("storage", "flows")))
+    )
+    assert crossings == ["storage.errors -> pipeline.errors"]

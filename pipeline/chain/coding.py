@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from pipeline.chain.jit import kernel
 from pipeline.chain.spikes import SpikeTrains
 from pipeline.design.scene import CodingSpec, Polarity
 from pipeline.errors import SimulationError
@@ -66,7 +66,7 @@ def resolve_n_windows(coding: CodingSpec, durations_s: np.ndarray) -> int:
     return coding.n_windows
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _count_sorted(times, edges, counts, row):  # pragma: no cover - compiled
     """Add the sorted ``times`` into ``counts[row]``; return how many fall outside the edges."""
     n_windows = edges.shape[0] - 1
@@ -118,7 +118,7 @@ def rate_code(times_s: np.ndarray, window_s: float, n_windows: int) -> tuple[np.
     return counts[0], int(dropped)
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _count_trains(times, polarity, counts_flat, split, edges, out, dropped):  # pragma: no cover
     """Rate-code every train of a ragged set; ``out`` is (n_trains * channels, n_windows)."""
     start = 0

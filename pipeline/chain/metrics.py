@@ -40,9 +40,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
-import numba
 import numpy as np
 
+from pipeline.chain.jit import kernel
 from pipeline.chain.spikes import SpikeTrains
 
 
@@ -92,7 +92,7 @@ def _ssnr_from_error(n_true: np.ndarray, error: np.ndarray) -> np.ndarray:
         return np.where(exact, np.inf, 20.0 * np.log10(n_true / np.where(exact, 1.0, error)))
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _nearest_gaps(true_t, real_t, out):  # pragma: no cover - compiled
     """``out[i]`` = distance from ``true_t[i]`` to the nearest of the sorted ``real_t``."""
     j = 0
@@ -107,7 +107,7 @@ def _nearest_gaps(true_t, real_t, out):  # pragma: no cover - compiled
         out[i] = best
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _ste_kernel(true_t, real_t, sign_safe):  # pragma: no cover - compiled
     n_true = true_t.shape[0]
     n_real = real_t.shape[0]
@@ -129,7 +129,7 @@ def ste_s2(true_times_s: np.ndarray, real_times_s: np.ndarray, variant: SteVaria
     return float(_ste_kernel(true_t, real_t, variant == "sign_safe"))
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _ste_trains(true_t, true_count, real_t, real_count, sign_safe, out):  # pragma: no cover
     a = 0
     b = 0

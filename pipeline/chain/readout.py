@@ -16,6 +16,20 @@ interpolated time ``t = (n - 1 + (m - u_{n-1}) / (u_n - u_{n-1})) / fs``, in tim
 computed from the integer sample index, so they keep sub-nanosecond precision for hours of
 recording at kHz rates.
 
+Decaying-threshold encoder
+--------------------------
+``readout.encoder = "decaying"`` (as in the decaying-threshold encoder of Alea et al., IEEE
+TBioCAS 2024): the reference ``r`` starts at the first sample and the threshold is
+
+    theta(t) = theta_min + (theta_0 - theta_min) * exp(-(t - t_last) / tau)
+
+with ``t_last`` the time of the last spike (0 at the start). A +1 spike is emitted at the first
+instant the interpolated signal reaches ``r + theta(t)``, a -1 spike at ``r - theta(t)``; the spike
+moves ``r`` by that ``theta(t)`` and sets ``t_last``. Within a segment the condition is a line
+minus a decaying exponential, which is concave, so its first root has a closed-form bracket and is
+solved by safeguarded Newton steps in continuous time (see :func:`_first_reach`); a segment may
+hold several spikes. ``theta_min = theta_0`` is the fixed encoder.
+
 Non-ideal encoder (the REAL train)
 ----------------------------------
 The scene's effects act in this order (each only when the scene names it)::
@@ -27,8 +41,13 @@ The scene's effects act in this order (each only when the scene names it)::
     decision at sample i: v[i] - r >= up + e[i]  if v[i] >= r,  else  r - v[i] >= down + e[i]
                                                         (comparator_noise, per sample)
 
-Every effective threshold is clipped below at ``floor_rel * theta`` (``threshold_mismatch``'s
-``floor_rel`` when the scene names it, else :data:`THRESHOLD_FLOOR_REL`): mismatch or offsets
+For the decaying encoder ``theta_t`` is the taxel's curve: one mismatch draw scales both
+``theta_0`` and ``theta_min``, a comparator offset shifts both ends of its comparator's curve,
+and a sample's decision noise shifts both ends of both curves in its segment.
+
+Every effective threshold is clipped below at ``floor_rel * theta_min`` (``theta_min`` is
+``theta`` for the fixed encoder; ``floor_rel`` is ``threshold_mismatch``'s when the scene names
+it, else :data:`THRESHOLD_FLOOR_REL`): mismatch or offsets
 that would push a threshold to zero or below leave the comparator at the smallest step it can
 resolve, so the train stays finite. With equal UP and DOWN thresholds and no comparator noise
 the REAL train is the ideal encoder run with ``theta_t`` on ``v_t``. Otherwise the reference
@@ -54,13 +73,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from pipeline.chain.jit import kernel
 from pipeline.design.scene import (
     AmplifierNoise,
     AmplifierOffset,
     Effect,
+    Encoder,
     ReadoutSpec,
     Saturation,
     ThresholdMismatch,
@@ -104,14 +124,14 @@ def effect_rng(seed: int, effect: Effect, taxel: int, recording: int | None = No
 # Ideal encoder
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _level(k, u):  # pragma: no cover - compiled
     """``clip(k, floor(u), ceil(u))``, branch-free; a NaN ``u`` gives NaN (so it is an event)."""
     at_least = k if k > np.floor(u) else np.floor(u)
     return at_least if at_least < np.ceil(u) else np.ceil(u)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _scan_lane(v, v0, inv_threshold, i, k, events, out):  # pragma: no cover - compiled
     """One sample of a lane: the new level, and where the next event index goes."""
     k_new = _level(k, (v[i] - v0) * inv_threshold)
@@ -119,7 +139,7 @@ def _scan_lane(v, v0, inv_threshold, i, k, events, out):  # pragma: no cover - c
     return k_new, out + (k_new != k)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _emit(v, v0, inv_threshold, i, k, times, polarity, out):  # pragma: no cover - compiled
     """Apply sample ``i`` to level ``k``: write its spikes while they fit; return the new level
     and count, or NaN and ``-(i + 1)`` for a non-finite sample."""
@@ -145,7 +165,7 @@ def _emit(v, v0, inv_threshold, i, k, times, polarity, out):  # pragma: no cover
     return k_new, out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _encode_block(
     v, v0, inv_threshold, start, stop, k, events, times, polarity, out
 ):  # pragma: no cover - compiled
@@ -195,7 +215,7 @@ def _encode_block(
     return k, out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _ideal_kernel(v, inv_threshold, times, polarity):  # pragma: no cover - compiled
     """Emit the ideal train into ``times``/``polarity`` while it fits; return the full count.
 
@@ -295,10 +315,195 @@ def reference_level_crossings(
 
 
 # ---------------------------------------------------------------------------------------------
+# Decaying-threshold encoder
+
+
+@kernel(error_model="numpy", inline="always")
+def _gap(x0, m, theta_min, swing, s_ref, tau, s):  # pragma: no cover - compiled
+    """``f(s) = x0 + m * s - theta(s)``: how far the signal is past the level at local time
+    ``s``, with ``theta(s) = theta_min + swing * exp((s_ref - s) / tau)``."""
+    return x0 + m * s - (theta_min + swing * math.exp((s_ref - s) / tau))
+
+
+@kernel(error_model="numpy")
+def _first_reach(x0, m, theta_min, swing, s_ref, tau, lo):  # pragma: no cover - compiled
+    """The first ``s`` in ``[lo, 1]`` where ``f(s) = x0 + m * s - theta(s) >= 0``
+    (:func:`_gap`), or -1.0 if there is none.
+
+    ``f`` is a line minus a decaying exponential, so ``f' = m + swing * w(s) / tau`` falls with
+    ``s`` (``f`` is concave). Rising (``m >= 0``) it increases on the whole segment; falling,
+    it increases up to ``s*`` where ``w(s*) = -m * tau / swing`` and falls after. Either way the
+    first root, if any, lies in ``[lo, hi]`` with ``hi = min(s*, 1)`` and ``f`` increasing there:
+    a guaranteed bracket, solved by Newton steps kept inside it (bisection when one leaves).
+    """
+    hi = 1.0
+    if m < 0.0:
+        hi = lo
+        if swing > 0.0:
+            hi = min(max(s_ref + tau * math.log(swing / (-m * tau)), lo), 1.0)
+    f_hi = _gap(x0, m, theta_min, swing, s_ref, tau, hi)
+    if f_hi < 0.0:
+        return -1.0
+    f_lo = _gap(x0, m, theta_min, swing, s_ref, tau, lo)
+    if f_lo >= 0.0:
+        return lo
+    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)  # the chord's root, inside the bracket
+    for _ in range(200):
+        f = _gap(x0, m, theta_min, swing, s_ref, tau, s)
+        if f == 0.0:
+            return s
+        if f > 0.0:
+            hi = s
+        else:
+            lo = s
+        if hi - lo <= 4e-16:
+            break
+        step = f / (m + swing * math.exp((s_ref - s) / tau) / tau)
+        if abs(step) <= 1e-15 and lo < s - step < hi:
+            return s - step  # Newton from one side converges without shrinking the bracket
+        s = s - step if lo < s - step < hi else 0.5 * (lo + hi)
+    return hi
+
+
+@kernel(error_model="numpy")
+def _decaying_kernel(
+    v,
+    up0_v,
+    up_min_v,
+    down0_v,
+    down_min_v,
+    floor_v,
+    tau,
+    noise_rng,
+    noise_sigma_v,
+    limit,
+    times,
+    polarity,
+):  # pragma: no cover - compiled
+    """Decaying-threshold encoder with separate UP/DOWN threshold curves and decision noise.
+
+    The UP threshold is ``up_min + (up0 - up_min) * exp(-(t - t_last) / tau)`` (``tau`` in
+    samples), the DOWN one likewise; one decision-noise value per sample (drawn from
+    ``noise_rng``, ``None``: none) shifts both ends of both curves in that sample's segment,
+    each clipped below at ``floor_v``. A spike moves ``r`` by the threshold it crossed and
+    restarts the decay. Segments whose ends stay closer to ``r`` than the lowest threshold are
+    skipped without evaluating the exponential, and those closer than the thresholds at their
+    end with one evaluation. Writes while the buffers have room and returns
+    the full count, or stops at the first count above ``limit``, as :func:`_general_kernel`.
+    """
+    n = v.shape[0]
+    capacity = times.shape[0]
+    r = v[0]
+    t_last = 0.0  # samples from the first sample
+    out = 0
+    for i in range(1, n):
+        a = v[i - 1]
+        b = v[i]
+        e = 0.0 if noise_rng is None else noise_sigma_v * noise_rng.standard_normal()
+        up_min = max(up_min_v + e, floor_v)
+        down_min = max(down_min_v + e, floor_v)
+        high = max(a, b) - r
+        low = r - min(a, b)
+        if high < up_min and low < down_min:
+            continue
+        up_swing = max(up0_v + e, floor_v) - up_min
+        down_swing = max(down0_v + e, floor_v) - down_min
+        decayed = math.exp((t_last - i) / tau)  # the thresholds only fall within the segment
+        if high < up_min + up_swing * decayed and low < down_min + down_swing * decayed:
+            continue
+        lo = 0.0
+        while True:
+            s_ref = t_last - (i - 1)
+            s_up = _first_reach(a - r, b - a, up_min, up_swing, s_ref, tau, lo)
+            s_down = _first_reach(r - a, a - b, down_min, down_swing, s_ref, tau, lo)
+            if s_up < 0.0 and s_down < 0.0:
+                break
+            rising = s_down < 0.0 or (0.0 <= s_up <= s_down)
+            s = s_up if rising else s_down
+            if rising:
+                r += up_min + up_swing * math.exp((s_ref - s) / tau)
+            else:
+                r -= down_min + down_swing * math.exp((s_ref - s) / tau)
+            t_last = (i - 1) + s
+            if out < capacity:
+                times[out] = t_last
+                polarity[out] = np.int8(1 if rising else -1)
+            out += 1
+            if out > limit:
+                return out
+            lo = s
+    return out
+
+
+def decaying_crossings(
+    v: np.ndarray, fs_hz: float, theta0_v: float, theta_min_v: float, tau_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Ideal continuous-time level-crossing encoder with a decaying threshold.
+
+    Between samples the signal is the straight line through them. The reference ``r`` starts
+    at the first sample; the threshold is ``theta(t) = theta_min + (theta_0 - theta_min) *
+    exp(-(t - t_last) / tau)`` with ``t_last`` the time of the last spike (0 at the start). A +1
+    spike is emitted at the first instant the signal reaches ``r + theta(t)``, a -1 spike at
+    ``r - theta(t)``; at a spike ``r`` moves by that ``theta(t)`` in its direction and ``t_last``
+    becomes the spike time. Each crossing is solved in continuous time (a bracketed Newton
+    solve of line = exponential, to about 1e-15 of a sample). ``theta_min_v == theta0_v`` is the
+    fixed encoder :func:`level_crossings`.
+
+    Parameters
+    ----------
+    v : float64 (n,)
+        The signal's samples in volts, all finite.
+    fs_hz : float
+        Sampling rate in Hz, > 0.
+    theta0_v, theta_min_v : float
+        Threshold right after a spike and its floor, in volts, ``0 < theta_min_v <= theta0_v``.
+    tau_s : float
+        Time constant of the decay in seconds, > 0.
+
+    Returns
+    -------
+    times_s : float64 (n_spikes,), polarity : int8 (n_spikes,)
+        As :func:`level_crossings`.
+
+    Raises
+    ------
+    ValueError
+        Listing every bad parameter at once, or for a non-finite sample.
+    SimulationError
+        If the train would hold more than :data:`MAX_SPIKES_PER_TRAIN` spikes.
+    """
+    v = _as_signal(v)
+    problems = _non_finite_problems(v) + _positive_problems(
+        fs_hz=fs_hz, theta0_v=theta0_v, theta_min_v=theta_min_v, tau_s=tau_s
+    )
+    if math.isfinite(theta0_v) and theta_min_v > theta0_v:
+        problems.append(f"theta_min_v ({theta_min_v!r}) must not be above theta0_v ({theta0_v!r})")
+    if not problems and not tau_s * fs_hz > 0:  # tau below the smallest number in samples
+        problems.append(f"tau_s * fs_hz must be > 0, got {tau_s!r} * {fs_hz!r}")
+    if problems:
+        raise ValueError("; ".join(problems))
+    curve = (theta0_v, theta_min_v)
+    return _decaying_train(v, fs_hz, curve, curve, tau_s, MAX_SPIKES_PER_TRAIN)
+
+
+def _decaying_train(v, fs_hz, up, down, tau_s, max_spikes, floor_v=0.0, noise=None):
+    """The decaying encoder's train with UP/DOWN ``(theta_0, theta_min)`` pairs, a threshold
+    floor and decision noise (see :func:`_decaying_kernel` and :func:`_run_noisy`)."""
+
+    def call(rng, sigma_v, times, polarity):
+        tau = tau_s * fs_hz
+        return _decaying_kernel(
+            v, *up, *down, floor_v, tau, rng, sigma_v, max_spikes, times, polarity
+        )
+
+    return _run_noisy(call, noise, fs_hz, max_spikes, v)
+
+
+# ---------------------------------------------------------------------------------------------
 # General (non-ideal) encoder
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _general_kernel(
     v, up_v, down_v, floor_v, noise_rng, noise_sigma_v, limit, times, polarity
 ):  # pragma: no cover - compiled
@@ -336,7 +541,7 @@ def _general_kernel(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel()
 def _amplified(x, offset_v, noise_rng, noise_sigma_v, rail_v):  # pragma: no cover - compiled
     """``clip(x + offset_v + noise_sigma_v * z, -rail_v, rail_v)`` with ``z`` drawn from
     ``noise_rng`` sample by sample (none when it is ``None``); the same numbers, in the same
@@ -384,21 +589,41 @@ def _as_signal(v: np.ndarray) -> np.ndarray:
 
 
 def _raise_non_finite(v: np.ndarray, index: int) -> None:
-    raise ValueError(f"signal has a non-finite sample ({v[index]}) at index {index}")
+    raise ValueError(_non_finite_message(v, index))
+
+
+def _non_finite_message(v: np.ndarray, index: int) -> str:
+    return f"signal has a non-finite sample ({v[index]}) at index {index}"
+
+
+def _non_finite_problems(v: np.ndarray) -> list[str]:
+    """The first non-finite sample of 1-D ``v`` as a problem, or none."""
+    if np.all(np.isfinite(v)):
+        return []
+    return [_non_finite_message(v, int(np.flatnonzero(~np.isfinite(v))[0]))]
 
 
 def _checked_signal(v: np.ndarray) -> np.ndarray:
     """A 1-D float64 signal whose samples are all finite (for paths without the kernel check)."""
     v = _as_signal(v)
-    if not np.all(np.isfinite(v)):
-        _raise_non_finite(v, int(np.flatnonzero(~np.isfinite(v))[0]))
+    problems = _non_finite_problems(v)
+    if problems:
+        raise ValueError(problems[0])
     return v
 
 
+def _positive_problems(**values: float) -> list[str]:
+    return [
+        f"{name} must be a finite number > 0, got {value!r}"
+        for name, value in values.items()
+        if not (math.isfinite(value) and value > 0)
+    ]
+
+
 def _check_positive(**values: float) -> None:
-    for name, value in values.items():
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    problems = _positive_problems(**values)
+    if problems:
+        raise ValueError("; ".join(problems))
 
 
 def real_train(
@@ -430,10 +655,11 @@ def real_train(
         As :func:`level_crossings`. For an ideal readout, exactly its TRUE train.
     """
     effects = readout.effects
-    theta = readout.threshold_v
     if not effects:
-        return level_crossings(v, fs_hz, theta, max_spikes=max_spikes)
+        return true_train(v, fs_hz, readout, max_spikes=max_spikes)
     v = _checked_signal(v)
+    theta, theta_min = readout.threshold_v, readout.theta_min_v
+    nominal = (theta, theta_min)
 
     def draw(effect: Effect, static: bool):
         return effect_rng(seed, effect, taxel, None if static else recording)
@@ -452,29 +678,69 @@ def real_train(
         v = _amplified(v, offset_v, amplifier_rng, amplifier_sigma_v, rail_v)
 
     mismatch: ThresholdMismatch | None = effects.get(Effect.THRESHOLD_MISMATCH)
-    floor_v = (THRESHOLD_FLOOR_REL if mismatch is None else mismatch.floor_rel) * theta
-    taxel_theta = theta
+    # The floor is relative to the smallest nominal threshold (threshold_v for a fixed one).
+    floor_v = (THRESHOLD_FLOOR_REL if mismatch is None else mismatch.floor_rel) * theta_min
+    scale = 1.0
+    if mismatch is not None:  # one draw scales the whole threshold curve of the taxel
+        scale = 1.0 + mismatch.sigma_rel * draw(Effect.THRESHOLD_MISMATCH, True).standard_normal()
+    curve = nominal
     if mismatch is not None:
-        z = draw(Effect.THRESHOLD_MISMATCH, True).standard_normal()
-        taxel_theta = max(theta * (1.0 + mismatch.sigma_rel * z), floor_v)
+        curve = (max(theta * scale, floor_v), max(theta_min * scale, floor_v))
 
     comparator_offset = effects.get(Effect.COMPARATOR_OFFSET)
     comparator_noise = effects.get(Effect.COMPARATOR_NOISE)
     if comparator_offset is None and comparator_noise is None:
-        return level_crossings(v, fs_hz, taxel_theta, max_spikes=max_spikes)
-
-    up_v = down_v = taxel_theta
+        return _encode(v, fs_hz, readout, curve, None, floor_v, None, max_spikes)
+    up = down = curve
     if comparator_offset is not None:
-        c_up, c_down = draw(Effect.COMPARATOR_OFFSET, True).standard_normal(2)
-        up_v = max(taxel_theta + comparator_offset.sigma_v * c_up, floor_v)
-        down_v = max(taxel_theta + comparator_offset.sigma_v * c_down, floor_v)
-    decision_sigma_v = 0.0 if comparator_noise is None else comparator_noise.sigma_v
+        c_up, c_down = comparator_offset.sigma_v * draw(
+            Effect.COMPARATOR_OFFSET, True
+        ).standard_normal(2)
+        up = (max(curve[0] + c_up, floor_v), max(curve[1] + c_up, floor_v))
+        down = (max(curve[0] + c_down, floor_v), max(curve[1] + c_down, floor_v))
+    decision_noise = None
+    if comparator_noise is not None:
+        decision_noise = (comparator_noise.sigma_v, lambda: draw(Effect.COMPARATOR_NOISE, False))
+    return _encode(v, fs_hz, readout, up, down, floor_v, decision_noise, max_spikes)
+
+
+def true_train(
+    v: np.ndarray, fs_hz: float, readout: ReadoutSpec, *, max_spikes: int = MAX_SPIKES_PER_TRAIN
+) -> tuple[np.ndarray, np.ndarray]:
+    """The TRUE train of ``v`` by the readout's ideal encoder (:func:`level_crossings` or
+    :func:`decaying_crossings`, by ``readout.encoder``) at its nominal thresholds."""
+    nominal = (readout.threshold_v, readout.theta_min_v)
+    return _encode(v, fs_hz, readout, nominal, None, 0.0, None, max_spikes)
+
+
+def _encode(v, fs_hz, readout, up, down, floor_v, noise, max_spikes):
+    """Encode ``v`` with the readout's encoder at UP and DOWN ``(theta_0, theta_min)``
+    thresholds (equal for a fixed encoder), floor ``floor_v`` and decision ``noise``
+    (``(sigma_v, rng factory)`` or None). ``down=None`` (no comparator effect): both
+    comparators at ``up`` without noise, which :func:`level_crossings` computes for the fixed
+    encoder."""
+    if readout.encoder is Encoder.DECAYING:
+        v = _checked_signal(v)  # the decaying kernel does not look for non-finite samples
+        down = up if down is None else down
+        return _decaying_train(v, fs_hz, up, down, readout.decay.tau_s, max_spikes, floor_v, noise)
+    if down is None:
+        return level_crossings(v, fs_hz, up[0], max_spikes=max_spikes)
+
+    def call(rng, sigma_v, times, polarity):
+        return _general_kernel(
+            v, up[0], down[0], floor_v, rng, sigma_v, max_spikes, times, polarity
+        )
+
+    return _run_noisy(call, noise, fs_hz, max_spikes, v)
+
+
+def _run_noisy(call, noise, fs_hz: float, max_spikes: int, v: np.ndarray) -> tuple:
+    """:func:`_run` of a kernel ``call(rng, sigma_v, times, polarity) -> count`` with decision
+    ``noise`` (``(sigma_v, rng factory)``, or None for none)."""
+    sigma_v, new_rng = (0.0, None) if noise is None else noise
 
     def emit(times: np.ndarray, polarity: np.ndarray) -> int:
         # A fresh generator per call: a second pass must see the same decision noise.
-        decision_rng = None if comparator_noise is None else draw(Effect.COMPARATOR_NOISE, False)
-        return _general_kernel(
-            v, up_v, down_v, floor_v, decision_rng, decision_sigma_v, max_spikes, times, polarity
-        )
+        return call(None if new_rng is None else new_rng(), sigma_v, times, polarity)
 
     return _run(emit, fs_hz, max_spikes, v)

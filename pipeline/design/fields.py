@@ -15,7 +15,8 @@ From that one declaration:
 * :func:`plain` writes it back as a plain nested dict, or as its *canonical form*, which leaves
   out every field at a neutral default: a field added with a default that reproduces what was
   done before it existed is not in the canonical form of any existing scene, and so changes no
-  cache key;
+  cache key; a part declared ``only_when`` (the parameters of one option of an enum) is left
+  out while its option is not chosen;
 * :func:`resolve`, :func:`get`, :func:`put`, :func:`select` and :func:`flatten` walk dotted
   paths (``"readout.effects.amplifier_noise.sigma_v"``) through the declaration, a value object
   or a plain dict;
@@ -168,9 +169,18 @@ def param(
     return dataclasses.field(default=default, metadata=metadata)
 
 
-def part(cls: type) -> Any:
-    """A dataclass field holding a nested value object of type ``cls``, read as its own table."""
-    return dataclasses.field(default_factory=cls)
+_ONLY_WHEN = "only_when"
+
+
+def part(cls: type, *, only_when: tuple[str, Any] | None = None) -> Any:
+    """A dataclass field holding a nested value object of type ``cls``, read as its own table.
+
+    ``only_when=(name, value)``: the part matters only while the sibling field ``name`` holds
+    ``value`` (the parameters of one option of an enum), so the canonical form leaves it out
+    otherwise, and a value that does not use it keeps the key it had before the part existed.
+    """
+    metadata = {} if only_when is None else {_ONLY_WHEN: only_when}
+    return dataclasses.field(default_factory=cls, metadata=metadata)
 
 
 @dataclass(frozen=True)
@@ -194,6 +204,12 @@ class Slot:
     @property
     def convert(self) -> Callable[[Any], Any]:
         return _converter(self.kind)
+
+    @property
+    def only_when(self) -> tuple[str, Any] | None:
+        """For a :func:`part` declared ``only_when``: the sibling field and the value under
+        which it matters."""
+        return self.field.metadata.get(_ONLY_WHEN)
 
 
 @functools.cache
@@ -412,13 +428,18 @@ def _leaves(cls: type, prefix: str) -> Iterator[tuple[str, Slot, Declared]]:
 # Plain and canonical forms
 
 
-def left_out(slot: Slot, value: Any, canonical: bool) -> bool:
-    """Whether field ``slot`` holding ``value`` is left out of a plain form: when ``None``, and
-    in the canonical form when at a neutral default."""
+def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool:
+    """Whether field ``slot`` of value object ``owner`` holding ``value`` is left out of a plain
+    form: when ``None``, and in the canonical form when at a neutral default or, for a part
+    declared ``only_when``, when its sibling field does not hold that value."""
     if value is None:
         return True
-    declared = slot.declared
-    return canonical and declared is not None and declared.neutral and value == slot.default
+    if not canonical:
+        return False
+    declared, only_when = slot.declared, slot.only_when
+    if only_when is not None and owner is not None:
+        return getattr(owner, only_when[0]) != only_when[1]
+    return declared is not None and declared.neutral and value == slot.default
 
 
 def plain(value: Any, canonical: bool = False) -> Any:
@@ -431,7 +452,7 @@ def plain(value: Any, canonical: bool = False) -> Any:
         data = {}
         for slot in slots(type(value)):
             v = getattr(value, slot.name)
-            if not left_out(slot, v, canonical):
+            if not left_out(slot, v, canonical, value):
                 data[slot.name] = plain(v, canonical)
         return data
     if isinstance(value, enum.Enum):

@@ -20,7 +20,8 @@ Cache keys (:func:`pipeline.run.stages.cache_key`) hash exactly the fields a sta
 fields those are is declared with the stages themselves, in :mod:`pipeline.run.stages`::
 
     recordings : dataset
-    spikes     : dataset, array, readout (+ seed if a random effect is named)
+    spikes     : dataset, array, readout (+ seed if a random effect is named; readout.decay
+                 only with the decaying encoder)
     rates      : spikes fields + coding
     results    : rates fields + training
 
@@ -52,6 +53,7 @@ MAX_TAXELS_PER_SIDE = 256
 
 _POSITIVE = Range(0, low_open=True)
 _NONNEGATIVE = Range(0)
+_TAU = Range(0, 3600, low_open=True)
 
 
 class DatasetKind(enum.StrEnum):
@@ -97,6 +99,13 @@ class Model(enum.StrEnum):
 
     FFNN = "ffnn"
     CNN = "cnn"
+
+
+class Encoder(enum.StrEnum):
+    """Encoder architecture of the readout."""
+
+    LCS = "lcs"  # level crossing with a fixed threshold (the paper)
+    DECAYING = "decaying"  # the threshold restarts at threshold_v after a spike, then decays
 
 
 class Effect(enum.StrEnum):
@@ -257,8 +266,22 @@ class ArraySpec:
 
 
 @dataclass(frozen=True)
+class DecaySpec:
+    """Threshold of the decaying encoder: after each spike it restarts at ``threshold_v`` and
+    decays toward ``theta_min_v`` with time constant ``tau_s``."""
+
+    theta_min_v: float = param(
+        0.03, "V", "lowest threshold of the decaying encoder", within=_POSITIVE, cost=Cost.FREE
+    )
+    tau_s: float = param(
+        0.02, "s", "time constant of the decaying threshold", within=_TAU, cost=Cost.FREE
+    )
+
+
+@dataclass(frozen=True)
 class ReadoutSpec:
-    """Level-crossing readout: ``threshold_v`` of a ``full_scale_v`` range, and effects."""
+    """Level-crossing readout: ``threshold_v`` of a ``full_scale_v`` range, the ``encoder``
+    architecture (with the ``decay`` of its threshold for the decaying one), and effects."""
 
     threshold_v: float = param(
         0.09,
@@ -268,6 +291,10 @@ class ReadoutSpec:
         cost=Cost.FREE,
     )
     full_scale_v: float = param(1.0, "V", "full-scale input range of the readout", within=_POSITIVE)
+    encoder: Encoder = param(
+        Encoder.LCS, "1", "encoder architecture (threshold_v is its first threshold)", neutral=True
+    )
+    decay: DecaySpec = part(DecaySpec, only_when=("encoder", Encoder.DECAYING))
     effects: Mapping[Effect, Any] = param(
         units="1",
         long_name="non-ideal readout effects and their parameters",
@@ -276,12 +303,26 @@ class ReadoutSpec:
     )
 
     def refusals(self) -> Iterator[tuple[str, str]]:
-        """What the fields refuse together: the threshold must be below the full scale."""
+        """What the fields refuse together: the threshold must be below the full scale, and the
+        decaying encoder's lowest threshold not above its first."""
         if self.threshold_v >= self.full_scale_v:
             yield (
                 "threshold_v",
                 f"{self.threshold_v!r} V is not below full_scale_v = {self.full_scale_v!r} V",
             )
+        if self.encoder is Encoder.DECAYING and self.decay.theta_min_v > self.threshold_v:
+            yield (
+                "decay.theta_min_v",
+                f"{self.decay.theta_min_v!r} V is above threshold_v = {self.threshold_v!r} V "
+                "(the decaying threshold starts at threshold_v)",
+            )
+
+    @property
+    def theta_min_v(self) -> float:
+        """The lowest threshold the encoder reaches: ``threshold_v`` for a fixed threshold."""
+        if self.encoder is Encoder.DECAYING:
+            return self.decay.theta_min_v
+        return self.threshold_v
 
     @property
     def is_ideal(self) -> bool:

@@ -18,17 +18,23 @@ For each model, over every distinct design of the run (:mod:`pipeline.report.des
 
 Each answer is set against the frame-based readout of the same array (``rows * cols`` taxels,
 ``bits`` per sample at ``rate_hz``): its data rate ``n * bits * rate_hz`` and its power
-(:func:`pipeline.results.hardware.frame_power_w`), as ``frame / event`` ratios.
+(:func:`pipeline.results.hardware.frame_power_w`), as ``frame / event`` ratios. Power is kept as
+its static and dynamic parts (:class:`~pipeline.results.hardware.ReadoutPower`); energy per
+decision is power times the seconds of touch the design observed.
+
+What the report shows of it: per model a small table (:func:`glance_rows`) and one sentence on
+how sure it is (:func:`how_sure`); then, once, the method (:func:`method_sentences`) and every
+comparison with the best (:func:`comparison_rows`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from pipeline.report import paper
-from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost
+from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost, readout_power
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import REPEATS
 from pipeline.report.text import (
@@ -40,7 +46,14 @@ from pipeline.report.text import (
     si,
     times,
 )
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.hardware import (
+    CHIP,
+    CHIP_EVENT_RATE_HZ,
+    CHIP_TAXELS,
+    EnergyModel,
+    ReadoutPower,
+    power_budget,
+)
 from pipeline.results.stats import PairedComparison, holm
 
 
@@ -49,8 +62,9 @@ class Candidate:
     """One design for one model, measured against the model's best design.
 
     ``versus_best`` is ``accuracy(design) - accuracy(best)`` (None for the best itself and for a
-    design that cannot be compared); ``holm_p`` its Holm-adjusted p-value. Frame figures are None
-    when the frame readout or the array size is unknown.
+    design that cannot be compared); ``holm_p`` its Holm-adjusted p-value. ``power`` is None when
+    the array size or the rates are unknown; frame figures are None when the frame readout or the
+    array size is unknown.
     """
 
     design: Design
@@ -58,9 +72,23 @@ class Candidate:
     versus_best: PairedComparison | None
     holm_p: float | None
     data_rate_bps: float
-    power_w: float
+    power: ReadoutPower | None
     frame_data_rate_bps: float | None
-    frame_power_w: float | None
+    frame_power: ReadoutPower | None
+
+    @property
+    def power_w(self) -> float:
+        """Event readout power, static plus dynamic, in W (NaN when unknown)."""
+        return math.nan if self.power is None else self.power.total_w
+
+    @property
+    def frame_power_w(self) -> float | None:
+        return None if self.frame_power is None else self.frame_power.total_w
+
+    @property
+    def energy_per_decision_j(self) -> float:
+        """Readout energy of one decision: power times the seconds observed (NaN: unknown)."""
+        return self.power_w * self.design.observation_s
 
     @property
     def below_best(self) -> bool:
@@ -156,9 +184,9 @@ def model_answer(
             versus_best=test,
             holm_p=holm_p,
             data_rate_bps=cost(d, model, Cost.DATA_RATE, energy),
-            power_w=cost(d, model, Cost.POWER, energy),
+            power=readout_power(d, energy),
             frame_data_rate_bps=frame.data_rate_bps(n) if known else None,
-            frame_power_w=frame.power_w(n, energy) if known else None,
+            frame_power=frame.power(n, energy) if known else None,
         )
 
     top = candidate(best, None, None)
@@ -178,80 +206,95 @@ def model_answer(
     )
 
 
-def answer_sentences(answer: ModelAnswer, frame: FrameReadout | None) -> Iterator[str]:
-    """The answer for one model in a few sentences: the chosen designs, then how they were found."""
-    name = answer.model.upper()
-    best = answer.best
-    best_text = f"{pct_interval(best.accuracy.mean, best.accuracy.low, best.accuracy.high)}"
-    if not answer.can_compare:
-        yield (
-            f"{name}: the most accurate design is {best.design.label} at {best_text}. Which "
-            f"cheaper designs are as accurate cannot be told: {NO_INTERVAL_WHY}."
+GLANCE_COLUMNS = (
+    "design",
+    "accuracy [95 % interval]",
+    "data rate",
+    "power (static share)",
+    "energy per decision",
+    "frame readout / this: data rate, power",
+)
+
+
+def glance_header(answer: ModelAnswer) -> tuple[str, ...]:
+    """The small table's header: the model's name, then :data:`GLANCE_COLUMNS`."""
+    return (answer.model.upper(), *GLANCE_COLUMNS)
+
+
+def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
+    """The small table: the best design, the cheapest not significantly below it by data rate
+    and by power (one row with both roles when they are the same design)."""
+    rows = []
+    for chosen, roles in _roles(answer):
+        a = chosen.accuracy
+        power = chosen.power
+        share = "" if power is None else f" ({_share(power.static_share)} static)"
+        rows.append(
+            (
+                ", ".join(roles),
+                chosen.design.label,
+                pct_interval(a.mean, a.low, a.high),
+                rate(chosen.data_rate_bps, "bit/s"),
+                f"{si(chosen.power_w, 'W')}{share}",
+                _energy(chosen),
+                "unknown"
+                if chosen.frame_power is None
+                else f"{times(chosen.data_rate_ratio)}, {times(chosen.power_ratio)}",
+            )
         )
-        return
-    same = answer.by_data_rate is answer.by_power
-    choices = (
-        ((answer.by_data_rate, ("data rate", "readout power")),)
-        if same
-        else ((answer.by_data_rate, ("data rate",)), (answer.by_power, ("readout power",)))
-    )
-    for chosen, whats in choices:
-        by = " and by ".join(whats)
-        if chosen is None:
-            yield f"{name}: no design as accurate as the best states its {' or '.join(whats)}."
-            continue
-        costs = "; ".join(_cost_text(chosen, what) for what in whats)
-        if chosen is best:
-            yield (
-                f"{name}, by {by}: the most accurate design, {best.design.label}, is also the "
-                f"cheapest of those not significantly below it: {best_text}; {costs}."
-            )
-        else:
-            accuracy = pct_interval(chosen.accuracy.mean, chosen.accuracy.low, chosen.accuracy.high)
-            yield (
-                f"{name}, by {by}: the cheapest design not significantly below the best is "
-                f"{chosen.design.label}: {accuracy} against the best's {best_text} "
-                f"({best.design.label}; difference "
-                f"{comparison(chosen.versus_best, chosen.holm_p)}); {costs}."  # type: ignore[arg-type]
-            )
-            caution = _caution(chosen.versus_best)
-            if caution:
-                yield f"{name}, by {by}: {caution}"
+    return tuple(rows)
+
+
+def how_sure(answer: ModelAnswer) -> str:
+    """One sentence: how many designs the answer was chosen among, and what it may lose."""
+    name = answer.model.upper()
+    if not answer.can_compare:
+        return f"{name}: which cheaper designs are as accurate cannot be told ({NO_INTERVAL_WHY})."
     if not answer.comparisons and not answer.untested:
-        yield f"{name}: this run has no other design to compare with the best."
-        return
+        return f"{name}: this run has no other design to compare with the best."
     n_as = len(answer.as_accurate) - 1
-    untested = (
-        f"; {answer.untested} design(s) could not be compared (no per-recording results in "
-        "common) and are not chosen"
-        if answer.untested
-        else ""
+    text = (
+        f"{name}: {n_as} of the {answer.comparisons} other designs are not significantly below "
+        "the best"
     )
-    yield (
-        f"{name}: each of the {answer.comparisons} other designs was compared with the best by a "
-        "paired test on the same recordings (exact McNemar for one repeat, bootstrap otherwise); "
-        f"the p-values are Holm-corrected over these {answer.comparisons} comparisons (alpha "
-        f"{ALPHA:g}), and {n_as} of them are not significantly below the best{untested}."
+    if answer.untested:
+        text += f" ({answer.untested} could not be compared)"
+    chosen = [c for c in (answer.by_data_rate, answer.by_power) if c is not None]
+    losses = [-c.versus_best.low for c in chosen if c.versus_best is not None]
+    if not losses:
+        return text + "; the best is also the cheapest."
+    worst = max(losses)
+    if worst <= 0:
+        return text + "; the cheapest is at least as accurate as the best (95 % interval)."
+    return text + (
+        f"; the cheapest may still lose up to {100 * worst:.1f} points of accuracy against the "
+        "best (95 % interval)."
     )
 
 
-def _caution(versus_best: PairedComparison | None) -> str:
-    """What "not significantly below" leaves open: it is not "as accurate".
-
-    Said when the uncorrected test or the interval already hints at a loss, so a reader does not
-    take a Holm-protected choice for a proven equivalence.
-    """
-    if versus_best is None or versus_best.low >= 0:
-        return ""
-    hint = (
-        f"its uncorrected test does find it less accurate (p = {versus_best.p_value:.2g}); "
-        if versus_best.significant(ALPHA)
-        else ""
-    )
+def method_sentences(
+    n_designs: int, frame: FrameReadout | None, energy: EnergyModel
+) -> tuple[str, ...]:
+    """How the answer was found, said once for every model."""
+    chip = power_budget(CHIP_TAXELS, CHIP_EVENT_RATE_HZ, bits=0, model=energy)
     return (
-        f"not significantly below is not the same as as accurate: {hint}this run cannot rule "
-        f"out a loss of up to {-100 * versus_best.low:.1f} points against the best (more "
-        f"recordings per class, or {REPEATS}, narrow that bound)."
+        f"Over the run's {n_designs} distinct design{'' if n_designs == 1 else 's'}, per model: "
+        "the most accurate design, and the cheapest designs (by address-event "
+        "data rate and by estimated readout power) whose accuracy is not significantly below it.",
+        "Each other design is compared with the best by a paired test on the same recordings "
+        "(exact McNemar for one repeat, bootstrap otherwise); the p-values are Holm-corrected over "
+        f"the model's comparisons (alpha {ALPHA:g}). Not significantly below is not the same as "
+        "as accurate: the lower end of the difference's 95 % interval bounds what a choice may "
+        f"lose (more recordings per class, or {REPEATS}, narrow it).",
+        frame_sentence(frame),
+        "Readout power is static bias (every taxel's front end and comparators; for the frame "
+        "readout the front ends and the ADCs) plus dynamic power (per event and per bit sent; "
+        "per conversion and per bit for the frame readout). The event readout's constants are "
+        f"calibrated on the chip of {CHIP}: fed that array, these constants give "
+        f"{si(chip.event.total_w / chip.n_taxels, 'W')} per taxel. "
+        "Energy per decision is that power times the seconds of touch the design observed (the "
+        "windows it used times the window length). The constants (set them with the options of "
+        "eskin report, e.g. --front-end-nw):",
     )
 
 
@@ -269,72 +312,72 @@ def frame_sentence(frame: FrameReadout | None) -> str:
     )
 
 
-ANSWER_COLUMNS = (
+COMPARISON_COLUMNS = (
     "model",
     "design",
-    "swept settings",
     "accuracy [95 % interval]",
     "difference to best [95 % interval], p",
+    "not significantly below the best?",
     "data rate",
-    "frame readout / event readout (data rate)",
-    "readout power (frame readout's)",
+    "power (static)",
+    "energy per decision",
     "fold std (secondary)",
 )
 
 
-def answer_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
-    """Table rows: the best design, the cheapest by data rate and by power (merged if the same)."""
-    roles: dict[int, list[str]] = {}
-    for chosen, role in (
-        (answer.best, "best"),
-        (answer.by_data_rate, "cheapest by data rate"),
-        (answer.by_power, "cheapest by readout power"),
-    ):
-        if chosen is not None:
-            roles.setdefault(id(chosen), []).append(role)
+def comparison_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
+    """Every design of the model against the best, the best first, then by readout power."""
+    rest = sorted(
+        (c for c in answer.candidates if c is not answer.best),
+        key=lambda c: (not math.isfinite(c.power_w), c.power_w),
+    )
     rows = []
-    for chosen in (answer.best, answer.by_data_rate, answer.by_power):
-        if chosen is None or id(chosen) not in roles:
-            continue
-        a = chosen.accuracy
+    for c in (answer.best, *rest):
+        a = c.accuracy
+        if c is answer.best:
+            difference, verdict = "-", "the best"
+        elif c.versus_best is None:
+            difference, verdict = "not compared", "-"
+        else:
+            difference = comparison(c.versus_best, c.holm_p)
+            verdict = "no: significantly below" if c.below_best else "yes"
         rows.append(
             (
                 answer.model.upper(),
-                "; ".join(roles.pop(id(chosen))),
-                chosen.design.label,
+                c.design.label,
                 pct_interval(a.mean, a.low, a.high),
-                "-"
-                if chosen.versus_best is None
-                else comparison(chosen.versus_best, chosen.holm_p),
-                rate(chosen.data_rate_bps, "bit/s"),
-                "unknown" if chosen.frame_data_rate_bps is None else times(chosen.data_rate_ratio),
-                si(chosen.power_w, "W")
-                + ("" if chosen.frame_power_w is None else f" ({si(chosen.frame_power_w, 'W')})"),
+                difference,
+                verdict,
+                rate(c.data_rate_bps, "bit/s"),
+                si(c.power_w, "W") + ("" if c.power is None else f" ({si(c.power.static_w, 'W')})"),
+                _energy(c),
                 fold_spread(a.fold_std),
             )
         )
     return tuple(rows)
 
 
-def _cost_text(chosen: Candidate, what: str) -> str:
-    if what == "data rate":
-        own = rate(chosen.data_rate_bps, "bit/s")
-        frame, ratio = chosen.frame_data_rate_bps, chosen.data_rate_ratio
-        frame_text = None if frame is None else rate(frame, "bit/s")
-    else:
-        own = si(chosen.power_w, "W")
-        frame, ratio = chosen.frame_power_w, chosen.power_ratio
-        frame_text = None if frame is None else si(frame, "W")
-    if frame_text is None:
-        return f"{what} {own} (frame readout unknown)"
-    if math.isinf(ratio):
-        return f"{what} {own}, against {frame_text} for the frame-based readout of the same array"
-    relation = "below" if ratio >= 1 else "above"
-    factor = ratio if ratio >= 1 else 1 / ratio if ratio > 0 else math.inf
-    return (
-        f"{what} {own}, {times(factor)} {relation} the frame-based readout of the same array "
-        f"({frame_text}, {_taxels(chosen.design.n_taxels)})"
-    )
+def _roles(answer: ModelAnswer) -> list[tuple[Candidate, list[str]]]:
+    roles: dict[int, tuple[Candidate, list[str]]] = {}
+    for chosen, role in (
+        (answer.best, "best"),
+        (answer.by_data_rate, "cheapest by data rate"),
+        (answer.by_power, "by power"),
+    ):
+        if chosen is not None:
+            roles.setdefault(id(chosen), (chosen, []))[1].append(role)
+    return list(roles.values())
+
+
+def _share(fraction: float) -> str:
+    return "unknown" if not math.isfinite(fraction) else f"{100 * fraction:.0f} %"
+
+
+def _energy(chosen: Candidate) -> str:
+    seconds = chosen.design.observation_s
+    if not math.isfinite(chosen.energy_per_decision_j):
+        return "unknown"
+    return f"{si(chosen.energy_per_decision_j, 'J')} ({seconds:g} s)"
 
 
 def _cheapest(eligible: Sequence[Candidate], attribute: str) -> Candidate | None:
@@ -350,7 +393,3 @@ def _ratio(frame: float | None, event: float) -> float:
     if event <= 0:
         return math.inf if frame > 0 else math.nan
     return frame / event
-
-
-def _taxels(n: int | None) -> str:
-    return "unknown taxels" if n is None else f"{n} taxel{'' if n == 1 else 's'}"

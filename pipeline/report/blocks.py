@@ -46,4 +46,13 @@ class Items:
     items: tuple[str, ...]
 
 
-Block = Heading | Paragraph | Table | Figure | Items
+@dataclass(frozen=True)
+class Details:
+    """Blocks a reader opens on demand: collapsed under ``summary`` in HTML, a section in
+    Markdown."""
+
+    summary: str
+    blocks: tuple[Block, ...]
+
+
+Block = Heading | Paragraph | Table | Figure | Items | Details

@@ -125,6 +125,18 @@ def time_to_accuracy(
     return tuple(rows)
 
 
+def sweep_runs(records: Iterable[Mapping[str, Any]]) -> list[SweepRun]:
+    """The run log's records (JSON objects) as :class:`SweepRun`, skipping any that lacks a
+    field or holds a value of the wrong kind."""
+    runs = []
+    for record in records:
+        try:
+            runs.append(sweep_run_from_record(record))
+        except (KeyError, ValueError, TypeError):
+            continue
+    return runs
+
+
 def sweep_run_from_record(record: Mapping[str, Any]) -> SweepRun:
     """A run-log record (a JSON object) as a :class:`SweepRun`; raises KeyError/ValueError."""
     return SweepRun(

@@ -13,12 +13,15 @@ Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
 * equivalent bits ``log2(V_fs / theta)``;
 * compute seconds: its spike and coding stages plus ``train_m``, as measured when each stage was
   computed (a stage reused from the cache counts at its original cost);
-* readout power ``P = event_rate_hz * E_event + data_rate_bps * E_link`` (W,
-  :func:`pipeline.results.hardware.event_power_w`, constants of an
-  :class:`~pipeline.results.hardware.EnergyModel`).
+* readout power (W): static bias of the ``n = rows * cols`` taxels plus the dynamic power of
+  its events and bits (:func:`pipeline.results.hardware.event_power_w`, constants of an
+  :class:`~pipeline.results.hardware.EnergyModel`), the two parts kept apart
+  (:func:`readout_power`);
+* energy per decision (J): that power times the seconds of touch the point observed,
+  ``n_windows_used * window_s`` (the windows it really used, from the cube).
 
 The frame-based readout of the same array (:class:`FrameReadout`) sends ``n * bits * rate_hz``
-bit/s for ``n = rows * cols`` taxels and draws :func:`pipeline.results.hardware.frame_power_w`.
+bit/s and draws :func:`pipeline.results.hardware.frame_power_w`.
 """
 
 from __future__ import annotations
@@ -41,7 +44,15 @@ from pipeline.report.cubes import (
 )
 from pipeline.report.panels import COLS, N_WINDOWS, ROWS, WINDOW_S
 from pipeline.report.text import label
-from pipeline.results.hardware import EnergyModel, event_power_w, frame_data_rate_bps, frame_power_w
+from pipeline.results.hardware import (
+    EnergyModel,
+    ReadoutPower,
+    event_dynamic_power_w,
+    event_static_power_w,
+    frame_data_rate_bps,
+    frame_dynamic_power_w,
+    frame_static_power_w,
+)
 
 
 @dataclass(frozen=True)
@@ -76,7 +87,9 @@ class Design:
     """One distinct point of the run (see the module docstring).
 
     ``rows``/``cols`` are None when the cube does not hold them; rates and bits are NaN when the
-    point did not measure them; ``seconds`` and ``accuracy`` hold the models the point trained.
+    point did not measure them; ``observation_s`` (s of touch per decision, ``n_windows_used *
+    window_s``) is NaN when the cube does not state the windows used; ``seconds`` and
+    ``accuracy`` hold the models the point trained.
     """
 
     key: str
@@ -89,6 +102,7 @@ class Design:
     equivalent_bits: float
     window_s: float
     n_windows: str
+    observation_s: float
     seconds: Mapping[str, float]
     accuracy: Mapping[str, Accuracy]
 
@@ -135,8 +149,23 @@ class FrameReadout:
     def data_rate_bps(self, n_taxels: int) -> float:
         return float(frame_data_rate_bps(n_taxels, self.rate_hz, self.bits))
 
-    def power_w(self, n_taxels: int, energy: EnergyModel) -> float:
-        return float(frame_power_w(n_taxels, self.rate_hz, self.bits, energy))
+    def power(self, n_taxels: int, energy: EnergyModel) -> ReadoutPower:
+        return ReadoutPower(
+            float(frame_static_power_w(n_taxels, energy)),
+            float(frame_dynamic_power_w(n_taxels, self.rate_hz, self.bits, energy)),
+        )
+
+
+def readout_power(design: Design, energy: EnergyModel) -> ReadoutPower | None:
+    """The design's event readout power, static and dynamic; None when its array size or its
+    rates are unknown."""
+    rates = (design.event_rate_hz, design.data_rate_bps)
+    if design.n_taxels is None or not all(math.isfinite(r) and r >= 0 for r in rates):
+        return None
+    return ReadoutPower(
+        float(event_static_power_w(design.n_taxels, energy)),
+        float(event_dynamic_power_w(*rates, energy)),
+    )
 
 
 def cost(design: Design, model: str, which: Cost, energy: EnergyModel) -> float:
@@ -151,10 +180,8 @@ def cost(design: Design, model: str, which: Cost, energy: EnergyModel) -> float:
         case Cost.COMPUTE:
             return design.seconds.get(model, math.nan)
         case Cost.POWER:
-            rates = (design.event_rate_hz, design.data_rate_bps)
-            if not all(math.isfinite(r) and r >= 0 for r in rates):
-                return math.nan
-            return float(event_power_w(*rates, energy))
+            power = readout_power(design, energy)
+            return math.nan if power is None else power.total_w
     raise ValueError(f"unknown cost {which}")
 
 
@@ -177,6 +204,11 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
         }
         fields = {f: field_values(cube, f) for f in (ROWS, COLS, WINDOW_S, N_WINDOWS)}
         fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
+        used = (
+            _flat(cube["n_windows_used"], dims)
+            if "n_windows_used" in cube
+            else np.full(mean.shape[0], -1.0)
+        )
         for p, key in enumerate(point_keys(cube)):
             entry = found.get(key)
             if entry is not None:
@@ -204,6 +236,9 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 **{v: float(values[p]) for v, values in scalars.items()},
                 "window_s": math.nan if fields[WINDOW_S] is None else float(fields[WINDOW_S][p]),
                 "n_windows": "?" if fields[N_WINDOWS] is None else label(fields[N_WINDOWS][p]),
+                "observation_s": float(used[p]) * float(fields[WINDOW_S][p])
+                if used[p] > 0 and fields[WINDOW_S] is not None
+                else math.nan,
                 "seconds": {}
                 if seconds is None
                 else {m: _model_seconds(seconds[p], stages, m) for m in accuracy},

@@ -1,11 +1,13 @@
 """The report as a document: its blocks in order, and the files of the report folder.
 
-Order: the answer to the designer's question (per model, the cheapest design as accurate as the
-best, :mod:`pipeline.report.answer`), the paper's claims judged by tests
-(:mod:`pipeline.report.claims`), Table I with the paper's rows (:mod:`pipeline.report.tables`),
-the figures (the paper's, then a curve for every other 1-D sweep and a heat map for every 2-D
-one), the hardware cost fronts (:mod:`pipeline.report.fronts`) with the energy model's stated
-assumptions, and what accuracy costs in time.
+Order: the answer to the designer's question at a glance (per model, one small table of the best
+design and the cheapest designs not significantly below it, by data rate and by power, with one
+sentence on how sure that is; then the power front figure), then, once and collapsed in HTML,
+the method and every comparison with the best (:mod:`pipeline.report.answer`); the paper's
+claims judged by tests (:mod:`pipeline.report.claims`), Table I with the paper's rows
+(:mod:`pipeline.report.tables`), the figures (the paper's, then a curve for every other 1-D
+sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipeline.report.fronts`;
+the power front is drawn once, at the top), and what accuracy costs in time.
 
 Files of a report (``<root>/report`` by default), as :func:`report_files` returns them::
 
@@ -25,8 +27,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pipeline.report.analysis import Report
-from pipeline.report.answer import ANSWER_COLUMNS, answer_rows, answer_sentences, frame_sentence
-from pipeline.report.blocks import Block, Figure, Heading, Items, Paragraph, Table
+from pipeline.report.answer import (
+    COMPARISON_COLUMNS,
+    comparison_rows,
+    glance_header,
+    glance_rows,
+    how_sure,
+    method_sentences,
+)
+from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.cost import observation_sentence
 from pipeline.report.designs import Cost
 from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
@@ -82,7 +91,7 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
         Heading(1, TITLE),
         Paragraph(
             f"Grid(s) {', '.join(report.grids)} on {report.dataset} data, written by eskin-sweep "
-            f"{version}. {_accuracy_words(report)}"
+            f"{version}."
         ),
     ]
     if report.untested:
@@ -92,7 +101,7 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
                 "They are shown, but no paired test can be made with them."
             )
         )
-    blocks += _answer_blocks(report)
+    blocks += _answer_blocks(report, drawn)
     blocks += [Heading(2, "Against the paper"), *(Paragraph(c.sentence) for c in report.claims)]
     blocks += _table_blocks(report)
     blocks += _figure_blocks(report, drawn)
@@ -122,29 +131,40 @@ def _accuracy_words(report: Report) -> str:
     )
 
 
-def _answer_blocks(report: Report) -> Iterator[Block]:
-    yield Heading(2, "The answer: the cheapest design as accurate as the best")
+ANSWER_TITLE = "The answer: the cheapest design as accurate as the best"
+METHOD_TITLE = "How the answer was found, and every comparison with the best"
+
+
+def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
+    yield Heading(2, ANSWER_TITLE)
     if not report.answers:
         yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
         return
-    n = len(report.designs)
-    yield Paragraph(
-        f"Over the run's {n} distinct design{'' if n == 1 else 's'}, per model: the most "
-        "accurate design, and the cheapest designs (by address-event data rate and by estimated "
-        "readout power) whose accuracy is not significantly below it."
-    )
     for answer in report.answers:
-        for sentence in answer_sentences(answer, report.frame):
-            yield Paragraph(sentence)
-    yield Table(ANSWER_COLUMNS, tuple(row for a in report.answers for row in answer_rows(a)))
-    yield Paragraph(frame_sentence(report.frame))
-    yield Paragraph(
-        "Readout power is an order-of-magnitude estimate of the activity-dependent power of the "
-        "readout (events and link for the event readout; ADC conversions and link for the frame "
-        "readout), from these assumptions (set them with --event-energy-pj, --adc-fom-fj and "
-        "--link-energy-pj-per-bit):"
+        yield Table(glance_header(answer), glance_rows(answer))
+        yield Paragraph(how_sure(answer))
+    if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
+        yield Figure(Cost.POWER.stem, _power_caption(report))
+    yield Details(
+        METHOD_TITLE,
+        (
+            Paragraph(_accuracy_words(report)),
+            *(
+                Paragraph(s)
+                for s in method_sentences(len(report.designs), report.frame, report.energy)
+            ),
+            Items(report.energy.assumptions()),
+            Table(COMPARISON_COLUMNS, tuple(r for a in report.answers for r in comparison_rows(a))),
+        ),
     )
-    yield Items(report.energy.assumptions())
+
+
+def _power_caption(report: Report) -> str:
+    return _caption(
+        "Accuracy against estimated readout power (static bias calibrated on the chip of Alea "
+        "et al., IEEE TBioCAS 2024; stars: the front, the cheapest design per accuracy)",
+        report,
+    )
 
 
 def _table_blocks(report: Report) -> Iterator[Block]:
@@ -241,12 +261,14 @@ def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         "the difference is not significant it is marked (hollow diamond) and listed, since it "
         "is as accurate as far as this run can tell. The frame-based readout of each array "
         "size is a reference line on the data-rate and power fronts. Readout power rests on the "
-        "energy assumptions listed with the answer above."
+        "energy model stated with the answer's method above."
     )
     for front in report.fronts:
         title = f"Accuracy against {front.cost.short}"
         yield Heading(3, title)
-        if front.cost.stem in drawn:
+        if front.cost is Cost.POWER and front.cost.stem in drawn:
+            yield Paragraph("The figure is at the top of the report, with the answer.")
+        elif front.cost.stem in drawn:
             yield Figure(front.cost.stem, _caption(title, report))
         rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
         rows += [_front_row(front, p) for p in front.marked]

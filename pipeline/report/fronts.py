@@ -147,7 +147,9 @@ def _references(
         sizes = [sizes[0], sizes[-1]]
     references = []
     for n in sizes:
-        value = frame.data_rate_bps(n) if which is Cost.DATA_RATE else frame.power_w(n, energy)
+        value = (
+            frame.data_rate_bps(n) if which is Cost.DATA_RATE else frame.power(n, energy).total_w
+        )
         if math.isfinite(value) and value > 0:
             references.append((f"frame readout, {n} taxel{'' if n == 1 else 's'}", value))
     return tuple(references)

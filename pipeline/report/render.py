@@ -11,7 +11,7 @@ import html
 import re
 from collections.abc import Mapping, Sequence
 
-from pipeline.report.blocks import Block, Figure, Heading, Items, Paragraph, Table
+from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 
 TITLE = "e-skin sweep report"
 FIGURES = "figures"
@@ -21,15 +21,21 @@ FIGURES = "figures"
 _MD_MARKUP = re.compile(r"<(?=[A-Za-z/!?])|&(?=#?\w+;)")
 
 _STYLE = (
-    "body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em}"
-    "table{border-collapse:collapse;margin:1em 0}"
-    "th,td{border:1px solid #ccc;padding:.3em .5em;text-align:left;vertical-align:top}"
-    "figure{margin:1em 0}figure svg{max-width:100%;height:auto}"
+    "body{font-family:sans-serif;max-width:72em;margin:1em auto;padding:0 1em}"
+    "table{border-collapse:collapse;margin:.6em 0;font-size:.9em}"
+    "th,td{border:1px solid #ccc;padding:.2em .4em;text-align:left;vertical-align:top}"
+    "figure{margin:.6em 0}figure svg{max-width:100%;max-height:24em;width:auto;height:auto}"
+    "summary{cursor:pointer;font-weight:bold;margin:1em 0}"
 )
 
 
 def render_markdown(blocks: Sequence[Block], *, figure_folder: str = FIGURES) -> str:
-    """Markdown of ``blocks``; a figure links ``<figure_folder>/<name>.png``."""
+    """Markdown of ``blocks``; a figure links ``<figure_folder>/<name>.png``; :class:`Details`
+    become a ``<details>`` element (collapsed where the Markdown viewer renders HTML)."""
+    return "\n".join(_markdown_lines(blocks, figure_folder))
+
+
+def _markdown_lines(blocks: Sequence[Block], figure_folder: str) -> list[str]:
     lines: list[str] = []
     for block in blocks:
         match block:
@@ -46,7 +52,10 @@ def render_markdown(blocks: Sequence[Block], *, figure_folder: str = FIGURES) ->
                 lines.append("")
             case Items(items):
                 lines += [f"- {_md_text(item)}" for item in items] + [""]
-    return "\n".join(lines)
+            case Details(summary, inner):
+                lines += [f"<details><summary>{html.escape(summary)}</summary>", ""]
+                lines += [*_markdown_lines(inner, figure_folder), "</details>", ""]
+    return lines
 
 
 def render_html(blocks: Sequence[Block], svgs: Mapping[str, str]) -> str:
@@ -58,6 +67,15 @@ def render_html(blocks: Sequence[Block], svgs: Mapping[str, str]) -> str:
     KeyError
         A figure block names a figure ``svgs`` does not hold.
     """
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{TITLE}</title>'
+        f"<style>{_STYLE}</style></head><body>\n"
+        + "\n".join(_html_parts(blocks, svgs))
+        + "\n</body></html>\n"
+    )
+
+
+def _html_parts(blocks: Sequence[Block], svgs: Mapping[str, str]) -> list[str]:
     body: list[str] = []
     for block in blocks:
         match block:
@@ -81,10 +99,11 @@ def render_html(blocks: Sequence[Block], svgs: Mapping[str, str]) -> str:
                 body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{cells}</tbody></table>")
             case Items(items):
                 body.append("<ul>" + "".join(f"<li>{html.escape(i)}</li>" for i in items) + "</ul>")
-    return (
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{TITLE}</title>'
-        f"<style>{_STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
+            case Details(summary, inner):
+                body.append(f"<details><summary>{html.escape(summary)}</summary>")
+                body += _html_parts(inner, svgs)
+                body.append("</details>")
+    return body
 
 
 def _md_text(text: str) -> str:

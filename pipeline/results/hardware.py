@@ -1,140 +1,297 @@
-r"""Hardware cost of a readout: data rate and an order-of-magnitude energy estimate.
+r"""Hardware cost of a readout: data rate, static and dynamic power, energy per decision.
 
-Two readouts of the same array of ``n`` taxels are compared.
+Two readouts of the same array of ``n`` taxels are compared. Both have a *front end* per taxel
+(the sensor's charge or capacitance amplifier), biased all the time; they differ in how its
+signal leaves the taxel.
 
-*Event readout* (this project's design): each taxel's level-crossing encoder emits a signed spike
-when its signal moves by one threshold; the array sends every spike as an address event. Its
-rates are the ones :mod:`pipeline.chain.metrics` measures: ``event_rate_hz`` (spikes per second of
-the whole array, averaged over recordings) and ``data_rate_bps = event_rate_hz * (ceil(log2 n) +
-1)``
-(taxel address plus polarity bit per event; time is implicit in the asynchronous bus). Power::
+*Event readout* (this project's design): each taxel's level-crossing encoder (two continuous-time
+comparators, up and down) emits a signed spike when its signal moves by one threshold; the array
+sends every spike as an address event. Its rates are the ones :mod:`pipeline.chain.metrics`
+measures: ``event_rate_hz`` (spikes per second of the whole array) and ``data_rate_bps =
+event_rate_hz * (ceil(log2 n) + 1)`` (taxel address plus polarity bit per event; time is implicit
+in the asynchronous bus). Power::
 
-    P_event = event_rate_hz * E_event + data_rate_bps * E_link
+    P_event = n * (P_fe + P_cmp)                                   static  [W]
+            + event_rate_hz * E_event + data_rate_bps * E_link     dynamic [W]
 
 *Frame readout* (the conventional alternative): every taxel is sampled by an ADC of ``bits``
-resolution at ``sampling_rate_hz`` and every sample is sent::
+resolution at ``sampling_rate_hz`` and every sample is sent. One ADC serves ``m`` taxels through
+a multiplexer (``ceil(n / m)`` ADCs, each converting at ``m * sampling_rate_hz``)::
 
-    R_frame = n * sampling_rate_hz * bits                                  [bit/s]
-    P_frame = n * sampling_rate_hz * FOM * 2**bits + R_frame * E_link      [W]
+    R_frame = n * sampling_rate_hz * bits                                         [bit/s]
+    P_frame = n * P_fe + ceil(n / m) * P_adc                              static  [W]
+            + n * sampling_rate_hz * (FOM * 2**bits + bits * E_link)      dynamic [W]
 
 with the Walden figure of merit ``FOM = P / (2**ENOB * f_s)``, so that one conversion costs
-``FOM * 2**bits`` (here ``bits`` stands for the effective number of bits).
+``FOM * 2**bits`` whatever the rate (``bits`` stands for the effective number of bits).
+``P_adc`` is the ADC's static power that published figures of merit leave out (reference buffer,
+bias of the multiplexer's sampling driver).
 
 Energy per decision: a classifier that observes ``observation_s`` seconds of touch per decision
-(``n_windows * window_s`` in the report) spends ``E = P * observation_s`` joules of readout energy
-on it, see :func:`energy_per_decision_j`.
+(the windows a point really used times the window length) spends ``E = P * observation_s`` joules
+of readout energy on it, see :func:`energy_per_decision_j`.
+
+Constants (:class:`EnergyModel`; units in their names, SI), their defaults and sources:
+
+===========================  ========  =====================================================
+``front_end_w_per_taxel``    10 nW     CALIBRATED on the chip below (the remainder)
+``comparator_w_per_taxel``   2 nW      two comparators in weak inversion, ~1 nA each at ~1 V
+``event_energy_j``           10 pJ     per event: comparator switching, address-event encoder
+``link_energy_j_per_bit``    1 pJ      low-power wired serial links
+``adc_fom_j_per_step``       10 fJ     low-power SAR ADCs at kHz rates (Murmann's survey)
+``adc_static_w``             100 nW    per ADC, reference buffer and sampling driver
+``taxels_per_adc``           16        taxels multiplexed onto one ADC (one per column)
+===========================  ========  =====================================================
+
+Calibration. The closest silicon is M. D. Alea et al., "A Fingertip-Mimicking 12x16 200-um
+Resolution e-Skin Taxel Readout Chip with Per-Taxel Spiking Readout and Embedded Receptive Field
+Processing", IEEE TBioCAS, Dec. 2024, doi 10.1109/TBCAS.2024.3387545: 192 taxels, 3-5 equivalent
+bits, 2.2 kevent/s for the whole array and 12.33 nW per taxel. The chip reports only the total
+per taxel, so one constant is calibrated and the rest are taken from the literature: the
+comparators (2 nW), the event energy (10 pJ) and the link (1 pJ per bit) are literature values;
+at the chip's activity their dynamic part is ``(2200 * 10 pJ + 2200 * 9 bit * 1 pJ) / 192 =
+0.22 nW`` per taxel, and the front end's bias is the remainder, ``12.33 - 2 - 0.22 = 10.1 nW``,
+rounded to 10 nW. Fed the chip's array, the model gives 12.22 nW per taxel (0.9 % below the
+chip; a test holds it within 30 %). Static power is then 98 % of the event readout's power: at
+such rates the bias floor, not the events, sets the cost. The frame readout's ADC constants are
+order-of-magnitude ASSUMPTIONS (no frame-readout chip of this array is calibrated here).
+
+Not modelled: clock generation and distribution, protocol overhead on the link (framing,
+handshakes, idle), the multiplexer's switching energy (small against a conversion), leakage of
+digital logic, and the classifier. The estimate is good to an order of magnitude at best.
 
 Units: rates in Hz (events or samples per second), data rates in bit/s, energies in J, power in
-W, times in s. ``E_event`` (:attr:`EnergyModel.event_energy_j`), ``FOM``
-(:attr:`EnergyModel.adc_fom_j_per_step`) and ``E_link``
-(:attr:`EnergyModel.link_energy_j_per_bit`) are set by the user; their defaults are
-order-of-magnitude ASSUMPTIONS from the literature, not measurements of a circuit
-(:meth:`EnergyModel.assumptions` states them in words for a report).
+W, times in s. The command line takes each constant in the unit of its :class:`Parameter`
+(``--front-end-nw``, ``--event-energy-pj``, ...), declared once on the field.
 
-Modelled: the dynamic energy that scales with activity. The frame readout pays one ADC conversion
-per taxel per sample whatever the signal does; the event readout pays per event, so a still
-surface costs nothing and a rough one costs more.
-
-Not modelled: static and bias power (the comparators of a continuous-time level-crossing encoder
-are biased all the time, as are an ADC's references; at low event rates this floor can dominate
-the event readout), clock generation and distribution, the sensor front end (charge amplifiers,
-shared by both readouts), any ADC multiplexing overhead, protocol overhead on the link (framing,
-handshakes, idle), and the classifier. The estimate is therefore a comparison of the
-activity-dependent parts of the two readouts, good to an order of magnitude at best.
-
-The functions broadcast: scalars, numpy arrays and ``xarray.DataArray`` inputs work alike, and a
-DataArray keeps its dimensions and coordinates, since after validation only numpy arithmetic is
-applied to the inputs. Scalars give a Python float.
+The power functions broadcast: scalars, numpy arrays and ``xarray.DataArray`` inputs work alike,
+and a DataArray keeps its dimensions and coordinates, since after validation only numpy
+arithmetic is applied to the inputs. Scalars give a Python float.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 
 __all__ = [
+    "CHIP",
+    "CHIP_EVENT_RATE_HZ",
+    "CHIP_TAXELS",
     "MAX_BITS",
+    "PARAMETERS",
     "EnergyModel",
+    "Parameter",
+    "PowerBudget",
+    "ReadoutPower",
     "energy_per_decision_j",
+    "event_data_rate_bps",
+    "event_dynamic_power_w",
     "event_power_w",
+    "event_static_power_w",
     "frame_data_rate_bps",
+    "frame_dynamic_power_w",
     "frame_power_w",
+    "frame_static_power_w",
+    "power_budget",
 ]
 
 MAX_BITS = 64
 """Largest ADC resolution accepted: beyond it ``2**bits`` is a unit mistake, not a design."""
 
-# What each constant is, its unit, and where its default comes from; kept next to the class so
-# that a changed default and its stated source are edited together.
-_ABOUT = {
-    "event_energy_j": (
-        "energy of the level-crossing comparators and the address-event encoder, per event",
-        "J per event",
-        "event-driven (level-crossing) readouts and address-event interfaces in the "
-        "neuromorphic-sensor literature",
-        "tens of pJ per event is typical, and reported figures range from pJ to nJ with the "
-        "process and with what is counted",
-    ),
-    "adc_fom_j_per_step": (
-        "Walden figure of merit of the frame readout's ADC, one conversion costing FOM * 2**bits",
-        "J per conversion step",
-        "low-power SAR ADCs at kHz sampling rates in B. Murmann's ADC Performance Survey",
-        "good designs lie between about 1 and 10 fJ per step and the best below, and a lower "
-        "value makes the frame readout cheaper",
-    ),
-    "link_energy_j_per_bit": (
-        "energy per bit sent on the link, charged to both readouts",
-        "J per bit",
-        "low-power wired serial links",
-        "these spend of the order of 1 pJ per bit",
-    ),
-}
+CHIP = (
+    "M. D. Alea et al., IEEE TBioCAS, Dec. 2024 (doi 10.1109/TBCAS.2024.3387545): 192 taxels, "
+    "2.2 kevent/s, 12.33 nW per taxel"
+)
+"""The chip the event readout's defaults are calibrated on (see the module docstring)."""
+CHIP_TAXELS, CHIP_EVENT_RATE_HZ = 192, 2200.0
+"""Its array and its events per second in all, which the calibration feeds the model."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """How one :class:`EnergyModel` constant is stated: declared once, on its field.
+
+    ``option`` is the command-line option, which takes the value in ``unit`` (``scale`` SI units
+    each, e.g. pJ = 1e-12 J); ``what`` says what it is, ``source`` where its default comes from;
+    ``calibrated`` marks the constant fitted to :data:`CHIP` (the others are literature values
+    or assumptions); ``count`` marks an integer count >= 1 (no unit).
+    """
+
+    option: str
+    unit: str
+    scale: float
+    what: str
+    source: str
+    calibrated: bool = False
+    count: bool = False
+
+    def problem(self, value: Any) -> str | None:
+        """Why ``value`` (in :attr:`unit`) is not valid, or None."""
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+            return f"{self.option} {value!r}: need a number"
+        if self.count:
+            if not (math.isfinite(value) and value >= 1 and value == int(value)):
+                return f"{self.option} {value:g}: need a whole number >= 1"
+        elif not math.isfinite(value) or value < 0:
+            return f"{self.option} {value:g}: need a finite number >= 0"
+        return None
+
+
+def _constant(default: float, parameter: Parameter) -> Any:
+    return field(default=default, metadata={"parameter": parameter})
 
 
 @dataclass(frozen=True)
 class EnergyModel:
-    """Constants of the energy estimate; defaults are order-of-magnitude ASSUMPTIONS.
-
-    The defaults are round values from bodies of literature, named in :meth:`assumptions`; they
-    are meant for comparing the two readouts to an order of magnitude, not for predicting the
-    power of a circuit. Set them to a design's own figures where they are known.
+    """Constants of the power estimate, in SI units; defaults and sources in the module docstring.
 
     Parameters
     ----------
+    front_end_w_per_taxel : float
+        Static (bias) power of one taxel's front end, in W; both readouts pay it. Default 10 nW,
+        calibrated on :data:`CHIP`.
+    comparator_w_per_taxel : float
+        Static power of one taxel's level-crossing comparators, in W (event readout). Default
+        2 nW.
     event_energy_j : float
-        Energy per spike event, in J: the level-crossing comparators and the address-event
-        encoder, once per event. Default 10 pJ (event-driven readouts and AER interfaces report
-        tens of pJ per event; the order of magnitude is taken).
+        Energy per spike event, in J: comparator switching and the address-event encoder.
+        Default 10 pJ.
+    link_energy_j_per_bit : float
+        Energy per bit sent on the link, in J, charged to both readouts. Default 1 pJ.
     adc_fom_j_per_step : float
         Walden figure of merit of the frame readout's ADC, in J per conversion step; one
-        conversion of ``bits`` bits costs ``adc_fom_j_per_step * 2**bits``. Default 10 fJ
-        (good low-power SAR ADCs at low sampling rates in B. Murmann's ADC Performance Survey
-        lie between about 1 and 10 fJ per step; the upper end is taken).
-    link_energy_j_per_bit : float
-        Energy per bit sent on the link, in J, charged to both readouts. Default 1 pJ (low-power
-        wired serial links, order of pJ per bit).
+        conversion of ``bits`` bits costs ``adc_fom_j_per_step * 2**bits``. Default 10 fJ.
+    adc_static_w : float
+        Static power of one ADC not counted in its figure of merit, in W. Default 100 nW.
+    taxels_per_adc : int
+        Taxels multiplexed onto one ADC of the frame readout, >= 1. Default 16.
 
     Raises
     ------
     ValueError
-        If a constant is not a finite number >= 0; the message names the field and its value.
+        If a constant is not a finite number >= 0 (a whole number >= 1 for ``taxels_per_adc``);
+        the message names every such field and its value.
     """
 
-    event_energy_j: float = 10e-12
-    adc_fom_j_per_step: float = 10e-15
-    link_energy_j_per_bit: float = 1e-12
+    front_end_w_per_taxel: float = _constant(
+        10e-9,
+        Parameter(
+            "--front-end-nw",
+            "nW per taxel",
+            1e-9,
+            "static bias of one taxel's front end (both readouts)",
+            f"calibrated on the chip of {CHIP}, as the remainder once the other constants "
+            "are taken",
+            calibrated=True,
+        ),
+    )
+    comparator_w_per_taxel: float = _constant(
+        2e-9,
+        Parameter(
+            "--comparator-nw",
+            "nW per taxel",
+            1e-9,
+            "static bias of one taxel's two level-crossing comparators (event readout)",
+            "assumed: continuous-time comparators biased in weak inversion, of the order of 1 "
+            "nA each at about 1 V, as in low-power level-crossing ADCs",
+        ),
+    )
+    event_energy_j: float = _constant(
+        10e-12,
+        Parameter(
+            "--event-energy-pj",
+            "pJ per event",
+            1e-12,
+            "energy of the comparators' switching and the address-event encoder, per event",
+            "assumed from event-driven readouts and address-event interfaces in the "
+            "neuromorphic-sensor literature (tens of pJ per event is typical)",
+        ),
+    )
+    link_energy_j_per_bit: float = _constant(
+        1e-12,
+        Parameter(
+            "--link-energy-pj-per-bit",
+            "pJ per bit",
+            1e-12,
+            "energy per bit sent on the link (both readouts)",
+            "assumed from low-power wired serial links (of the order of 1 pJ per bit)",
+        ),
+    )
+    adc_fom_j_per_step: float = _constant(
+        10e-15,
+        Parameter(
+            "--adc-fom-fj",
+            "fJ per conversion step",
+            1e-15,
+            "Walden figure of merit of the frame readout's ADC, one conversion costing "
+            "FOM * 2**bits",
+            "assumed from low-power SAR ADCs at kHz sampling rates in B. Murmann's ADC "
+            "Performance Survey (good designs lie between about 1 and 10 fJ per step)",
+        ),
+    )
+    adc_static_w: float = _constant(
+        100e-9,
+        Parameter(
+            "--adc-static-nw",
+            "nW per ADC",
+            1e-9,
+            "static power of one ADC that its figure of merit leaves out (reference buffer, "
+            "sampling driver of the multiplexer)",
+            "an order-of-magnitude assumption for a kS/s low-power SAR ADC, whose published "
+            "figure of merit usually counts the core alone",
+        ),
+    )
+    taxels_per_adc: int = _constant(
+        16,
+        Parameter(
+            "--taxels-per-adc",
+            "taxels",
+            1.0,
+            "taxels multiplexed onto one ADC of the frame readout",
+            "assumed: one ADC per column of 16 taxels, as in column-parallel sensor readouts",
+            count=True,
+        ),
+    )
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            number = isinstance(value, int | float | np.integer | np.floating)
-            if isinstance(value, bool) or not number or not math.isfinite(value) or value < 0:
-                raise ValueError(
-                    f"EnergyModel.{f.name} must be a finite number >= 0, got {value!r}"
-                )
+        problems = [
+            f"EnergyModel.{f.name} must be "
+            + ("a whole number >= 1" if p.count else "a finite number >= 0")
+            + f", got {getattr(self, f.name)!r}"
+            for f in fields(self)
+            if (p := f.metadata["parameter"]).problem(getattr(self, f.name)) is not None
+        ]
+        if problems:
+            raise ValueError("; ".join(problems))
+
+    @classmethod
+    def from_options(cls, values: Mapping[str, Any]) -> EnergyModel:
+        """The model of values given in their options' units, by field name (None: default).
+
+        Raises
+        ------
+        ValueError
+            A value is not valid; the message names every such option (``--front-end-nw -1:
+            need a finite number >= 0``).
+        """
+        unknown = sorted(set(values) - set(PARAMETERS))
+        if unknown:
+            raise ValueError(f"unknown energy constant(s): {', '.join(unknown)}")
+        given = {name: v for name, v in values.items() if v is not None}
+        problems = [p for n, v in given.items() if (p := PARAMETERS[n].problem(v)) is not None]
+        if problems:
+            raise ValueError("; ".join(problems))
+        return cls(
+            **{
+                name: int(v) if PARAMETERS[name].count else v * PARAMETERS[name].scale
+                for name, v in given.items()
+            }
+        )
 
     def assumptions(self) -> tuple[str, ...]:
         """One sentence per constant, with its value and where the value comes from.
@@ -147,17 +304,159 @@ class EnergyModel:
         """
         sentences = []
         for f in fields(self):
-            what, unit, source, note = _ABOUT[f.name]
+            p: Parameter = f.metadata["parameter"]
             value = getattr(self, f.name)
-            if value == f.default:
-                origin = f"an order-of-magnitude assumption from {source}; {note}"
-            else:
-                origin = (
-                    f"set by the user; the default, {_si(f.default, unit)}, is an "
-                    f"order-of-magnitude assumption from {source}"
-                )
-            sentences.append(f"{f.name} = {_si(value, unit)} ({what}): {origin}.")
+            origin = (
+                p.source
+                if value == f.default
+                else f"set by the user (the default, {_in_unit(f.default, p)}, is {p.source})"
+            )
+            sentences.append(f"{f.name} = {_in_unit(value, p)}: {p.what}; {origin}.")
         return tuple(sentences)
+
+
+PARAMETERS: dict[str, Parameter] = {f.name: f.metadata["parameter"] for f in fields(EnergyModel)}
+"""Every constant's :class:`Parameter` by field name, in field order."""
+
+
+@dataclass(frozen=True)
+class ReadoutPower:
+    """Power of one readout of one array: ``static_w`` (bias, paid whatever the signal does) and
+    ``dynamic_w`` (per event, conversion and bit sent), in W."""
+
+    static_w: float
+    dynamic_w: float
+
+    @property
+    def total_w(self) -> float:
+        return self.static_w + self.dynamic_w
+
+    @property
+    def static_share(self) -> float:
+        """Fraction of the power that is static (NaN when there is no power)."""
+        return self.static_w / self.total_w if self.total_w > 0 else math.nan
+
+
+@dataclass(frozen=True)
+class PowerBudget:
+    """Both readouts of one array (:func:`power_budget`); ``frame`` None: its rate not given."""
+
+    n_taxels: int
+    event_rate_hz: float
+    bits: float
+    sampling_rate_hz: float | None
+    event: ReadoutPower
+    event_data_rate_bps: float
+    frame: ReadoutPower | None
+    frame_data_rate_bps: float | None
+    model: EnergyModel
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON values by name, units in the names; ``None`` (JSON ``null``) for what is
+        unknown (the frame readout without a sampling rate, a ratio to no power)."""
+        frame, event_w = self.frame, self.event.total_w
+        return {
+            "n_taxels": self.n_taxels,
+            "event_rate_hz": self.event_rate_hz,
+            "bits": self.bits,
+            "sampling_rate_hz": self.sampling_rate_hz,
+            "event_readout_w": event_w,
+            "event_readout_static_w": self.event.static_w,
+            "event_readout_dynamic_w": self.event.dynamic_w,
+            "event_readout_per_taxel_w": event_w / self.n_taxels,
+            "event_data_rate_bps": self.event_data_rate_bps,
+            "frame_readout_w": frame.total_w if frame else None,
+            "frame_readout_static_w": frame.static_w if frame else None,
+            "frame_readout_dynamic_w": frame.dynamic_w if frame else None,
+            "frame_readout_per_taxel_w": frame.total_w / self.n_taxels if frame else None,
+            "frame_data_rate_bps": self.frame_data_rate_bps,
+            "frame_over_event_power": frame.total_w / event_w if frame and event_w > 0 else None,
+            "energy_model": {name: getattr(self.model, name) for name in PARAMETERS},
+        }
+
+
+def power_budget(
+    n_taxels: int,
+    event_rate_hz: float,
+    bits: float,
+    sampling_rate_hz: float | None = None,
+    model: EnergyModel | None = None,
+) -> PowerBudget:
+    """Power (static and dynamic) and data rate of both readouts of an array of ``n_taxels``.
+
+    Parameters
+    ----------
+    n_taxels : int
+        Taxels in the array, >= 1.
+    event_rate_hz : float
+        Events per second of the whole array, >= 0.
+    bits : float
+        The frame readout's ADC resolution, 0 to :data:`MAX_BITS`.
+    sampling_rate_hz : float, optional
+        The frame readout's samples per second per taxel, > 0; None leaves the frame readout
+        unknown.
+    model : EnergyModel, optional
+        The constants (default ``EnergyModel()``).
+
+    Raises
+    ------
+    ValueError
+        Every bad argument, named in one message.
+    """
+    model = _model(model)
+    problems = []
+    if isinstance(n_taxels, bool) or not isinstance(n_taxels, int | np.integer) or n_taxels < 1:
+        problems.append(f"n_taxels must be a whole number >= 1, got {n_taxels!r}")
+    if sampling_rate_hz is not None and not (
+        math.isfinite(sampling_rate_hz) and sampling_rate_hz > 0
+    ):
+        problems.append(f"sampling_rate_hz must be finite and > 0, got {sampling_rate_hz!r}")
+    for name, value, check in (
+        ("event_rate_hz", event_rate_hz, _non_negative),
+        ("bits", bits, lambda _, v: _bits(v)),
+    ):
+        try:
+            check(name, value)
+        except ValueError as exc:
+            problems.append(str(exc))
+    if problems:
+        raise ValueError("; ".join(problems))
+    data_rate = event_data_rate_bps(n_taxels, event_rate_hz)
+    event = ReadoutPower(
+        event_static_power_w(n_taxels, model),
+        event_dynamic_power_w(event_rate_hz, data_rate, model),
+    )
+    frame = frame_rate = None
+    if sampling_rate_hz is not None:
+        frame = ReadoutPower(
+            frame_static_power_w(n_taxels, model),
+            frame_dynamic_power_w(n_taxels, sampling_rate_hz, bits, model),
+        )
+        frame_rate = frame_data_rate_bps(n_taxels, sampling_rate_hz, bits)
+    return PowerBudget(
+        int(n_taxels),
+        float(event_rate_hz),
+        float(bits),
+        None if sampling_rate_hz is None else float(sampling_rate_hz),
+        event,
+        data_rate,
+        frame,
+        frame_rate,
+        model,
+    )
+
+
+def event_data_rate_bps(n_taxels: int, event_rate_hz: Any) -> Any:
+    """Address-event bits per second: ``event_rate_hz * (ceil(log2 n_taxels) + 1)``.
+
+    ``n_taxels`` is one whole number >= 1; ``event_rate_hz`` broadcasts (float64 bit/s).
+    """
+    # Imported here: the command line reads this module for its options, and the metrics module
+    # compiles kernels on import.
+    from pipeline.chain.metrics import bits_per_event
+
+    event_rate_hz = _non_negative("event_rate_hz", event_rate_hz)
+    return _plain(1.0 * event_rate_hz * bits_per_event(int(n_taxels)))
 
 
 def frame_data_rate_bps(n_taxels: Any, sampling_rate_hz: Any, bits: Any) -> Any:
@@ -191,8 +490,17 @@ def frame_data_rate_bps(n_taxels: Any, sampling_rate_hz: Any, bits: Any) -> Any:
     return _plain(1.0 * n_taxels * sampling_rate_hz * bits)
 
 
-def event_power_w(event_rate_hz: Any, data_rate_bps: Any, model: EnergyModel | None = None) -> Any:
-    """Power of the event readout: ``event_rate_hz * E_event + data_rate_bps * E_link``.
+def event_static_power_w(n_taxels: Any, model: EnergyModel | None = None) -> Any:
+    """Static power of the event readout: ``n_taxels * (P_fe + P_cmp)``, in W (broadcasts)."""
+    model = _model(model)
+    n_taxels = _non_negative("n_taxels", n_taxels)
+    return _plain(1.0 * n_taxels * (model.front_end_w_per_taxel + model.comparator_w_per_taxel))
+
+
+def event_dynamic_power_w(
+    event_rate_hz: Any, data_rate_bps: Any, model: EnergyModel | None = None
+) -> Any:
+    """Dynamic power of the event readout: ``event_rate_hz * E_event + data_rate_bps * E_link``.
 
     Parameters
     ----------
@@ -222,10 +530,35 @@ def event_power_w(event_rate_hz: Any, data_rate_bps: Any, model: EnergyModel | N
     )
 
 
-def frame_power_w(
+def event_power_w(
+    n_taxels: Any, event_rate_hz: Any, data_rate_bps: Any, model: EnergyModel | None = None
+) -> Any:
+    """Power of the event readout, static plus dynamic, in W (see the module docstring).
+
+    ``n_taxels`` as in :func:`frame_data_rate_bps`, the rates as in
+    :func:`event_dynamic_power_w`; the inputs broadcast together.
+    """
+    return _plain(
+        event_static_power_w(n_taxels, model)
+        + event_dynamic_power_w(event_rate_hz, data_rate_bps, model)
+    )
+
+
+def frame_static_power_w(n_taxels: Any, model: EnergyModel | None = None) -> Any:
+    """Static power of the frame readout: ``n_taxels * P_fe + ceil(n_taxels / m) * P_adc``, in W.
+
+    ``m`` is :attr:`EnergyModel.taxels_per_adc`; broadcasts like :func:`frame_data_rate_bps`.
+    """
+    model = _model(model)
+    n_taxels = _non_negative("n_taxels", n_taxels)
+    adcs = np.ceil(np.divide(n_taxels, model.taxels_per_adc))
+    return _plain(n_taxels * model.front_end_w_per_taxel + adcs * model.adc_static_w)
+
+
+def frame_dynamic_power_w(
     n_taxels: Any, sampling_rate_hz: Any, bits: Any, model: EnergyModel | None = None
 ) -> Any:
-    """Power of the frame readout: ADC conversions plus link, see the module docstring.
+    """Dynamic power of the frame readout: ADC conversions plus link, in W.
 
     ``n_taxels * sampling_rate_hz * (FOM * 2**bits + bits * E_link)``.
 
@@ -253,6 +586,17 @@ def frame_power_w(
     samples_per_s = 1.0 * n_taxels * sampling_rate_hz
     per_sample_j = model.adc_fom_j_per_step * np.exp2(bits) + bits * model.link_energy_j_per_bit
     return _plain(samples_per_s * per_sample_j)
+
+
+def frame_power_w(
+    n_taxels: Any, sampling_rate_hz: Any, bits: Any, model: EnergyModel | None = None
+) -> Any:
+    """Power of the frame readout, static plus dynamic, in W (see the module docstring); the
+    arguments as in :func:`frame_dynamic_power_w`."""
+    return _plain(
+        frame_static_power_w(n_taxels, model)
+        + frame_dynamic_power_w(n_taxels, sampling_rate_hz, bits, model)
+    )
 
 
 def energy_per_decision_j(power_w: Any, observation_s: Any) -> Any:
@@ -325,15 +669,6 @@ def _plain(result: Any) -> Any:
     return result
 
 
-_PREFIXES = ((1e0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"), (1e-15, "f"))
-
-
-def _si(value: float, unit: str) -> str:
-    """``value`` with an SI prefix and 3 significant digits, e.g. ``10 pJ per event``."""
-    value = float(f"{value:.3g}")
-    for factor, prefix in _PREFIXES:
-        if value >= factor:
-            return f"{value / factor:.3g} {prefix}{unit}"
-    if value == 0:
-        return f"0 {unit}"
-    return f"{value:.3g} {unit}"
+def _in_unit(value: float, parameter: Parameter) -> str:
+    """A constant in its option's unit, e.g. ``10 pJ per event``."""
+    return f"{value / parameter.scale:.4g} {parameter.unit}"

@@ -73,7 +73,7 @@ from pipeline.chain.metrics import (
     pooled_ssnr_db,
     ste_per_train,
 )
-from pipeline.chain.readout import level_crossings, real_train
+from pipeline.chain.readout import real_train, true_train
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.chain.taxels import taxel_delays_s, taxel_signals
 from pipeline.design import fields
@@ -226,13 +226,12 @@ def encode_trains(
     """
     delays = taxel_delays_s(array)
     fs = recordings.fs_hz
-    theta = readout.threshold_v
     true_trains, real_trains, durations = [], [], []
     for index, signal in enumerate(recordings.signals):
         with watch.stage("taxels"):
             taxels = taxel_signals(front_end.apply(signal), fs, delays)
         with watch.stage("readout"):
-            per_row = [level_crossings(row, fs, theta) for row in taxels.signals]
+            per_row = [true_train(row, fs, readout) for row in taxels.signals]
             true = [per_row[row] for row in taxels.taxel_row]
             true_trains.extend(true)
             durations.append((taxels.n_samples - 1) / fs)

@@ -1,5 +1,6 @@
 """End-to-end test helpers: run the real command line and servers in a hermetic environment."""
 
+import base64
 import math
 import os
 import subprocess
@@ -76,6 +77,14 @@ def hermetic_env(base: Path, **extra: str) -> dict[str, str]:
         }
     )
     return env
+
+
+def api_headers(auth: str | None) -> dict[str, str]:
+    """Headers of a JSON request to the Prefect API, with ``auth`` as its basic-auth string."""
+    headers = {"Content-Type": "application/json"}
+    if auth is not None:
+        headers["Authorization"] = f"Basic {base64.b64encode(auth.encode()).decode()}"
+    return headers
 
 
 def eskin(*args: str, env: dict[str, str], timeout: float = 900) -> subprocess.CompletedProcess:

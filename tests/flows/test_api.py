@@ -10,6 +10,7 @@ import flows.api
 from flows import planning, scheduling, work
 from flows.api import SweepFailed, open_results, run_sweep
 from flows.cluster import ClusterError
+from flows.progress import SweepStopped
 from storage.runlog import RUN_LOG
 from tests.flows.helpers import SMALL_GRID
 
@@ -81,6 +82,40 @@ def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     with pytest.raises(SweepFailed, match=r"^1 of 3 points failed .*broken point"):
         run_sweep(grid, tmp_path / "run", client=client)
     assert sorted(open_results(tmp_path / "run")) == ["window"]
+
+
+def test_a_write_without_space_stops_the_sweep_and_a_rerun_resumes(
+    tmp_path, grid, client, monkeypatch
+):
+    """The third batch written finds the disk full: the sweep stops with one line saying how
+    many points the root keeps, writes no cube, and a re-run computes only the others."""
+    from pipeline.run.stages import RESULTS
+    from storage import StoreWriteError, SweepStore
+
+    root = tmp_path / "run"
+    write = SweepStore.write_entries
+    writes = []
+
+    def filling(self, kind, entries):
+        writes.append(kind.name)
+        if len(writes) > 2:
+            raise StoreWriteError(self.root, "no space left on the device")
+        write(self, kind, entries)
+
+    monkeypatch.setattr(SweepStore, "write_entries", filling)
+    with pytest.raises(SweepStopped) as caught:
+        run_sweep(grid, root, client=client)
+    kept = SweepStore.open(root).complete_keys(RESULTS.name)
+    assert str(caught.value) == (
+        f"cannot write to run root {root}: no space left on the device; the sweep stopped, "
+        f"{len(kept)} of 3 points are kept, and running it again resumes from them"
+    )
+    assert caught.value.exit_status == 1 and len(kept) < 3
+    assert open_results(root) == {}
+
+    monkeypatch.setattr(SweepStore, "write_entries", write)
+    summary = run_sweep(grid, root, client=client)
+    assert (summary["cache_hits"], summary["computed"]) == (len(kept), 3 - len(kept))
 
 
 def test_two_roots_swept_on_one_client_each_get_every_entry(tmp_path, grid, client):

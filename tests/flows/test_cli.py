@@ -293,3 +293,44 @@ def test_help_lists_every_scene_field_from_its_declaration(capsys, command):
     assert len(fields) > 30
     for field in fields:
         assert f"  {field.text()}\n" in out + "\n", field.path
+
+
+def test_power_of_the_calibration_chip_through_the_installed_command():
+    # Alea et al., IEEE TBioCAS 2024: 192 taxels, 2.2 kevent/s, 12.33 nW per taxel.
+    chip = ["--taxels", "192", "--event-rate-hz", "2200", "--json"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "flows.cli", "power", *chip],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["event_readout_per_taxel_w"] == pytest.approx(12.33e-9, rel=0.3)
+    assert out["event_readout_w"] == pytest.approx(
+        out["event_readout_static_w"] + out["event_readout_dynamic_w"], rel=1e-12
+    )
+    assert out["event_data_rate_bps"] == 2200 * 9  # 8 address bits and a polarity bit
+    # No sampling rate: the frame readout is unknown, null rather than NaN.
+    for key in ("frame_readout_w", "frame_data_rate_bps", "frame_readout_static_w"):
+        assert out[key] is None
+    assert "NaN" not in proc.stdout
+
+
+def test_power_prints_both_readouts_and_takes_energy_options(capsys):
+    argv = ["power", "--taxels", "4", "--event-rate-hz", "50", "--bits", "8"]
+    argv += ["--sampling-rate-hz", "1000", "--front-end-nw", "3", "--comparator-nw", "1"]
+    argv += ["--event-energy-pj", "20", "--adc-static-nw", "100", "--taxels-per-adc", "4"]
+    argv += ["--adc-fom-fj", "5"]
+    assert main([*argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    # As tests/pipeline/results/test_hardware.py works it out by hand.
+    assert out["event_readout_w"] == pytest.approx(17.15e-9, rel=1e-12)
+    assert out["frame_readout_w"] == pytest.approx(149.12e-9, rel=1e-12)
+    assert out["frame_data_rate_bps"] == 32_000.0
+    assert out["energy_model"]["taxels_per_adc"] == 4
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "event readout    17.1 nW (4.29 nW per taxel; static 16 nW, dynamic 1.15 nW)" in text
+    assert "frame readout     149 nW (37.3 nW per taxel; static 112 nW, dynamic 37.1 nW)" in text
+    assert "frame / event: 8.7x the power, 213x the data rate" in text

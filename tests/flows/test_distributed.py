@@ -3,11 +3,16 @@ Prefect deployment started with ``prefect deployment run``. Both stop every proc
 
 import json
 import subprocess
+import urllib.error
 import urllib.request
+from pathlib import Path
+
+import pytest
 
 from flows import server
 from tests.flows.helpers import (
     BIN,
+    api_headers,
     assert_same_cubes,
     eskin,
     hermetic_env,
@@ -74,28 +79,33 @@ def test_existing_scheduler_and_workers_give_identical_cubes(smoke_sweep, tmp_pa
         stop(*workers, scheduler)
 
 
-def api_post(api: str, path: str, body: dict) -> list[dict]:
+def api_post(api: str, path: str, body: dict, auth: str | None) -> list[dict]:
+    """POST ``body`` to the Prefect API, with ``auth`` as its basic-auth string."""
     request = urllib.request.Request(
-        f"{api}/{path}",
-        data=json.dumps(body).encode(),
-        headers={"Content-Type": "application/json"},
-        method="POST",
+        f"{api}/{path}", data=json.dumps(body).encode(), headers=api_headers(auth), method="POST"
     )
     with urllib.request.urlopen(request, timeout=60) as response:
         return json.loads(response.read())
 
 
 def test_prefect_deployment_run(smoke_sweep, tmp_path):
-    """``prefect deployment run sweep/default --watch`` on the local server ``eskin`` starts;
-    afterwards the API lists the run's task runs (one per named sweep) and its artifacts."""
+    """``prefect deployment run sweep/default --watch`` on the local server ``eskin`` starts,
+    with its auth string set as a user sets it; afterwards the API lists the run's task runs
+    (one per named sweep) and its artifacts. Without the string the API answers 401."""
     state = tmp_path / "server-state"
     env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
     serving = None
     try:
         started = eskin("server", "start", "--json", env=env, timeout=900)
         assert started.returncode == 0, started.stderr[-2000:]
-        api = json.loads(started.stdout)["api_url"]
+        info = json.loads(started.stdout)
+        api = info["api_url"]
+        auth = Path(info["auth_string_file"]).read_text().strip()
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            api_post(api, "flow_runs/filter", {}, None)
+        assert refused.value.code == 401
         env["PREFECT_API_URL"] = api
+        env["PREFECT_API_AUTH_STRING"] = auth
         serving = subprocess.Popen(
             [BIN / "eskin", "serve", "--grid", "smoke"],
             env=env,
@@ -138,17 +148,17 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path):
         assert "Completed" in run.stdout + run.stderr
         assert_same_cubes(smoke_sweep[0], root)
 
-        (flow_run,) = api_post(api, "flow_runs/filter", {})
+        (flow_run,) = api_post(api, "flow_runs/filter", {}, auth)
         assert flow_run["state_type"] == "COMPLETED"
         task_runs = api_post(
-            api, "task_runs/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}
+            api, "task_runs/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}, auth
         )
         names = sorted(t["name"] for t in task_runs)
         assert names[0].startswith("plan-")  # Prefect numbers unnamed task runs
         assert names[1:] == ["sweep-noise", "sweep-threshold", "sweep-window"]
         assert all(t["state_type"] == "COMPLETED" for t in task_runs)
         artifacts = api_post(
-            api, "artifacts/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}
+            api, "artifacts/filter", {"flow_runs": {"id": {"any_": [flow_run["id"]]}}}, auth
         )
         keys = {a["key"]: a for a in artifacts}
         assert {"smoke-threshold-best", "smoke-window-best", "smoke-noise-best"} <= set(keys)

@@ -38,3 +38,20 @@ def test_tuned_allocator_reuses_pages_instead_of_faulting_them_in_again():
     # each of the 20 buffers is a fresh mapping (the kernel faults a few pages at a time in)
     assert plain["faults"] >= 20 * pages / 4
     assert tuned["faults"] < pages / 10  # the heap keeps the pages
+
+
+def test_a_root_without_space_for_the_tools_state_is_one_line(tmp_path, monkeypatch):
+    import errno
+    from pathlib import Path
+
+    from flows.environment import hermetic_environment
+    from storage import StoreWriteError
+
+    def full(self, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    for name in ("DASK_TEMPORARY_DIRECTORY", "MPLCONFIGDIR", "PREFECT_HOME"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(Path, "mkdir", full)
+    with pytest.raises(StoreWriteError, match=r"no space left on the device$"):
+        hermetic_environment(tmp_path)

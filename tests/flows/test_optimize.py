@@ -167,3 +167,17 @@ def test_bad_spaces_are_refused_before_any_work(space, tmp_path):
     for part in ("(3 problems)", "coding.window", "low (3) must be below high (2)", "latency_s"):
         assert part in lines[0]
     assert not root.exists()
+
+
+def test_an_object_root_is_refused_in_one_line_before_any_work(space, capsys):
+    from flows.cli import main
+
+    path, _ = space
+    # No S3 server is reachable: the refusal must come before any request.
+    assert main(["optimize", "--space", str(path), "--root", "s3://bucket/run/"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.splitlines() == [
+        "eskin: error: root s3://bucket/run: a search needs a folder root (its journal is "
+        "appended to in place, which an object root cannot do); sweep to s3:// roots, search "
+        "in a folder"
+    ]

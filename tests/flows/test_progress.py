@@ -27,3 +27,18 @@ def test_point_failures_name_only_the_failed_points_of_a_partly_failed_task():
     again = pickle.loads(pickle.dumps(partly))  # Dask ships it back to the coordinator
     assert isinstance(again, PointsFailed) and again.failures == partly.failures
     assert "1 point(s) failed: b: ValueError: bad" in str(again)
+
+
+def test_a_worker_leaves_a_write_failure_to_the_coordinator_and_logs_other_failures():
+    import logging
+
+    from flows.work import _WriteFailureFilter
+
+    def record(exception_text):
+        args = ("points-abc", "executing", "<Task ...>", exception_text, "  File ...")
+        message = "Compute Failed\nKey: %s\nState: %s\nTask: %s\nException: %r\nTraceback: %r\n"
+        return logging.LogRecord("distributed.worker", logging.ERROR, "", 0, message, args, None)
+
+    quiet = _WriteFailureFilter()
+    assert not quiet.filter(record("StoreWriteError('cannot write to run root r: x')"))
+    assert quiet.filter(record("OSError(5, 'Input/output error')"))

@@ -5,7 +5,7 @@ options of ``eskin report``, checked before anything is read or written."""
 import pytest
 
 from flows.cli import main
-from flows.report import energy_model, write_report, write_run_report
+from flows.report import write_report, write_run_report
 from pipeline.errors import EskinError
 from pipeline.report import Panel, build_report
 from pipeline.report.figures import draw_report
@@ -56,12 +56,21 @@ def test_a_report_replaces_an_old_report_but_never_a_users_folder(tmp_path, smal
         write_report(tmp_path / "file", report, figures)
 
 
-def test_energy_options_set_the_energy_model_in_si_units():
-    model = energy_model(event_energy_pj=20.0, adc_fom_fj=0.5, link_energy_pj_per_bit=0.0)
-    assert model == EnergyModel(
-        event_energy_j=20e-12, adc_fom_j_per_step=0.5e-15, link_energy_j_per_bit=0.0
+def test_the_energy_options_of_eskin_report_become_its_energy_model(tmp_path, monkeypatch):
+    seen = {}
+
+    def fake(root, out=None, **kwargs):
+        seen.update(kwargs)
+        return tmp_path / "report.html"
+
+    monkeypatch.setattr("flows.report.write_run_report", fake)
+    argv = ["report", "--root", str(tmp_path), "--front-end-nw", "5", "--taxels-per-adc", "8"]
+    assert main([*argv, "--event-energy-pj", "20"]) == 0
+    assert seen["energy"] == EnergyModel(
+        front_end_w_per_taxel=5e-9, event_energy_j=20e-12, taxels_per_adc=8
     )
-    assert energy_model() == EnergyModel()
+    assert main(["report", "--root", str(tmp_path)]) == 0
+    assert seen["energy"] == EnergyModel()
 
 
 @pytest.mark.parametrize(
@@ -71,6 +80,9 @@ def test_energy_options_set_the_energy_model_in_si_units():
         ("--adc-fom-fj", "nan"),
         ("--link-energy-pj-per-bit", "inf"),
         ("--adc-fom-fj", "ten"),
+        ("--front-end-nw", "-0.5"),
+        ("--taxels-per-adc", "0"),
+        ("--taxels-per-adc", "2.5"),
     ],
 )
 def test_a_bad_energy_option_is_one_line_naming_it_and_writes_nothing(
@@ -86,9 +98,7 @@ def test_a_bad_energy_option_is_one_line_naming_it_and_writes_nothing(
     assert list(root.iterdir()) == [] and [p.name for p in tmp_path.iterdir()] == ["root"]
 
 
-def test_write_run_report_checks_energy_before_reading_anything(tmp_path):
-    with pytest.raises(EskinError, match=r"--event-energy-pj -1: need a finite number >= 0"):
-        write_run_report(tmp_path, event_energy_pj=-1.0, adc_fom_fj=float("nan"))
-    with pytest.raises(EskinError, match=r"--adc-fom-fj nan"):
-        write_run_report(tmp_path, adc_fom_fj=float("nan"))
+def test_write_run_report_checks_the_adc_before_reading_anything(tmp_path):
+    with pytest.raises(EskinError, match=r"--adc-bits 0: need 1 to 64; --adc-rate-hz -1: need"):
+        write_run_report(tmp_path, adc_bits=0, adc_rate_hz=-1.0)
     assert list(tmp_path.iterdir()) == []

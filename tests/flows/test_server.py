@@ -7,16 +7,19 @@ touches the suite's shared one.
 import fcntl
 import json
 import os
+import stat
 import subprocess
 import sys
 import threading
 import time
+import urllib.error
+import urllib.request
 
 import psutil
 import pytest
 
 from flows import server
-from tests.flows.helpers import eskin, hermetic_env
+from tests.flows.helpers import api_headers, eskin, hermetic_env
 
 pytestmark = pytest.mark.slow
 
@@ -30,14 +33,44 @@ def state(tmp_path, monkeypatch):
     server.stop(folder)
 
 
+def api_status(url: str, auth: str | None = None) -> int:
+    """The HTTP status of a request that lists flow runs, with ``auth`` as basic auth."""
+    request = urllib.request.Request(
+        f"{url}/flow_runs/filter", data=b"{}", headers=api_headers(auth), method="POST"
+    )
+    try:
+        with urllib.request.urlopen(request, timeout=60) as response:
+            return response.status
+    except urllib.error.HTTPError as error:
+        return error.code
+
+
 def test_started_once_reused_and_stopped(state):
+    from prefect.settings import get_current_settings
+
     assert server.status(state) is None
+    heartbeat_s = get_current_settings().flows.heartbeat_frequency
+    assert heartbeat_s is not None
     with server.prefect_server(show_progress=False) as url:
         first = server.status(state)
         assert first is not None and url == first.api_url
         assert url.startswith("http://127.0.0.1:")
         assert os.environ["PREFECT_API_URL"] == url
+        assert get_current_settings().api.url == url
+        # Nothing on the local server reads heartbeats: flow runs send none.
+        assert get_current_settings().flows.heartbeat_frequency is None
+        auth = (state / server.AUTH_FILE).read_text().strip()
+        assert os.environ[server.CLIENT_AUTH_ENV] == auth and len(auth) >= 40
+        assert get_current_settings().api.auth_string.get_secret_value() == auth
+        assert stat.S_IMODE((state / server.AUTH_FILE).stat().st_mode) == 0o600
+        assert stat.S_IMODE(state.stat().st_mode) == 0o700
+        # Only the string's holders get in; the health check stays open.
+        assert api_status(url) == 401 and api_status(url, "guess") == 401
+        assert api_status(url, auth) == 200
+        assert server.healthy(url)
     assert "PREFECT_API_URL" not in os.environ, "the block's settings leaked"
+    assert server.CLIENT_AUTH_ENV not in os.environ, "the block's settings leaked"
+    assert get_current_settings().flows.heartbeat_frequency == heartbeat_s
     with server.prefect_server(show_progress=False) as again:
         assert again == url
     assert server.status(state).pid == first.pid, "a second use started another server"
@@ -80,6 +113,25 @@ def test_a_sweep_arriving_while_the_idle_server_stops_waits_and_gets_a_new_one(s
     assert server.status(state).pid != old.pid
 
 
+def test_a_named_server_is_used_with_the_users_own_auth_string(state, monkeypatch):
+    with server.prefect_server(show_progress=False) as url:
+        auth = os.environ[server.CLIENT_AUTH_ENV]
+    monkeypatch.setenv("PREFECT_API_URL", url)
+    monkeypatch.setenv(server.CLIENT_AUTH_ENV, "the user's own")
+    with server.prefect_server(show_progress=False) as named:
+        assert named == url and os.environ[server.CLIENT_AUTH_ENV] == "the user's own"
+    assert (state / server.AUTH_FILE).read_text().strip() == auth  # not drawn again
+
+
+def test_an_auth_string_others_may_read_is_refused(tmp_path):
+    (tmp_path / server.AUTH_FILE).write_text("secret\n")
+    (tmp_path / server.AUTH_FILE).chmod(0o644)
+    with pytest.raises(server.ServerError, match="others may read"):
+        server.auth_string(tmp_path)
+    (tmp_path / server.AUTH_FILE).chmod(0o600)
+    assert server.auth_string(tmp_path) == "secret"
+
+
 def test_a_named_server_is_used_and_must_answer(state, monkeypatch):
     monkeypatch.setenv("PREFECT_API_URL", "http://127.0.0.1:9/api")  # discard port: nothing
     with pytest.raises(server.ServerError, match="does not answer"), server.prefect_server():
@@ -110,6 +162,9 @@ def test_server_commands(tmp_path):
         url = json.loads(started.stdout)["ui_url"]
         status = eskin("server", "status", env=env)
         assert status.returncode == 0 and url in status.stdout
+        assert f"The UI asks for the auth string in {state / server.AUTH_FILE}" in status.stdout
+        shown = json.loads(eskin("server", "status", "--json", env=env).stdout)
+        assert shown["auth_string_file"] == str(state / server.AUTH_FILE)
         stopped = eskin("server", "stop", env=env)
         assert stopped.returncode == 0 and "stopped" in stopped.stdout
         assert json.loads(eskin("server", "status", "--json", env=env).stdout)["running"] is False

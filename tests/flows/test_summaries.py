@@ -99,6 +99,17 @@ def test_format_sweep_summary_uses_the_given_cubes_and_their_best_points(tmp_pat
     assert lines[-1] == "report: r.html"
 
 
+def test_format_sweep_summary_names_an_option_axis_by_its_value(tmp_path):
+    cube = xr.Dataset(
+        {"accuracy_mean": (("encoder", "model"), np.array([[0.5], [0.7]]))},
+        coords={"encoder": ["lcs", "decaying"], "model": ["ffnn"]},
+    )
+    summary = {"root": str(tmp_path), "cubes": {"encoder": "x"}, "points": 2}
+    summary |= {"cache_hits": 0, "computed": 2, "seconds": 1.0}
+    lines = format_sweep_summary(summary, {"encoder": cube}).splitlines()
+    assert lines[2].split()[-2:] == ["at", "encoder=decaying"]
+
+
 def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
     """With several repeats the interval is a bootstrap: seeded from the design's result key
     and the model, not from where the design sits in a grid, so two sweeps holding it at

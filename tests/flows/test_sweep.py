@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from flows.assembly import summarize
 from flows.cli import main
 from pipeline.run.stages import SPIKES
 from storage import SweepStore, open_results
 from storage.batches import BATCH_PREFIX, read_batch_keys
-from tests.flows.helpers import eskin, hermetic_env
+from tests.flows.helpers import api_headers, eskin, hermetic_env
 
 SMOKE_SWEEPS = {"threshold", "window", "noise"}
 
@@ -23,6 +24,7 @@ def test_cold_run_summary(smoke_sweep):
     assert set(summary) == {
         "root",
         "cubes",
+        "sweeps",
         "points",
         "cache_hits",
         "computed",
@@ -30,6 +32,8 @@ def test_cold_run_summary(smoke_sweep):
         "flow_run_url",
         "dashboard",
     }
+    cubes = open_results(root)
+    assert summary["sweeps"] == {name: summarize(cube) for name, cube in cubes.items()}
     assert summary["flow_run_url"].startswith("http://127.0.0.1:")
     assert "/runs/flow-run/" in summary["flow_run_url"]
     assert summary["dashboard"].startswith("http://127.0.0.1:")
@@ -303,7 +307,7 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
         data=json.dumps(
             {"artifacts": {"key": {"any_": [artifact_key(root.name, "report")]}}}
         ).encode(),
-        headers={"Content-Type": "application/json"},
+        headers=api_headers(server.auth_file().read_text().strip()),
         method="POST",
     )
     with urllib.request.urlopen(request, timeout=60) as response:

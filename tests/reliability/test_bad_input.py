@@ -310,6 +310,26 @@ CASES: list[Case] = [
     ("args-no-grid", lambda t: [], "--grid"),
     ("args-unknown-option", lambda t: ["--grid", "smoke", "--frobnicate"], "--frobnicate"),
 ]
+# The encoder's fields: (id, [readout] lines of the base scene, or an axis, the culprit).
+CASES += [
+    (name, lambda t, r=readout: scene_grid(t, readout=r), culprit)
+    for name, readout, culprit in [
+        ("scene-unknown-encoder", 'encoder = "sigma-delta"', "readout.encoder"),
+        ("scene-decay-zero-tau", "decay.tau_s = 0.0", "readout.decay.tau_s"),
+        (
+            "scene-decay-floor-above-threshold",
+            'encoder = "decaying"\ndecay.theta_min_v = 0.5',
+            "readout.decay.theta_min_v",
+        ),
+    ]
+]
+CASES.append(
+    (
+        "grid-unknown-encoder",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "readout.encoder" = ["lcs", "n-lcs"] }\n'),
+        "readout.encoder",
+    )
+)
 
 
 def tree(path: Path):
@@ -531,13 +551,18 @@ DESCRIBE_CASES: list[Case] = [
 def test_describe_refuses_bad_input(capsys, tmp_path, build, expected):
     argv = build(tmp_path)
     before = tree(tmp_path)
-    code = run_cli(["describe", *argv])
+    assert_one_line_exit_2(capsys, ["describe", *argv], expected)
+    assert tree(tmp_path) == before, "something was written"
+
+
+def assert_one_line_exit_2(capsys, argv: list[str], expected: str) -> None:
+    """``eskin argv`` exits 2 with one ``eskin: error:`` line holding ``expected``, no output."""
+    code = run_cli(argv)
     out, err = capsys.readouterr()
     assert code == 2 and out == ""
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
     assert expected in lines[0], lines[0]
-    assert tree(tmp_path) == before, "something was written"
 
 
 def test_describe_refuses_an_unwritable_export_folder(capsys, tmp_path, monkeypatch):
@@ -561,3 +586,31 @@ def test_describe_refuses_an_unwritable_export_folder(capsys, tmp_path, monkeypa
     lines = err.splitlines()
     assert len(lines) == 1 and "cannot write folder" in lines[0] and "Permission denied" in lines[0]
     assert after == before
+
+
+# -- eskin power -----------------------------------------------------------------------------------
+
+POWER = ["--taxels", "9", "--event-rate-hz", "100"]
+POWER_CASES: list[tuple[str, list[str], str]] = [
+    ("power-no-taxels", ["--event-rate-hz", "100"], "--taxels"),
+    ("power-zero-taxels", ["--taxels", "0", "--event-rate-hz", "1"], "argument --taxels: 0"),
+    ("power-half-taxel", ["--taxels", "2.5", "--event-rate-hz", "1"], "whole number >= 1"),
+    ("power-negative-rate", ["--taxels", "9", "--event-rate-hz", "-1"], "--event-rate-hz: -1"),
+    ("power-nan-rate", ["--taxels", "9", "--event-rate-hz", "nan"], "--event-rate-hz: nan"),
+    ("power-text-rate", ["--taxels", "9", "--event-rate-hz", "many"], "'many' is not a number"),
+    ("power-bits-too-many", [*POWER, "--bits", "65"], "--bits: 65: need at most 64"),
+    ("power-zero-sampling", [*POWER, "--sampling-rate-hz", "0"], "--sampling-rate-hz: 0"),
+    ("power-inf-sampling", [*POWER, "--sampling-rate-hz", "inf"], "--sampling-rate-hz: inf"),
+    ("power-negative-bias", [*POWER, "--front-end-nw", "-1"], "--front-end-nw: -1"),
+    ("power-zero-adc-share", [*POWER, "--taxels-per-adc", "0"], "--taxels-per-adc: 0"),
+    ("power-text-energy", [*POWER, "--event-energy-pj", "ten"], "--event-energy-pj: 'ten'"),
+]
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"), [c[1:] for c in POWER_CASES], ids=[c[0] for c in POWER_CASES]
+)
+def test_power_refuses_bad_values_in_one_line(capsys, tmp_path, monkeypatch, argv, expected):
+    monkeypatch.chdir(tmp_path)
+    assert_one_line_exit_2(capsys, ["power", *argv], expected)
+    assert list(tmp_path.iterdir()) == []

@@ -214,7 +214,8 @@ def first_file(folder: Path) -> Path:
 
 
 def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep, tmp_path):
-    """Flip bytes in one point's cached result and truncate its spike train, then re-run."""
+    """Flip bytes in one point's cached result and truncate its spike train, then re-run a
+    sweep that needs them: its cubes are gone, so it reads every result to build them."""
     import shutil
 
     from pipeline.design.grid import load_grid
@@ -224,6 +225,8 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     root = tmp_path / "run"
     shutil.copytree(smoke_sweep[0] / "store.zarr", root / "store.zarr")
     store = SweepStore.open(root)
+    for name in store.cube_names():
+        shutil.rmtree(store.path / "cubes" / name)
     scene = next(iter(load_grid("smoke").unique_points().values()))
     result_key, spikes_key = cache_key(scene, "results"), cache_key(scene, "spikes")
     chunk = first_file(store.entry_location(RESULTS.record, result_key) / "accuracy")

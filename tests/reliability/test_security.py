@@ -2,7 +2,10 @@
 and names and paths from scene and grid files cannot leave their root."""
 
 import ast
+import contextlib
 import os
+import socket
+import ssl
 import urllib.request
 from pathlib import Path
 
@@ -109,14 +112,115 @@ def test_the_local_cluster_and_its_dashboard_listen_on_loopback_only(tmp_path, m
     monkeypatch.setenv("DASK_TEMPORARY_DIRECTORY", str(tmp_path))
     with dask_client(workers=1) as client:
         info = client.scheduler_info()
-        assert info["address"].startswith("tcp://127.0.0.1:")
-        assert all(w.startswith("tcp://127.0.0.1:") for w in info["workers"])
+        assert info["address"].startswith("tls://127.0.0.1:")
+        assert all(w.startswith("tls://127.0.0.1:") for w in info["workers"])
         assert client.dashboard_link.startswith("http://127.0.0.1:")
         # The dashboard serves its pages (it needs bokeh, which distributed does not require).
         with urllib.request.urlopen(client.dashboard_link, timeout=60) as response:
             assert response.status == 200 and b"bokeh" in response.read().lower()
         addresses = listening(psutil.Process())
     assert addresses and set(addresses) == {"127.0.0.1"}, addresses
+
+
+def write_credentials(folder: Path, security) -> dict[str, str]:
+    """A Dask ``Security``'s in-memory CA, certificate and key as files only their owner
+    reads, by the ``eskin sweep`` option that takes each."""
+    folder.mkdir()
+    files = {}
+    for option, pem in (
+        ("--tls-ca-file", security.tls_ca_file),
+        ("--tls-cert", security.tls_client_cert),
+        ("--tls-key", security.tls_client_key),
+    ):
+        path = folder / option.removeprefix("--")
+        path.touch(mode=0o600)
+        path.write_text(pem)
+        files[option] = str(path)
+    return files
+
+
+def test_a_running_sweeps_scheduler_refuses_clients_without_its_credentials(tmp_path, monkeypatch):
+    """Another user who reaches the port cannot connect a client (and run code as the sweep's
+    owner): not without TLS, not over plain TCP, not with credentials of their own."""
+    from distributed import Client
+    from distributed.security import Security
+
+    monkeypatch.setenv("DASK_TEMPORARY_DIRECTORY", str(tmp_path))
+    with dask_client(workers=1) as client:
+        address = client.scheduler.address
+        assert address.startswith("tls://127.0.0.1:")
+        assert client.submit(lambda: __import__("torch").get_num_threads()).result() == 1
+        # Refused by the scheduler: plain TCP; TLS with credentials of another CA; TLS that
+        # trusts its certificate (which is no secret) but has no client certificate.
+        for attempt, security in (
+            (address.replace("tls://", "tcp://"), None),
+            (address, Security.temporary()),
+        ):
+            with pytest.raises(OSError):
+                Client(attempt, timeout=5, security=security).close()
+        # Refused with an alert or a dropped connection; one let in would wait for a Dask
+        # message (the read times out) or answer.
+        with contextlib.suppress(ssl.SSLError):
+            assert tls_without_certificate(address, client.security.tls_ca_file) == b""
+        assert len(client.scheduler_info()["workers"]) == 1
+
+
+def tls_without_certificate(address: str, ca_pem: str) -> bytes:
+    """Open a TLS connection to ``address`` that trusts ``ca_pem`` and shows no certificate;
+    return the first byte the server sends (none if it closes the connection)."""
+    host, port = address.removeprefix("tls://").rsplit(":", 1)
+    context = ssl.create_default_context(cadata=ca_pem)
+    context.check_hostname = False
+    with (
+        socket.create_connection((host, int(port)), timeout=10) as raw,
+        context.wrap_socket(raw) as tls,
+    ):
+        tls.sendall(b"\0" * 8)
+        return tls.recv(1)
+
+
+def test_an_external_tls_scheduler_needs_matching_credentials(tmp_path):
+    """The right files connect; another CA's are one line from ``eskin sweep --address``."""
+    import dask
+    from distributed import LocalCluster
+    from distributed.security import Security
+
+    from flows.cluster import probe_scheduler, tls_config
+    from tests.flows.helpers import eskin, hermetic_env
+
+    security = Security.temporary()
+    with LocalCluster(
+        n_workers=0,
+        processes=False,
+        host="127.0.0.1",
+        protocol="tls",
+        security=security,
+        dashboard_address=None,
+    ) as cluster:
+        address = cluster.scheduler_address
+        with dask.config.set(tls_config(address, write_credentials(tmp_path / "own", security))):
+            probe_scheduler(address, timeout_s=30)
+        wrong = write_credentials(tmp_path / "other", Security.temporary())
+        proc = eskin(
+            "sweep",
+            "--grid",
+            "smoke",
+            "--root",
+            str(tmp_path / "run"),
+            "--address",
+            address,
+            *(part for option, path in wrong.items() for part in (option, path)),
+            env=hermetic_env(tmp_path),
+            timeout=300,
+        )
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith(
+        f"eskin: error: the Dask scheduler at {address} and this client do not accept each "
+        "other's TLS credentials ("
+    )
+    assert not (tmp_path / "run").exists()
 
 
 def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):

@@ -36,6 +36,7 @@ from storage import (
     StoreBusyError,
     StoreError,
     StoreLayoutError,
+    StoreWriteError,
     SweepStore,
     cube_files,
     layout,
@@ -209,7 +210,7 @@ def test_public_names_are_reexported():
     # The package is the store's public names plus the run root as one DataTree.
     assert set(storage.__all__) == set(store_module.__all__) | {"open_tree"}
     assert issubclass(CorruptEntryError, StoreError) and issubclass(StoreError, EskinError)
-    assert issubclass(StoreLayoutError, StoreError)
+    assert issubclass(StoreLayoutError, StoreError) and issubclass(StoreWriteError, StoreError)
 
 
 def test_storage_knows_no_stage():
@@ -662,6 +663,60 @@ def test_failed_write_leaves_nothing(store, spike_entry, monkeypatch):
     with pytest.raises(OSError, match="disk full"):
         store.write_entries(SPIKES.record, {KEY: spike_entry, OTHER_KEY: spike_entry})
     assert written(store, "spikes") == []
+
+
+@pytest.mark.parametrize(
+    ("code", "cause"),
+    [
+        (errno.ENOSPC, "no space left on the device"),
+        (errno.EDQUOT, "disk quota exceeded"),
+        (errno.EACCES, "permission denied"),
+        (errno.EPERM, "operation not permitted"),
+        (errno.EROFS, "read-only file system"),
+    ],
+)
+def test_a_write_without_space_or_permission_is_one_store_write_error(
+    store, spike_entry, monkeypatch, code, cause
+):
+    """Raised deep in Zarr's writer thread, re-raised as one line naming the root and cause;
+    it pickles (a Dask worker sends it back) and nothing of the batch is left."""
+
+    def full(path, *args, **kwargs):
+        (Path(path) / "zarr.json").parent.mkdir(parents=True)  # a half-written batch
+        try:
+            raise OSError(code, os.strerror(code))
+        except OSError as error:
+            raise RuntimeError("wrapped by a library") from error
+
+    monkeypatch.setattr(store_module, "write_batch", full)
+    with pytest.raises(StoreWriteError) as caught:
+        store.write_entries(SPIKES.record, {KEY: spike_entry})
+    assert str(caught.value) == f"cannot write to run root {store.root}: {cause}"
+    assert caught.value.exit_status == 1
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert type(again) is StoreWriteError and (again.root, again.cause) == (str(store.root), cause)
+    assert written(store, "spikes") == []
+    assert not list((store.path / "spikes").glob(".partial-*"))
+
+
+def test_a_cube_without_space_is_a_store_write_error(store, monkeypatch):
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", full)
+    with pytest.raises(StoreWriteError, match="no space left on the device"):
+        store.write_cube("grid", make_cube())
+    assert store.cube_names() == []
+
+
+def test_other_write_errors_pass_unchanged(store, spike_entry, monkeypatch):
+    def broken(*args, **kwargs):
+        raise OSError(errno.EIO, "I/O error")
+
+    monkeypatch.setattr(store_module, "write_batch", broken)
+    with pytest.raises(OSError, match="I/O error") as caught:
+        store.write_entries(SPIKES.record, {KEY: spike_entry})
+    assert not isinstance(caught.value, StoreError)
 
 
 def test_write_entries_of_nothing_writes_nothing(store):
@@ -1226,6 +1281,21 @@ def test_lock_refuses_a_second_process_naming_root_and_pid(store):
         child.wait()
     with store.lock():  # the kernel released the killed holder's lock
         pass
+
+
+def test_lock_on_a_full_disk_is_taken_without_its_holder_note(store, monkeypatch):
+    import storage.locking
+
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(storage.locking.os, "write", full)
+    with store.lock():
+        monkeypatch.undo()
+        child = subprocess.run(
+            [sys.executable, "-c", HOLD_LOCK, str(store.root)], capture_output=True, text=True
+        )
+    assert child.returncode != 0 and "in use by another sweep (PID unknown)" in child.stderr
 
 
 def test_lock_nests_within_one_process_and_is_released_by_the_outermost(store):

@@ -14,6 +14,7 @@ from pipeline.chain.readout import (
     level_crossings,
     real_train,
     reference_level_crossings,
+    true_train,
 )
 from pipeline.design.scene import Effect, Scene
 from pipeline.errors import SimulationError
@@ -21,8 +22,9 @@ from pipeline.errors import SimulationError
 FS = 1000.0
 
 
-def readout_with(**effects):
-    return Scene.from_dict({"readout": {"threshold_v": 0.1, "effects": effects}}).readout
+def readout_with(encoder="lcs", **effects):
+    readout = {"threshold_v": 0.1, "encoder": encoder, "effects": effects}
+    return Scene.from_dict({"readout": readout}).readout
 
 
 def walk(n=4000, seed=0, step=0.02):
@@ -288,10 +290,12 @@ def test_each_effect_draws_from_its_own_stream(rng_calls):
         {"saturation": {"rail_v": 0.2}},
     ],
 )
-def test_each_effect_changes_the_train(effect):
+@pytest.mark.parametrize("encoder", ["lcs", "decaying"])
+def test_each_effect_changes_the_train(effect, encoder):
     v = walk()
-    real = real_train(v, FS, readout_with(**effect), seed=0, taxel=0, recording=0)
-    true = level_crossings(v, FS, 0.1)
+    readout = readout_with(encoder, **effect)
+    real = real_train(v, FS, readout, seed=0, taxel=0, recording=0)
+    true = true_train(v, FS, readout)
     assert not (len(real[0]) == len(true[0]) and np.array_equal(real[0], true[0]))
     assert np.all(np.diff(real[0]) >= 0) and np.all(np.isfinite(real[0]))
 

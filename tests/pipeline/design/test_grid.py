@@ -4,6 +4,7 @@ import dataclasses
 import hashlib
 import itertools
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -332,6 +333,16 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
 # Expansion: the shared-parts path gives what a plain ``Scene.replace`` per point gives
 
 
+def keyed_dict(scene: Scene) -> dict:
+    """The scene's plain form without what no key holds: its name, and the fixed-threshold
+    encoder (the neutral default) with the decay of a threshold it does not decay."""
+    data = scene.to_dict()
+    data.pop("name")
+    if data["readout"]["encoder"] == "lcs":
+        del data["readout"]["encoder"], data["readout"]["decay"]
+    return data
+
+
 def reference_key(scene: Scene, level) -> str:
     """A level's key as it was first written: its parts found level by level, the canonical
     form of the whole scene as one dict."""
@@ -342,8 +353,7 @@ def reference_key(scene: Scene, level) -> str:
                 paths.setdefault(read.path, None)
     parts = tuple(p for p in paths if not any(p.startswith(f"{q}.") for q in paths))
     assert level.key_parts(scene) == parts
-    data = scene.to_dict()
-    data.pop("name")
+    data = keyed_dict(scene)
     canonical = json.dumps(
         fields.select(data, parts),
         sort_keys=True,
@@ -437,8 +447,7 @@ def test_points_keys_and_order_are_those_of_scene_replace_at_every_point():
 def test_canonical_form_is_that_of_the_whole_selection_with_or_without_a_memo():
     scene = Grid.from_dict(MANY_AXES).points()[5].scene
     memo = {}
-    data = scene.to_dict()
-    data.pop("name")
+    data = keyed_dict(scene)
     for parts in (
         None,
         ("dataset",),
@@ -592,3 +601,17 @@ def test_plannable_points_follow_memory_up_to_the_planning_time():
 
     assert plannable_points(2 * PLAN_BYTES_PER_POINT * 1000) == 1000
     assert plannable_points(24 * 2**30) == 6_000_000
+
+
+def test_the_encoder_example_sweeps_both_encoders_with_the_decay_keyed_for_one():
+    grid = load_grid(Path(__file__).parents[3] / "examples" / "encoders.toml")
+    points = grid.points()
+    assert {p.scene.readout.encoder.value for p in points} == {"lcs", "decaying"}
+    assert len(points) == 6 and len({p.key for p in points}) == 6
+    for point in points:
+        keyed = "decay" in point.scene.canonical()
+        assert keyed == (point.scene.readout.encoder.value == "decaying")
+        assert point.key == reference_key(point.scene, LEVELS[-1])
+    paper = Scene.paper().replace(**{"readout.threshold_v": 0.05})
+    lcs = [p for p in points if p.scene.readout.encoder.value == "lcs"]
+    assert cache_key(paper, "results") in {p.key for p in lcs}  # the paper's own points

@@ -76,6 +76,13 @@ def test_effects_parse_into_typed_parameters():
         ({"readout": {"threshold_v": 2.0}}, "not below full_scale_v"),
         ({"readout": {"threshold_v": float("nan")}}, "expected a finite number"),
         ({"array": {"rows": True}}, "array.rows: expected an integer"),
+        ({"readout": {"encoder": "n-lcs"}}, "readout.encoder: 'n-lcs' is not one of"),
+        ({"readout": {"decay": {"theta_min_v": 0}}}, "readout.decay.theta_min_v: 0 is out of"),
+        ({"readout": {"decay": {"tau_s": -1.0}}}, "readout.decay.tau_s: -1.0 is out of range"),
+        (
+            {"readout": {"encoder": "decaying", "decay": {"theta_min_v": 0.1}}},
+            "readout.decay.theta_min_v: 0.1 V is above threshold_v = 0.09 V",
+        ),
     ],
 )
 def test_bad_values_name_the_field(data, message):
@@ -158,6 +165,29 @@ def test_seed_enters_the_spike_key_only_with_random_effects():
     assert cache_key(saturating, "spikes") == cache_key(saturating.replace(seed=7), "spikes")
     noisy = ideal.replace(**{"readout.effects": {"amplifier_noise": {}}})
     assert cache_key(noisy, "spikes") != cache_key(noisy.replace(seed=7), "spikes")
+
+
+def test_the_decay_is_keyed_only_for_the_decaying_encoder():
+    fixed = Scene.paper()
+    canonical = fixed.canonical()
+    assert "encoder" not in canonical and "decay" not in canonical  # earlier keys stay valid
+    # The decay of a fixed threshold is not simulated: any value, the same key, accepted even
+    # above the threshold.
+    idle = fixed.replace(**{"readout.decay.tau_s": 5.0, "readout.decay.theta_min_v": 0.5})
+    assert idle.readout.theta_min_v == fixed.readout.threshold_v
+    decaying = fixed.replace(**{"readout.encoder": "decaying"})
+    assert decaying.readout.theta_min_v == 0.03
+    for stage in ("recordings", "spikes", "rates", "results"):
+        assert cache_key(idle, stage) == cache_key(fixed, stage)
+    for stage in ("spikes", "rates", "results"):
+        assert cache_key(decaying, stage) != cache_key(fixed, stage)
+        slower = decaying.replace(**{"readout.decay.tau_s": 0.05})
+        assert cache_key(slower, stage) != cache_key(decaying, stage)
+    assert cache_key(decaying, "recordings") == cache_key(fixed, "recordings")
+    assert '"decay":{"tau_s":0.02,"theta_min_v":0.03}' in decaying.canonical()
+    assert cache_key(decaying.replace(**{"readout.encoder": "lcs"}), "spikes") == cache_key(
+        fixed, "spikes"
+    )
 
 
 def test_a_new_model_revision_changes_every_key(monkeypatch):

@@ -132,3 +132,18 @@ def test_the_fingerprint_follows_what_shapes_the_search():
     assert a.fingerprint() != Space.from_dict(space(seed=1)).fingerprint()
     other = space(objectives={"accuracy.ffnn": "max", "compute_s": "min"})
     assert a.fingerprint() != Space.from_dict(other).fingerprint()
+
+
+def test_the_encoder_is_a_categorical_dimension_of_its_choices():
+    encoders = {"readout.encoder": {"choices": ["lcs", "decaying"]}}
+    loaded = Space.from_dict(
+        space(space={**encoders, "readout.threshold_v": {"low": 0.05, "high": 0.3}})
+    )
+    encoder, _ = loaded.dimensions
+    assert encoder.kind is DimensionKind.CATEGORICAL and encoder.choices == ("lcs", "decaying")
+    trials = [{"readout.encoder": e, "readout.threshold_v": 0.1} for e in ("lcs", "decaying")]
+    points = loaded.trial_grid(trials).points()
+    assert [p.scene.readout.encoder.value for p in points] == ["lcs", "decaying"]
+    assert len({p.key for p in points}) == 2
+    (found,) = problems(space(space={"readout.encoder": {"choices": ["lcs", "decay"]}}))
+    assert "readout.encoder: 'decay' is not one of 'lcs', 'decaying'" in found

@@ -11,10 +11,10 @@ import pytest
 import scipy.stats
 
 from pipeline.report import FrameReadout, build_report
-from pipeline.report.answer import answer_rows, answer_sentences
+from pipeline.report.answer import comparison_rows, glance_header, glance_rows, how_sure
 from pipeline.report.document import report_blocks
 from pipeline.report.render import render_markdown
-from pipeline.results.hardware import EnergyModel, frame_data_rate_bps
+from pipeline.results.hardware import EnergyModel, frame_data_rate_bps, frame_power_w
 from pipeline.results.stats import holm
 from tests.report_helpers import N_RECORDINGS, make_cubes
 
@@ -82,15 +82,32 @@ def test_the_answer_is_set_against_the_frame_readout_of_the_same_array(answer):
     assert chosen.frame_data_rate_bps == frame
     assert chosen.data_rate_ratio == pytest.approx(frame / (700.0 / 0.15), rel=1e-12)
     assert chosen.power_ratio > 1
-    text = " ".join(answer_sentences(answer, FrameReadout(12, 2000.0)))
-    assert "readout.threshold_v = 0.15 V" in text and "Holm-corrected over these 4" in text
-    # 96 kbit/s / (700 / 0.15 bit/s) = 20.6
-    assert "21x below the frame-based readout of the same array (96 kbit/s, 4 taxels)" in text
-    rows = answer_rows(answer)
-    assert [r[1] for r in rows] == ["best", "cheapest by data rate; cheapest by readout power"]
+    rows = glance_rows(answer)
+    assert glance_header(answer)[0] == "FFNN"
+    assert [r[0] for r in rows] == ["best", "cheapest by data rate, by power"]
+    assert rows[1][1] == "readout.threshold_v = 0.15 V"
     wilson = scipy.stats.binomtest(106, N_RECORDINGS).proportion_ci(method="wilson")
-    assert rows[1][3] == f"88.3 % [{100 * wilson.low:.1f}, {100 * wilson.high:.1f}]"
-    assert rows[1][4].startswith("-1.7 points [") and rows[1][4].endswith("Holm p = 1")
+    assert rows[1][2] == f"88.3 % [{100 * wilson.low:.1f}, {100 * wilson.high:.1f}]"
+    # 96 kbit/s / (700 / 0.15 bit/s) = 20.6
+    assert rows[1][3] == "4.67 kbit/s"
+    # 4 taxels: static 4 * (10 + 2) nW = 48 nW; dynamic 666.7 events/s * 10 pJ + 4667 bit/s *
+    # 1 pJ = 11.3 nW; 59.3 nW in all, 81 % static. The frame readout: 4 * 10 nW + one ADC of
+    # 100 nW, plus 8000 samples/s * (10 fJ * 4096 + 12 pJ) = 564 nW, 9.5x more.
+    assert chosen.power.static_w == pytest.approx(48e-9, rel=1e-12)
+    assert chosen.power_w == pytest.approx(48e-9 + 1e-8 / 1.5 + 7e-9 / 1.5, rel=1e-12)
+    assert chosen.frame_power_w == pytest.approx(frame_power_w(4, 2000.0, 12), rel=1e-12)
+    assert rows[1][4] == "59.3 nW (81 % static)"
+    assert rows[1][6] == "21x, 9.5x"
+    # 8 windows of the smoke scene's 0.1 s: 0.8 s of touch per decision.
+    assert chosen.design.observation_s == pytest.approx(0.8, rel=1e-12)
+    assert rows[1][5] == "47.5 nJ (0.8 s)"
+    sure = how_sure(answer)
+    assert sure.startswith("FFNN: 2 of the 4 other designs are not significantly below the best")
+    assert f"lose up to {-100 * chosen.versus_best.low:.1f} points" in sure
+    details = comparison_rows(answer)
+    assert [r[4] for r in details].count("no: significantly below") == 2
+    assert details[0][1] == "readout.threshold_v = 0.09 V" and details[0][4] == "the best"
+    assert details[1][1] == "readout.threshold_v = 0.3 V"  # then cheapest power first
 
 
 def test_data_rate_and_power_can_choose_different_designs():
@@ -106,7 +123,9 @@ def test_data_rate_and_power_can_choose_different_designs():
     (answer,) = build_report(cubes, energy=energy).answers
     assert threshold_of(answer.by_data_rate) == 0.05
     assert threshold_of(answer.by_power) == 0.09
-    assert answer.by_power.power_w == pytest.approx(100.0 * 1e-9 + 3000.0 * 1e-12)
+    static = 4 * (EnergyModel().front_end_w_per_taxel + EnergyModel().comparator_w_per_taxel)
+    assert answer.by_power.power.static_w == pytest.approx(static, rel=1e-12)
+    assert answer.by_power.power_w == pytest.approx(static + 100.0 * 1e-9 + 3000.0 * 1e-12)
     assert answer.by_power.frame_power_w is None  # no frame readout given: unknown, not guessed
 
 

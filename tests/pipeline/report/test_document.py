@@ -75,6 +75,34 @@ def test_the_report_opens_with_the_answer_and_names_its_assumptions():
         "## Against the paper",
         "## Table I",
     ]
-    assert "Holm-corrected over these 18 comparisons" in markdown
+    assert markdown.count("Holm-corrected over the model's comparisons") == 1
     for sentence in EnergyModel().assumptions():
         assert f"- {sentence}" in markdown
+    assert "calibrated on the chip of M. D. Alea et al., IEEE TBioCAS, Dec. 2024" in markdown
+
+
+def test_the_first_screen_is_the_answer_tables_one_sentence_each_and_the_power_front(small):
+    report, figures = small
+    page = report_files(report, figures, version=VERSION)["report.html"].decode()
+    opened, closed = page.index("<details>"), page.index("</details>")
+    first = page[:opened]
+    # Per model one small table headed by its name, and one sentence; then the power front.
+    assert first.count("<table>") == len(report.answers) == 2
+    for answer in report.answers:
+        assert f"<thead><tr><th>{answer.model.upper()}</th><th>design</th>" in first
+        assert first.count(f"<p>{answer.model.upper()}: ") == 1
+    assert first.count("<p>") == 1 + len(report.answers)  # the run's one line, then those
+    assert first.count("<svg") == 1
+    assert "<figcaption>Accuracy against estimated readout power" in first
+    assert "Alea et al." in first
+    # The method follows once, collapsed, and is not repeated per model anywhere.
+    for method in (
+        "Each other design is compared with the best by a paired test",
+        "the p-values are Holm-corrected over the model",
+        "Accuracy is the fraction of (recording, repeat) pairs",
+        "front_end_w_per_taxel = ",
+    ):
+        assert page.count(method) == 1, method
+        assert opened < page.index(method) < closed, method
+    # The power front is drawn once: at the top, not again with the other fronts.
+    assert page.count("<svg") == len(figures)

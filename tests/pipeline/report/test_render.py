@@ -5,7 +5,7 @@ from html.parser import HTMLParser
 
 import pytest
 
-from pipeline.report.blocks import Figure, Heading, Items, Paragraph, Table
+from pipeline.report.blocks import Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.render import render_html, render_markdown
 
 TRICKY = "a|b <script>alert(1)</script> & &amp; p < 0.05"
@@ -72,3 +72,17 @@ def test_html_escapes_text_and_is_self_contained():
 def test_html_figure_without_its_svg_is_an_error():
     with pytest.raises(KeyError):
         render_html([Figure("missing", "c")], {})
+
+
+def test_details_are_collapsed_in_html_and_a_details_element_in_markdown():
+    inner = (Paragraph("p < 0.05 & more"), Table(("a",), (("x|y",),)))
+    blocks = [Paragraph("first"), Details("How <it> was found", inner), Paragraph("last")]
+    page = render_html(blocks, {})
+    opened = page.index("<details><summary>How &lt;it&gt; was found</summary>")
+    closed = page.index("</details>")
+    assert page.index("<p>first</p>") < opened < page.index("<p>p &lt; 0.05 &amp; more</p>")
+    assert page.index("<td>x|y</td>") < closed < page.index("<p>last</p>")
+    assert "<details open" not in page
+    markdown = render_markdown(blocks)
+    assert "<details><summary>How &lt;it&gt; was found</summary>\n\np < 0.05 & more\n" in markdown
+    assert "| x\\|y |\n\n</details>\n\nlast" in markdown

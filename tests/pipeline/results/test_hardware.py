@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import fields
 
@@ -11,15 +12,31 @@ import xarray as xr
 
 from pipeline.results.hardware import (
     MAX_BITS,
+    PARAMETERS,
     EnergyModel,
     energy_per_decision_j,
+    event_data_rate_bps,
+    event_dynamic_power_w,
     event_power_w,
+    event_static_power_w,
     frame_data_rate_bps,
+    frame_dynamic_power_w,
     frame_power_w,
+    frame_static_power_w,
+    power_budget,
 )
 
 # Round constants so that every expected value below is plain arithmetic.
-MODEL = EnergyModel(event_energy_j=2e-11, adc_fom_j_per_step=5e-15, link_energy_j_per_bit=1e-12)
+MODEL = EnergyModel(
+    front_end_w_per_taxel=3e-9,
+    comparator_w_per_taxel=1e-9,
+    event_energy_j=2e-11,
+    link_energy_j_per_bit=1e-12,
+    adc_fom_j_per_step=5e-15,
+    adc_static_w=1e-7,
+    taxels_per_adc=4,
+)
+ZERO = EnergyModel(**{name: 1 if p.count else 0.0 for name, p in PARAMETERS.items()})
 
 
 def test_frame_data_rate_is_taxels_times_rate_times_bits():
@@ -38,27 +55,96 @@ def test_frame_data_rate_of_integers_is_float_and_does_not_wrap():
 
 def test_event_power_by_hand():
     # 50 events/s of a 9-taxel array: 5 bits per event, 250 bit/s.
-    # 50 * 20 pJ + 250 * 1 pJ = 1000 pJ/s + 250 pJ/s = 1.25 nW.
-    got = event_power_w(50.0, 250.0, MODEL)
+    # dynamic: 50 * 20 pJ + 250 * 1 pJ = 1000 pJ/s + 250 pJ/s = 1.25 nW;
+    # static: 9 * (3 nW + 1 nW) = 36 nW.
+    assert event_data_rate_bps(9, 50.0) == 250.0
+    got = event_dynamic_power_w(50.0, 250.0, MODEL)
     assert got == pytest.approx(1.25e-9, rel=1e-12)
     assert type(got) is float
+    assert event_static_power_w(9, MODEL) == pytest.approx(36e-9, rel=1e-12)
+    assert event_power_w(9, 50.0, 250.0, MODEL) == pytest.approx(37.25e-9, rel=1e-12)
 
 
 def test_frame_power_by_hand():
-    # 4 taxels x 1 kHz x (5 fJ * 2**8 + 8 bit * 1 pJ) = 4000 * (1.28 pJ + 8 pJ) = 37.12 nW.
-    got = frame_power_w(4, 1000.0, 8, MODEL)
-    assert got == pytest.approx(37.12e-9, rel=1e-12)
+    # dynamic: 4 taxels x 1 kHz x (5 fJ * 2**8 + 8 bit * 1 pJ) = 4000 * 9.28 pJ = 37.12 nW;
+    # static: 4 * 3 nW front end + one ADC (4 taxels per ADC) of 100 nW = 112 nW.
+    assert frame_dynamic_power_w(4, 1000.0, 8, MODEL) == pytest.approx(37.12e-9, rel=1e-12)
+    assert frame_static_power_w(4, MODEL) == pytest.approx(112e-9, rel=1e-12)
+    assert frame_power_w(4, 1000.0, 8, MODEL) == pytest.approx(149.12e-9, rel=1e-12)
+
+
+def test_the_frame_readout_pays_one_adc_per_taxels_per_adc_rounded_up():
+    # 4 taxels per ADC: 1 -> 1 ADC, 4 -> 1, 5 -> 2, 9 -> 3.
+    taxels = np.array([1, 4, 5, 9])
+    np.testing.assert_allclose(
+        frame_static_power_w(taxels, MODEL), taxels * 3e-9 + np.array([1, 1, 2, 3]) * 1e-7
+    )
 
 
 def test_frame_power_accepts_fractional_bits():
     # 1 taxel x 1 Hz x (5 fJ * 2**3.5 + 3.5 pJ)
-    got = frame_power_w(1, 1.0, 3.5, MODEL)
+    got = frame_dynamic_power_w(1, 1.0, 3.5, MODEL)
     assert got == pytest.approx(5e-15 * 2**3.5 + 3.5e-12, rel=1e-12)
 
 
 def test_default_model_is_used_when_none_is_given():
-    assert event_power_w(1.0, 0.0) == EnergyModel().event_energy_j
-    assert frame_power_w(1, 1.0, 0) == EnergyModel().adc_fom_j_per_step
+    assert event_dynamic_power_w(1.0, 0.0) == EnergyModel().event_energy_j
+    assert frame_dynamic_power_w(1, 1.0, 0) == EnergyModel().adc_fom_j_per_step
+
+
+# The chip the defaults are calibrated on (Alea et al., IEEE TBioCAS 2024): 192 taxels,
+# 2.2 kevent/s for the whole array, 12.33 nW per taxel. The model must stay within 30 %.
+CHIP_TAXELS, CHIP_EVENTS_HZ, CHIP_W_PER_TAXEL, CALIBRATION_TOLERANCE = 192, 2200.0, 12.33e-9, 0.3
+
+
+def test_the_default_event_readout_is_calibrated_on_the_chip():
+    budget = power_budget(CHIP_TAXELS, CHIP_EVENTS_HZ, bits=4)
+    per_taxel = budget.to_json()["event_readout_per_taxel_w"]
+    assert per_taxel == pytest.approx(CHIP_W_PER_TAXEL, rel=CALIBRATION_TOLERANCE)
+    # As the module docstring states it: 10 + 2 nW static and 0.22 nW dynamic per taxel.
+    assert per_taxel == pytest.approx(12.218e-9, rel=1e-4)
+    assert budget.event.static_share == pytest.approx(12 / 12.218, rel=1e-4)
+    # The event rate alone cannot reach the chip's figure: without bias it is 60x below.
+    assert budget.event.dynamic_w / CHIP_TAXELS < CHIP_W_PER_TAXEL / 50
+
+
+def test_power_budget_adds_both_readouts_parts():
+    budget = power_budget(4, 50.0, 8, 1000.0, MODEL)
+    out = budget.to_json()
+    # 4 taxels: 3 bits per event, 150 bit/s; dynamic 50 * 20 pJ + 150 pJ/s = 1.15 nW.
+    assert out["event_data_rate_bps"] == 150.0
+    assert out["event_readout_static_w"] == pytest.approx(16e-9, rel=1e-12)
+    assert out["event_readout_dynamic_w"] == pytest.approx(1.15e-9, rel=1e-12)
+    assert out["event_readout_w"] == pytest.approx(17.15e-9, rel=1e-12)
+    assert out["event_readout_per_taxel_w"] == pytest.approx(17.15e-9 / 4, rel=1e-12)
+    assert out["frame_readout_w"] == pytest.approx(149.12e-9, rel=1e-12)
+    assert out["frame_readout_static_w"] == pytest.approx(112e-9, rel=1e-12)
+    assert out["frame_data_rate_bps"] == 32_000.0
+    assert out["frame_over_event_power"] == pytest.approx(149.12 / 17.15, rel=1e-12)
+    unknown = power_budget(4, 50.0, 8, None, MODEL).to_json()
+    assert unknown["frame_readout_w"] is None and unknown["frame_data_rate_bps"] is None
+
+
+def test_power_budget_names_every_bad_argument():
+    with pytest.raises(ValueError) as caught:
+        power_budget(0, -1.0, MAX_BITS + 1, 0.0)
+    message = str(caught.value)
+    for name in ("n_taxels", "event_rate_hz", "bits", "sampling_rate_hz"):
+        assert name in message
+
+
+def test_model_from_option_units_and_its_problems():
+    model = EnergyModel.from_options(
+        {"front_end_w_per_taxel": 5.0, "event_energy_j": 20.0, "taxels_per_adc": 8.0}
+    )
+    assert model == EnergyModel(front_end_w_per_taxel=5e-9, event_energy_j=20e-12, taxels_per_adc=8)
+    assert EnergyModel.from_options({name: None for name in PARAMETERS}) == EnergyModel()
+    with pytest.raises(ValueError) as caught:
+        EnergyModel.from_options({"adc_static_w": -1.0, "taxels_per_adc": 2.5})
+    assert str(caught.value) == (
+        "--adc-static-nw -1: need a finite number >= 0; --taxels-per-adc 2.5: need a whole "
+        "number >= 1"
+    )
 
 
 def test_energy_per_decision_is_power_times_observation():
@@ -68,11 +154,13 @@ def test_energy_per_decision_is_power_times_observation():
 def test_functions_broadcast_over_numpy_arrays():
     rates = np.array([0.0, 10.0, 100.0])
     np.testing.assert_allclose(
-        event_power_w(rates, 5 * rates, MODEL), rates * 2e-11 + 5 * rates * 1e-12, rtol=1e-12
+        event_dynamic_power_w(rates, 5 * rates, MODEL),
+        rates * 2e-11 + 5 * rates * 1e-12,
+        rtol=1e-12,
     )
     taxels = np.array([[1], [4]])
     bits = np.array([4, 8])
-    power = frame_power_w(taxels, 100.0, bits, MODEL)
+    power = frame_dynamic_power_w(taxels, 100.0, bits, MODEL)
     expected = taxels * 100.0 * (5e-15 * 2.0**bits + bits * 1e-12)
     assert power.shape == (2, 2)
     np.testing.assert_allclose(power, expected, rtol=1e-12)
@@ -88,14 +176,14 @@ def test_data_arrays_keep_their_coordinates():
     events = xr.DataArray(
         [100.0, 50.0, 10.0], dims="threshold_v", coords={"threshold_v": threshold_v}
     )
-    power = event_power_w(events, events * 5, MODEL)
+    power = event_dynamic_power_w(events, events * 5, MODEL)
     assert isinstance(power, xr.DataArray)
     assert power.dims == ("threshold_v",)
     np.testing.assert_array_equal(power["threshold_v"], threshold_v)
     np.testing.assert_allclose(power, events.values * 2.5e-11, rtol=1e-12)
 
     bits = xr.DataArray([4.0, 8.0], dims="bits", coords={"bits": [4.0, 8.0]})
-    frame = frame_power_w(9, 9600.0, bits, MODEL)
+    frame = frame_dynamic_power_w(9, 9600.0, bits, MODEL)
     assert frame.dims == ("bits",)
     np.testing.assert_allclose(
         frame, 9 * 9600.0 * (5e-15 * 2.0**bits.values + bits.values * 1e-12), rtol=1e-12
@@ -107,28 +195,28 @@ def test_data_arrays_keep_their_coordinates():
     np.testing.assert_array_equal(energy["threshold_v"], threshold_v)
 
 
-def test_zero_rates_give_zero_power_not_nan():
-    assert event_power_w(0.0, 0.0, MODEL) == 0.0
+def test_zero_rates_give_zero_dynamic_power_not_nan():
+    assert event_dynamic_power_w(0.0, 0.0, MODEL) == 0.0
+    assert event_power_w(9, 0.0, 0.0, MODEL) == event_static_power_w(9, MODEL)
     assert frame_power_w(0, 1000.0, MAX_BITS, MODEL) == 0.0
-    assert frame_power_w(9, 0.0, MAX_BITS, MODEL) == 0.0
+    assert frame_dynamic_power_w(9, 0.0, MAX_BITS, MODEL) == 0.0
     assert frame_data_rate_bps(9, 1000.0, 0) == 0.0
     assert energy_per_decision_j(0.0, 4.0) == 0.0
-    zeros = frame_power_w(np.zeros(3), np.zeros(3), np.full(3, MAX_BITS), MODEL)
+    zeros = frame_dynamic_power_w(np.zeros(3), np.zeros(3), np.full(3, MAX_BITS), MODEL)
     np.testing.assert_array_equal(zeros, np.zeros(3))
 
 
 def test_a_zero_model_costs_nothing():
-    zero = EnergyModel(0.0, 0.0, 0.0)
-    assert event_power_w(10.0, 50.0, zero) == 0.0
-    assert frame_power_w(9, 1000.0, 10, zero) == 0.0
+    assert event_power_w(9, 10.0, 50.0, ZERO) == 0.0
+    assert frame_power_w(9, 1000.0, 10, ZERO) == 0.0
 
 
 CALLS = {
     "n_taxels": lambda v: frame_power_w(v, 1.0, 8),
     "sampling_rate_hz": lambda v: frame_data_rate_bps(1, v, 8),
     "bits": lambda v: frame_power_w(1, 1.0, v),
-    "event_rate_hz": lambda v: event_power_w(v, 1.0),
-    "data_rate_bps": lambda v: event_power_w(1.0, v),
+    "event_rate_hz": lambda v: event_power_w(1, v, 1.0),
+    "data_rate_bps": lambda v: event_power_w(1, 1.0, v),
     "power_w": lambda v: energy_per_decision_j(v, 1.0),
     "observation_s": lambda v: energy_per_decision_j(1.0, v),
 }
@@ -156,11 +244,11 @@ def test_non_numbers_are_refused(value):
 
 
 def test_bits_above_the_maximum_are_refused():
-    one_joule_per_step = EnergyModel(0, 1.0, 0)
-    assert frame_power_w(1, 1.0, MAX_BITS, one_joule_per_step) == 2.0**MAX_BITS
+    one_joule_per_step = dataclasses.replace(ZERO, adc_fom_j_per_step=1.0)
+    assert frame_dynamic_power_w(1, 1.0, MAX_BITS, one_joule_per_step) == 2.0**MAX_BITS
     integer_bits = np.array([MAX_BITS - 1, MAX_BITS])  # 2**bits would wrap in int64
     np.testing.assert_array_equal(
-        frame_power_w(1, 1.0, integer_bits, one_joule_per_step), [2.0**63, 2.0**64]
+        frame_dynamic_power_w(1, 1.0, integer_bits, one_joule_per_step), [2.0**63, 2.0**64]
     )
     with pytest.raises(ValueError, match=rf"^bits must be at most {MAX_BITS}, got 65\.0"):
         frame_power_w(1, 1.0, [8, MAX_BITS + 1])
@@ -168,13 +256,14 @@ def test_bits_above_the_maximum_are_refused():
 
 def test_model_must_be_an_energy_model():
     with pytest.raises(TypeError, match="model must be an EnergyModel, got dict"):
-        event_power_w(1.0, 1.0, {"event_energy_j": 1e-12})
+        event_power_w(1, 1.0, 1.0, {"event_energy_j": 1e-12})
 
 
 FIELDS = [f.name for f in fields(EnergyModel)]
+AMOUNTS = [n for n in FIELDS if not PARAMETERS[n].count]
 
 
-@pytest.mark.parametrize("name", FIELDS)
+@pytest.mark.parametrize("name", AMOUNTS)
 @pytest.mark.parametrize("value", [-1e-12, math.nan, math.inf, "1e-12", True, None])
 def test_model_constants_are_validated_naming_field_and_value(name, value):
     with pytest.raises(
@@ -184,38 +273,49 @@ def test_model_constants_are_validated_naming_field_and_value(name, value):
         EnergyModel(**{name: value})
 
 
-def test_defaults_are_finite_and_positive():
+@pytest.mark.parametrize("value", [0, 2.5, -1, math.inf, True])
+def test_taxels_per_adc_is_a_whole_number_of_at_least_one(value):
+    with pytest.raises(ValueError, match=r"^EnergyModel\.taxels_per_adc must be a whole number"):
+        EnergyModel(taxels_per_adc=value)
+
+
+def test_every_problem_is_named_at_once():
+    with pytest.raises(ValueError, match=r"front_end_w_per_taxel .*; EnergyModel\.adc_static_w"):
+        EnergyModel(front_end_w_per_taxel=-1.0, adc_static_w=math.nan)
+
+
+def test_defaults_are_finite_and_positive_and_options_unique():
     model = EnergyModel()
     for name in FIELDS:
         value = getattr(model, name)
-        assert isinstance(value, float)
+        assert isinstance(value, int if PARAMETERS[name].count else float)
         assert math.isfinite(value)
         assert value > 0
+    options = [p.option for p in PARAMETERS.values()]
+    assert len(set(options)) == len(options)
+    assert [p.calibrated for p in PARAMETERS.values()].count(True) == 1
 
 
 def test_default_assumptions_state_each_value_and_source():
     sentences = EnergyModel().assumptions()
     assert len(sentences) == len(FIELDS)
-    assert sentences[0].startswith("event_energy_j = 10 pJ per event (energy of ")
-    assert sentences[1].startswith("adc_fom_j_per_step = 10 fJ per conversion step (Walden ")
-    assert sentences[2].startswith("link_energy_j_per_bit = 1 pJ per bit (energy per bit ")
-    assert "neuromorphic" in sentences[0]
-    assert "Murmann" in sentences[1]
-    assert "serial links" in sentences[2]
-    assert all("): an order-of-magnitude assumption from " in s for s in sentences)
-    assert all(s.endswith(".") and ". " not in s.replace("B. ", "") for s in sentences)
+    assert sentences[0].startswith("front_end_w_per_taxel = 10 nW per taxel: static bias ")
+    assert "calibrated on the chip of M. D. Alea et al." in sentences[0]
+    assert "12.33 nW per taxel" in sentences[0]
+    assert sentences[2].startswith("event_energy_j = 10 pJ per event: energy of ")
+    assert sentences[4].startswith("adc_fom_j_per_step = 10 fJ per conversion step: Walden ")
+    assert "neuromorphic" in sentences[2]
+    assert "Murmann" in sentences[4]
+    assert sentences[6].startswith("taxels_per_adc = 16 taxels: ")
+    assert all(s.endswith(".") for s in sentences)
 
 
 def test_user_values_are_named_with_the_default_beside_them():
     sentences = EnergyModel(
         event_energy_j=2.5e-11, adc_fom_j_per_step=0.0, link_energy_j_per_bit=3e-9
     ).assumptions()
-    assert sentences[0].startswith("event_energy_j = 25 pJ per event (")
-    assert (
-        "): set by the user; the default, 10 pJ per event, is an order-of-magnitude "
-        in (sentences[0])
-    )
-    assert sentences[1].startswith("adc_fom_j_per_step = 0 J per conversion step (")
-    assert "the default, 10 fJ per conversion step, is" in sentences[1]
-    assert sentences[2].startswith("link_energy_j_per_bit = 3 nJ per bit (")
-    assert "the default, 1 pJ per bit, is" in sentences[2]
+    assert sentences[2].startswith("event_energy_j = 25 pJ per event: ")
+    assert "; set by the user (the default, 10 pJ per event, is assumed from " in sentences[2]
+    assert sentences[4].startswith("adc_fom_j_per_step = 0 fJ per conversion step: ")
+    assert "the default, 10 fJ per conversion step, is" in sentences[4]
+    assert sentences[3].startswith("link_energy_j_per_bit = 3000 pJ per bit: ")

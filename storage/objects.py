@@ -1,0 +1,331 @@
+"""Objects: the small interface a run root on object storage is written through, with a POSIX
+and an S3 implementation.
+
+A run root is either a folder (``runs/paper``) or an S3-compatible URL
+(``s3://bucket/prefix``). A folder root keeps the guarantees of its file system (rename,
+``flock``; :mod:`storage.store`); an object root has none of them, only whole objects, each
+written by one PUT, and conditional PUTs. :class:`Objects` is what the store needs of such a
+root: list, get, put, put-if-absent, put-if-match (on an ETag), delete, and a Zarr store for a
+prefix. Keys are ``/``-separated and relative to the root.
+
+:class:`S3Objects` talks to S3 through obstore (endpoint, region and credentials from the
+standard AWS variables: ``AWS_ACCESS_KEY_ID``, ``AWS_SECRET_ACCESS_KEY``, ``AWS_REGION``,
+``AWS_ENDPOINT_URL``, ``AWS_ALLOW_HTTP`` for a plain-http endpoint); it holds only the URL, so
+it pickles cheaply to Dask workers. :class:`PosixObjects` gives the same semantics on a local
+folder (an ETag there is the file's inode, size and modification time; conditional writes
+hold the folder's ``flock``), so the object layout runs, and is tested, without a server.
+"""
+
+from __future__ import annotations
+
+import abc
+import concurrent.futures
+import contextlib
+import fcntl
+import os
+import threading
+import uuid
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import zarr
+
+from storage.errors import StoreError, StoreWriteError
+
+#: The URL schemes of object roots.
+SCHEMES = ("s3://",)
+# Objects written at once when publishing a group (each PUT waits tens of ms on S3).
+PUT_THREADS = 16
+
+
+class Conflict(Exception):
+    """A conditional write found the object otherwise than required (present, or changed)."""
+
+
+@dataclass(frozen=True)
+class ObjectInfo:
+    """One listed object: its key (relative to the root), last modification (s since the epoch)
+    and ETag."""
+
+    key: str
+    modified_s: float
+    etag: str
+
+
+def is_object_url(root: str | Path) -> bool:
+    """True if ``root`` names an object root (``s3://...``), not a folder."""
+    return isinstance(root, str) and root.startswith(SCHEMES)
+
+
+def run_root(root: str | Path) -> str | Path:
+    """``root`` as the store keeps it: an object root's URL without a trailing ``/``, else a
+    Path (``Path("s3://b/p")`` would make a folder named ``s3:``)."""
+    if is_object_url(root):
+        return str(root).rstrip("/")
+    return Path(root)
+
+
+class Objects(abc.ABC):
+    """The object operations of a run root (see the module docstring); keys relative to it."""
+
+    url: str
+
+    @abc.abstractmethod
+    def list(self, prefix: str) -> list[ObjectInfo]:
+        """Every object whose key starts with ``prefix``, at any depth."""
+
+    @abc.abstractmethod
+    def get(self, key: str) -> tuple[bytes, str]:
+        """The object's bytes and ETag; FileNotFoundError if there is none."""
+
+    @abc.abstractmethod
+    def put(self, key: str, data: bytes) -> str:
+        """Write the object whole (replacing any); return its ETag."""
+
+    @abc.abstractmethod
+    def put_if_absent(self, key: str, data: bytes) -> str:
+        """Write the object only if there is none; its ETag, or :class:`Conflict`."""
+
+    @abc.abstractmethod
+    def put_if_match(self, key: str, data: bytes, etag: str) -> str:
+        """Replace the object only if its ETag is still ``etag``; the new ETag, or
+        :class:`Conflict`."""
+
+    @abc.abstractmethod
+    def delete(self, keys: list[str]) -> None:
+        """Remove the objects (missing ones are fine)."""
+
+    @abc.abstractmethod
+    def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
+        """A Zarr store whose keys live under ``prefix``."""
+
+    def where(self, key: str = "") -> str:
+        """The URL or path of ``key``, for messages."""
+        return f"{self.url}/{key}" if key else self.url
+
+    def publish(self, prefix: str, files: Mapping[str, bytes], *, last: str) -> None:
+        """Write ``files`` (relative key -> bytes) under ``prefix``, concurrently, and the file
+        ``last`` after all the others have been written."""
+        rest = [name for name in files if name != last]
+        if rest:
+            with concurrent.futures.ThreadPoolExecutor(min(PUT_THREADS, len(rest))) as pool:
+                list(pool.map(lambda name: self.put(f"{prefix}{name}", files[name]), rest))
+        self.put(f"{prefix}{last}", files[last])
+
+
+def objects_for(root: str | Path) -> Objects:
+    """The objects of the run root ``root``: :class:`S3Objects` for an ``s3://`` URL, else
+    :class:`PosixObjects` of the folder."""
+    if is_object_url(root):
+        return S3Objects(str(root))
+    return PosixObjects(Path(root))
+
+
+# ---------------------------------------------------------------------------------------------
+# S3
+
+
+class S3Objects(Objects):
+    """An S3-compatible bucket and prefix, through obstore."""
+
+    def __init__(self, url: str):
+        self.url = str(url).rstrip("/")
+
+    def __repr__(self) -> str:
+        return f"S3Objects({self.url!r})"
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"url": self.url}  # the client is made again where it is unpickled
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.url = state["url"]
+
+    @property
+    def _store(self) -> Any:
+        return _s3_store(self.url)
+
+    def list(self, prefix: str) -> list[ObjectInfo]:
+        import obstore
+
+        # obstore lists whole path segments: list the folder, keep the keys with the prefix.
+        folder = prefix.rpartition("/")[0]
+        with _s3_errors(self.where(prefix)):
+            found = obstore.list(self._store, folder or None).collect()
+        return [
+            ObjectInfo(o["path"], o["last_modified"].timestamp(), o["e_tag"] or "")
+            for o in found
+            if o["path"].startswith(prefix)
+        ]
+
+    def get(self, key: str) -> tuple[bytes, str]:
+        import obstore
+
+        with _s3_errors(self.where(key)):
+            result = obstore.get(self._store, key)
+            return bytes(result.bytes()), result.meta["e_tag"] or ""
+
+    def put(self, key: str, data: bytes) -> str:
+        return self._put(key, data, "overwrite")
+
+    def put_if_absent(self, key: str, data: bytes) -> str:
+        return self._put(key, data, "create")
+
+    def put_if_match(self, key: str, data: bytes, etag: str) -> str:
+        return self._put(key, data, {"e_tag": etag})
+
+    def _put(self, key: str, data: bytes, mode: Any) -> str:
+        import obstore
+        from obstore.exceptions import AlreadyExistsError, PreconditionError
+
+        try:
+            with _s3_errors(self.where(key), root=self.url):
+                return obstore.put(self._store, key, data, mode=mode)["e_tag"] or ""
+        except (AlreadyExistsError, PreconditionError) as error:
+            raise Conflict(self.where(key)) from error
+
+    def delete(self, keys: list[str]) -> None:
+        import obstore
+
+        if keys:
+            with _s3_errors(self.where(), root=self.url):
+                obstore.delete(self._store, keys)
+
+    def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
+        with _s3_errors(self.where(prefix)):
+            return zarr.storage.ObjectStore(_s3_store(self.where(prefix)), read_only=read_only)
+
+
+_S3_STORES: dict[tuple[str, ...], Any] = {}
+_S3_GUARD = threading.Lock()
+
+
+def _s3_store(url: str) -> Any:
+    """obstore's S3 store of ``url``, configured from the environment (``AWS_*``): one per URL
+    and configuration in a process."""
+    from obstore.store import S3Store
+
+    config = tuple(sorted(f"{k}={v}" for k, v in os.environ.items() if k.startswith("AWS_")))
+    with _S3_GUARD:
+        if (url, *config) not in _S3_STORES:
+            _S3_STORES[(url, *config)] = S3Store.from_url(url)
+        return _S3_STORES[(url, *config)]
+
+
+@contextlib.contextmanager
+def _s3_errors(where: str, *, root: str | None = None) -> Iterator[None]:
+    """obstore's errors other than a missing object as one-line :class:`StoreError`; with the
+    ``root`` written to, a refused write as :class:`StoreWriteError` (every later one would be
+    refused too)."""
+    from obstore.exceptions import (
+        AlreadyExistsError,
+        BaseError,
+        PermissionDeniedError,
+        PreconditionError,
+        UnauthenticatedError,
+    )
+
+    try:
+        yield
+    except (FileNotFoundError, AlreadyExistsError, PreconditionError):
+        raise
+    except (PermissionDeniedError, UnauthenticatedError) as error:
+        if root is None:
+            raise StoreError(f"object store {where}: {_short(error)}") from error
+        raise StoreWriteError(root, "permission denied") from error
+    except BaseError as error:
+        raise StoreError(f"object store {where}: {_short(error)}") from error
+
+
+def _short(error: BaseException) -> str:
+    # obstore appends its Rust debug dump of the error: the sentence before it says it all.
+    text = " ".join(str(error).split("Debug source:")[0].split())
+    return f"{type(error).__name__}: {text}"
+
+
+# ---------------------------------------------------------------------------------------------
+# POSIX
+
+
+class PosixObjects(Objects):
+    """A local folder as objects: a key is a file path under it."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self.url = str(self.root)
+
+    def __repr__(self) -> str:
+        return f"PosixObjects({self.url!r})"
+
+    def list(self, prefix: str) -> list[ObjectInfo]:
+        found = []
+        for path in sorted(self.root.rglob("*")):
+            key = path.relative_to(self.root).as_posix()
+            if key.startswith(prefix) and path.is_file() and ".tmp-" not in path.name:
+                stat = path.stat()
+                found.append(ObjectInfo(key, stat.st_mtime, _posix_etag(stat)))
+        return found
+
+    def get(self, key: str) -> tuple[bytes, str]:
+        with open(self.root / key, "rb") as file:
+            return file.read(), _posix_etag(os.fstat(file.fileno()))
+
+    def put(self, key: str, data: bytes) -> str:
+        final = self.root / key
+        os.replace(self._written(final, data), final)
+        return _posix_etag(final.stat())
+
+    def put_if_absent(self, key: str, data: bytes) -> str:
+        final = self.root / key
+        temporary = self._written(final, data)
+        try:
+            os.link(temporary, final)  # fails if final exists: create-if-absent, whole
+        except FileExistsError as error:
+            raise Conflict(self.where(key)) from error
+        finally:
+            os.unlink(temporary)
+        return _posix_etag(final.stat())
+
+    def put_if_match(self, key: str, data: bytes, etag: str) -> str:
+        final = self.root / key
+        with _folder_lock(final.parent):
+            try:
+                current = _posix_etag(final.stat())
+            except FileNotFoundError as error:
+                raise Conflict(self.where(key)) from error
+            if current != etag:
+                raise Conflict(self.where(key))
+            return self.put(key, data)
+
+    def delete(self, keys: list[str]) -> None:
+        for key in keys:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(self.root / key)
+
+    def zarr_store(self, prefix: str, *, read_only: bool = False) -> zarr.abc.store.Store:
+        return zarr.storage.LocalStore(self.root / prefix, read_only=read_only)
+
+    def where(self, key: str = "") -> str:
+        return str(self.root / key)
+
+    @staticmethod
+    def _written(final: Path, data: bytes) -> Path:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        temporary = final.parent / f".tmp-{final.name}-{uuid.uuid4().hex}"
+        temporary.write_bytes(data)
+        return temporary
+
+
+def _posix_etag(stat: os.stat_result) -> str:
+    return f"{stat.st_ino}-{stat.st_size}-{stat.st_mtime_ns}"
+
+
+@contextlib.contextmanager
+def _folder_lock(folder: Path) -> Iterator[None]:
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
