@@ -220,9 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--space", required=True, metavar="FILE", help="a space TOML file (see the README)"
     )
     optimize.add_argument(
-        "--root",
-        metavar="DIR",
-        help="where the store goes, a folder (not s3://; default: runs/<space name>)",
+        "--root", metavar="DIR", help="the store's folder, not s3:// (default: runs/<space name>)"
     )
     budget = optimize.add_mutually_exclusive_group()
     budget.add_argument(
