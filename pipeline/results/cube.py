@@ -305,6 +305,13 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
     return field_attrs(name)
 
 
+def declared_names() -> tuple[str, ...]:
+    """Every variable and coordinate name a cube declares with :func:`describe`, swept scene
+    fields aside: the cube's own (:data:`CUBE_VARIABLES`), the spike metrics and
+    :data:`RESULT_VALUES`, in that order."""
+    return (*CUBE_VARIABLES, *METRICS, *RESULT_VALUES)
+
+
 def metric_attrs(name: str) -> dict[str, str]:
     """``units`` and ``long_name`` of a :class:`~pipeline.chain.metrics.SpikeMetrics` field."""
     found = {f.name: f for f in dataclasses.fields(SpikeMetrics)}

@@ -1,0 +1,234 @@
+"""Sphinx directives that write the reference from the code's single declarations.
+
+Nothing here restates a field, a variable or a stage: each directive reads the declaration the
+code itself uses (the scene schema, the cube's variables, the stage registry) at build time, so
+the pages cannot drift from the code.
+
+``.. eskin-scene-fields::``
+    One table per scene part: every field of :func:`pipeline.design.scene.scene_fields` with its
+    type, default, unit, accepted range and meaning.
+``.. eskin-cube-variables::``
+    Every name a result cube declares (:data:`pipeline.results.cube.CUBE_VARIABLES`, the spike
+    metrics and :data:`pipeline.results.cube.RESULT_VALUES`) with its unit and meaning, as
+    :func:`pipeline.results.cube.describe` gives them to the cube's attributes.
+A public name that autodoc lists without a docstring is a warning (:func:`warn_undocumented`).
+
+``.. eskin-dataflow::``
+    The data flow from recording to cube as an SVG figure, drawn from
+    :data:`pipeline.run.stages.LEVELS`: each level, the scene parts it reads, the steps it times,
+    and whether the sweep store keeps its output.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Iterable, Sequence
+
+from docutils import nodes
+from sphinx.application import Sphinx
+from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
+
+LOGGER = logging.getLogger(__name__)
+
+#: Table classes the docs test reads back from the built pages.
+FIELDS_CLASS = "eskin-scene-fields"
+VARIABLES_CLASS = "eskin-cube-variables"
+
+
+def _cell(content: nodes.Node | str, code: bool = False) -> nodes.entry:
+    entry = nodes.entry()
+    if isinstance(content, str):
+        content = nodes.literal(text=content) if code and content else nodes.Text(content)
+    entry += nodes.paragraph("", "", content)
+    return entry
+
+
+def _table(
+    headers: Sequence[str], rows: Iterable[Sequence[nodes.entry]], widths: Sequence[int], cls: str
+) -> nodes.table:
+    """A docutils table of ``rows`` (each a sequence of entries) under ``headers``."""
+    table = nodes.table(classes=[cls])
+    group = nodes.tgroup(cols=len(headers))
+    table += group
+    for width in widths:
+        group += nodes.colspec(colwidth=width)
+    head = nodes.thead()
+    header_row = nodes.row()
+    for header in headers:
+        header_row += _cell(header)
+    head += header_row
+    group += head
+    body = nodes.tbody()
+    for cells in rows:
+        row = nodes.row()
+        row.extend(cells)
+        body += row
+    group += body
+    return table
+
+
+def _units(units: str) -> str:
+    return "" if units == "1" else units
+
+
+class SceneFields(SphinxDirective):
+    """Every scene field, one table per top-level part, in declaration order."""
+
+    def run(self) -> list[nodes.Node]:
+        from pipeline.design.scene import scene_fields
+
+        parts: dict[str, list] = {}
+        for info in scene_fields():
+            part = info.path.split(".", 1)[0] if "." in info.path else "scene"
+            parts.setdefault(part, []).append(info)
+        found: list[nodes.Node] = []
+        for part, infos in parts.items():
+            section = nodes.section(ids=[nodes.make_id(f"fields-{part}")])
+            title = nodes.title()
+            title += nodes.Text("Top level") if part == "scene" else nodes.literal(text=part)
+            section += title
+            rows = (
+                [
+                    _cell(info.path, code=True),
+                    _cell(info.type),
+                    _cell("" if info.default is None else json.dumps(info.default), code=True),
+                    _cell(_units(info.units)),
+                    _cell(info.range),
+                    _cell(info.description),
+                ]
+                for info in infos
+            )
+            section += _table(
+                ("field", "type", "default", "unit", "range", "meaning"),
+                rows,
+                (24, 10, 10, 6, 14, 36),
+                FIELDS_CLASS,
+            )
+            found.append(section)
+        return found
+
+
+class CubeVariables(SphinxDirective):
+    """Every declared cube variable and coordinate with its unit and meaning."""
+
+    def run(self) -> list[nodes.Node]:
+        from pipeline.results.cube import declared_names, describe
+
+        rows = []
+        for name in declared_names():
+            attrs = describe(name)
+            rows.append(
+                [_cell(name, code=True), _cell(_units(attrs["units"])), _cell(attrs["long_name"])]
+            )
+        return [_table(("name", "unit", "meaning"), rows, (24, 10, 66), VARIABLES_CLASS)]
+
+
+#: Layout of the data-flow figure, in SVG user units.
+_BOX_W, _BOX_H, _GAP, _TOP, _MARGIN = 190, 150, 46, 70, 12
+
+
+def _box(x: float, title: str, lines: Sequence[str], stored: bool) -> str:
+    fill = "#e8f1fb" if stored else "#f4f4f4"
+    stroke = "#2f6db5" if stored else "#777"
+    out = [
+        f'<rect x="{x}" y="{_TOP}" width="{_BOX_W}" height="{_BOX_H}" rx="8" '
+        f'fill="{fill}" stroke="{stroke}" stroke-width="1.5"/>',
+        f'<text x="{x + _BOX_W / 2}" y="{_TOP + 24}" text-anchor="middle" '
+        f'font-weight="bold" font-size="15">{html.escape(title)}</text>',
+    ]
+    for i, line in enumerate(lines):
+        out.append(
+            f'<text x="{x + 10}" y="{_TOP + 48 + 17 * i}" font-size="12">{html.escape(line)}</text>'
+        )
+    return "\n".join(out)
+
+
+def _wrapped(label: str, items: Sequence[str], width: int = 26) -> list[str]:
+    lines, current = [], f"{label}:"
+    for item in items:
+        if len(current) + len(item) + 1 > width:
+            lines.append(current)
+            current = "  " + item
+        else:
+            current += f" {item}"
+    lines.append(current)
+    return lines
+
+
+def dataflow_svg() -> str:
+    """The data flow of :data:`pipeline.run.stages.LEVELS`, then the cube, as one SVG document."""
+    from pipeline.run.stages import LEVELS
+
+    x_of = {level.name: _MARGIN + i * (_BOX_W + _GAP) for i, level in enumerate(LEVELS)}
+    width = _MARGIN * 2 + (len(LEVELS) + 1) * _BOX_W + len(LEVELS) * _GAP
+    height = _TOP + _BOX_H + 60
+    parts = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {width} {height}" '
+        f'role="img" font-family="sans-serif">',
+        "<title>Data flow from recording to result cube</title>",
+        '<defs><marker id="arrow" viewBox="0 0 10 10" refX="10" refY="5" markerWidth="7" '
+        'markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#444"/></marker></defs>',
+    ]
+    for level in LEVELS:
+        lines = _wrapped("reads", [read.path for read in level.reads])
+        lines += _wrapped("steps", [step.replace("{model}", "<model>") for step in level.steps])
+        lines.append("kept in the Zarr store" if level.stored else "kept in worker memory")
+        parts.append(_box(x_of[level.name], level.name, lines, level.stored))
+        for before in level.after:
+            start, end = x_of[before.name] + _BOX_W, x_of[level.name]
+            if end - start == _GAP:  # neighbours: a straight arrow
+                y = _TOP + _BOX_H / 2
+                parts.append(
+                    f'<line x1="{start}" y1="{y}" x2="{end}" y2="{y}" stroke="#444" '
+                    f'stroke-width="1.5" marker-end="url(#arrow)"/>'
+                )
+            else:  # a level further back: an arc over the boxes between
+                x1, x2 = x_of[before.name] + _BOX_W / 2, x_of[level.name] + _BOX_W / 2 - 20
+                lift = 22 + 8 * (end - start) / (_BOX_W + _GAP)
+                parts.append(
+                    f'<path d="M{x1},{_TOP} C{x1},{_TOP - lift * 2} {x2},{_TOP - lift * 2} '
+                    f'{x2},{_TOP}" fill="none" stroke="#444" stroke-width="1.2" '
+                    f'stroke-dasharray="5,3" marker-end="url(#arrow)"/>'
+                )
+    cube_x = _MARGIN + len(LEVELS) * (_BOX_W + _GAP)
+    last = x_of[LEVELS[-1].name] + _BOX_W
+    y = _TOP + _BOX_H / 2
+    parts.append(
+        f'<line x1="{last}" y1="{y}" x2="{cube_x}" y2="{y}" stroke="#444" stroke-width="1.5" '
+        f'marker-end="url(#arrow)"/>'
+    )
+    cube_lines = ["one per sweep, from the", "results of its points:", "xarray Dataset in Zarr,"]
+    cube_lines += ["dims = swept axes, model,", "repeat, fold, recording"]
+    parts.append(_box(cube_x, "result cube", cube_lines, stored=True))
+    parts.append(
+        f'<text x="{_MARGIN}" y="{height - 18}" font-size="12" fill="#333">Solid arrows: the '
+        f"output of the level before; dashed: the output of a level further back. Blue: a cache "
+        f"level of the sweep store, keyed by the scene parts it and its inputs read.</text>"
+    )
+    parts.append("</svg>")
+    return "\n".join(parts)
+
+
+class DataFlow(SphinxDirective):
+    """The data-flow figure, inline SVG (no image file to go stale)."""
+
+    def run(self) -> list[nodes.Node]:
+        figure = nodes.raw("", dataflow_svg(), format="html")
+        return [nodes.container("", figure, classes=["eskin-dataflow"])]
+
+
+def warn_undocumented(app: Sphinx, what: str, name: str, obj: object, options, lines) -> None:
+    """A public name the API reference lists without a docstring is a warning (an error under
+    ``-W``): the reference is generated from docstrings, so a missing one is a hole in it."""
+    if not any(line.strip() for line in lines) and not name.rsplit(".", 1)[-1].startswith("_"):
+        LOGGER.warning("%s %s has no docstring", what, name, type="eskin", subtype="undocumented")
+
+
+def setup(app: Sphinx) -> dict[str, object]:
+    app.connect("autodoc-process-docstring", warn_undocumented)
+    app.add_directive("eskin-scene-fields", SceneFields)
+    app.add_directive("eskin-cube-variables", CubeVariables)
+    app.add_directive("eskin-dataflow", DataFlow)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
