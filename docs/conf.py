@@ -19,7 +19,7 @@ sys.path.insert(0, str(HERE.parent))
 
 project = "e-skin sweep"
 author = "the e-skin sweep developers"
-copyright = "2026, the e-skin sweep developers"  # noqa: A001 (Sphinx reads this name)
+copyright = "2026, the e-skin sweep developers"
 release = metadata.version("eskin-sweep")
 version = release
 
@@ -48,8 +48,11 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(collections\.abc|typing|pathlib|enum|datetime|concurrent|os|io|json)\..*"),
     (r"py:.*", r"(sklearn|matplotlib|scipy|numba|obstore|abc)\..*"),
     # Words of a numpydoc type line that name a dtype, a shape or a kind, not a class.
-    (r"py:class", r"(u?int(8|16|32|64)|float(32|64)|bool_?|complex128|str_|array-like|callable"
-     r"|sequence|iterable|mapping|optional|default.*|n|n_\w+|s|channels)"),
+    (
+        r"py:class",
+        r"(u?int(8|16|32|64)|float(32|64)|bool_?|complex128|str_|array-like|callable"
+        r"|sequence|iterable|mapping|optional|default.*|n|n_\w+|s|channels)",
+    ),
 ]
 
 myst_enable_extensions = ["colon_fence", "dollarmath", "amsmath", "deflist"]
@@ -91,7 +94,8 @@ templates_path = ["_templates"]
 def _skip_foreign(app, what, name, obj, skip, options):
     """Leave out names a module imports from elsewhere (``Callable``, ``Iterator``): each name is
     documented once, where it is defined."""
-    if what == "module" and getattr(obj, "__module__", None) not in (None, app.env.temp_data.get("autodoc:module")):
+    documented = app.env.temp_data.get("autodoc:module")
+    if what == "module" and getattr(obj, "__module__", None) not in (None, documented):
         return True
     return None
 
