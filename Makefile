@@ -53,7 +53,7 @@ lock:
 	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
 	$(PYTHON) -m venv "$$tmp/venv"; \
 	"$$tmp/venv/bin/python" -m pip install --quiet --upgrade pip; \
-	"$$tmp/venv/bin/python" -m pip install --quiet '.[test]'; \
+	"$$tmp/venv/bin/python" -m pip install --quiet '.[test,docs]'; \
 	{ grep '^#' $(LOCK) || true; "$$tmp/venv/bin/python" -m pip freeze --exclude eskin-sweep \
 		--exclude pip --exclude setuptools --exclude wheel; } > "$$tmp/lock"; \
 	if grep -qi '^nvidia-' "$$tmp/lock" || ! grep -q '^torch==.*+cpu$$' "$$tmp/lock"; then \

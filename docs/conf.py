@@ -38,6 +38,8 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "_templates", "**.ipynb_checkpoints", "jupyter_execute"]
 root_doc = "index"
+# Quotes stay as written: field types and values ('synthetic' | 'folder') are code, not prose.
+smartquotes = False
 
 # Every reference must resolve: a broken one is a warning, and the build turns warnings into
 # errors. Names of libraries outside this project have no inventory here (no network at build
@@ -78,11 +80,18 @@ napoleon_use_ivar = True
 html_theme = "pydata_sphinx_theme"
 html_title = "e-skin sweep"
 html_static_path = ["_static"]
+html_css_files = ["eskin.css"]
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
+    # The generated reference tables take the width of the page-contents column too.
+    "secondary_sidebar_items": {
+        "**": ["page-toc", "sourcelink"],
+        "reference/scene-fields": [],
+        "reference/cube-variables": [],
+    },
 }
 html_sidebars = {"index": []}
 

@@ -11,6 +11,12 @@ the pages cannot drift from the code.
     Every name a result cube declares (:data:`pipeline.results.cube.CUBE_VARIABLES`, the spike
     metrics and :data:`pipeline.results.cube.RESULT_VALUES`) with its unit and meaning, as
     :func:`pipeline.results.cube.describe` gives them to the cube's attributes.
+``.. eskin-reexports:: module``
+    The names a module's ``__all__`` imports from elsewhere (``pipeline.readout.level_crossings``,
+    the whole of :mod:`flows.api`), listed with a link to where each is defined: a name is
+    documented once. A reference to such a public name resolves to that definition
+    (:func:`resolve_public_name`).
+
 A public name that autodoc lists without a docstring is a warning (:func:`warn_undocumented`).
 
 ``.. eskin-dataflow::``
@@ -22,6 +28,8 @@ A public name that autodoc lists without a docstring is a warning (:func:`warn_u
 from __future__ import annotations
 
 import html
+import importlib
+import inspect
 import json
 from collections.abc import Iterable, Sequence
 
@@ -92,7 +100,7 @@ class SceneFields(SphinxDirective):
             rows = (
                 [
                     _cell(info.path, code=True),
-                    _cell(info.type),
+                    _cell(info.type, code=True),
                     _cell("" if info.default is None else json.dumps(info.default), code=True),
                     _cell(_units(info.units)),
                     _cell(info.range),
@@ -219,6 +227,83 @@ class DataFlow(SphinxDirective):
         return [nodes.container("", figure, classes=["eskin-dataflow"])]
 
 
+def definition_of(dotted: str) -> object | None:
+    """The object a dotted public name such as ``pipeline.readout.level_crossings`` refers to, or
+    None where no importable module holds it."""
+    parts = dotted.split(".")
+    for split in range(len(parts) - 1, 0, -1):
+        try:
+            found = importlib.import_module(".".join(parts[:split]))
+        except ImportError:
+            continue
+        for attribute in parts[split:]:
+            found = getattr(found, attribute, None)
+            if found is None:
+                return None
+        return found
+    return None
+
+
+def defined_name(obj: object) -> str | None:
+    """``module.qualname`` where ``obj`` is defined, for functions and classes; None otherwise."""
+    module, qualname = getattr(obj, "__module__", None), getattr(obj, "__qualname__", None)
+    return f"{module}.{qualname}" if module and qualname else None
+
+
+class ReExports(SphinxDirective):
+    """A list of the names ``__all__`` imports from elsewhere, each linking to its definition."""
+
+    required_arguments = 1
+
+    def run(self) -> list[nodes.Node]:
+        module_name = self.arguments[0]
+        module = importlib.import_module(module_name)
+        items: list[str] = []
+        for name in getattr(module, "__all__", ()):
+            origin = defined_name(getattr(module, name))
+            if origin is None or origin.rsplit(".", 1)[0] == module_name:
+                continue
+            role = "class" if inspect.isclass(getattr(module, name)) else "func"
+            items.append(f"* ``{name}``: :py:{role}:`{origin}`")
+        if not items:
+            return []
+        return [nodes.rubric(text="Re-exported names"), *self.parse_text_to_nodes("\n".join(items))]
+
+
+def resolve_public_name(app: Sphinx, env, node, contnode):
+    """Resolve a reference to a re-exported public name (``storage.open_results``,
+    ``pipeline.readout.level_crossings``) to the object's one documented definition."""
+    if node.get("refdomain") != "py":
+        return None
+    target = node["reftarget"]
+    candidates = [target]
+    if node.get("py:module") and "." not in target:
+        candidates.insert(0, f"{node['py:module']}.{target}")
+    domain = env.get_domain("py")
+    for candidate in candidates:
+        origin = defined_name(definition_of(candidate)) if "." in candidate else None
+        if origin and origin != candidate:
+            return domain.resolve_xref(
+                env, node["refdoc"], app.builder, node["reftype"], origin, node, contnode
+            )
+    return None
+
+
+def command_line_parser():
+    """``eskin``'s parser (:func:`flows.cli.build_parser`) for the command-line page, its
+    commands' epilogs left out: they list the scene fields, which have a page of their own."""
+    import argparse
+
+    from flows.cli import build_parser
+
+    parser = build_parser()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                command.epilog = None
+    return parser
+
+
 def warn_undocumented(app: Sphinx, what: str, name: str, obj: object, options, lines) -> None:
     """A public name the API reference lists without a docstring is a warning (an error under
     ``-W``): the reference is generated from docstrings, so a missing one is a hole in it."""
@@ -228,7 +313,9 @@ def warn_undocumented(app: Sphinx, what: str, name: str, obj: object, options, l
 
 def setup(app: Sphinx) -> dict[str, object]:
     app.connect("autodoc-process-docstring", warn_undocumented)
+    app.connect("missing-reference", resolve_public_name)
     app.add_directive("eskin-scene-fields", SceneFields)
     app.add_directive("eskin-cube-variables", CubeVariables)
     app.add_directive("eskin-dataflow", DataFlow)
+    app.add_directive("eskin-reexports", ReExports)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
