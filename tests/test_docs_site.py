@@ -9,6 +9,7 @@ from __future__ import annotations
 import html.parser
 import importlib
 import pkgutil
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -165,3 +166,12 @@ def test_the_data_flow_figure_has_every_stage(site):
     figure = page.split("<svg", 1)[1].split("</svg>", 1)[0]
     for level in LEVELS:
         assert f">{level.name}</text>" in figure, level.name
+
+
+def test_the_readme_is_a_front_door_whose_links_all_lead_somewhere():
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) < 150
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", readme)
+    assert "docs/index.md" in targets and "docs/reference/scene-fields.md" in targets
+    missing = [target for target in targets if not (ROOT / target).exists()]
+    assert not missing, missing
