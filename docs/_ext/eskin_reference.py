@@ -180,7 +180,8 @@ def dataflow_svg() -> str:
         'markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#444"/></marker></defs>',
     ]
     for level in LEVELS:
-        lines = _wrapped("reads", [read.path for read in level.reads])
+        reads = [read.path + ("*" if read.when is not None else "") for read in level.reads]
+        lines = _wrapped("reads", reads)
         lines += _wrapped("steps", [step.replace("{model}", "<model>") for step in level.steps])
         lines.append("kept in the Zarr store" if level.stored else "kept in worker memory")
         parts.append(_box(x_of[level.name], level.name, lines, level.stored))
@@ -213,7 +214,8 @@ def dataflow_svg() -> str:
     parts.append(
         f'<text x="{_MARGIN}" y="{height - 18}" font-size="12" fill="#333">Solid arrows: the '
         f"output of the level before; dashed: the output of a level further back. Blue: a cache "
-        f"level of the sweep store, keyed by the scene parts it and its inputs read.</text>"
+        f"level of the sweep store, keyed by the scene parts it and its inputs read. *: read only "
+        f"where the scene needs it (the seed, by a random effect).</text>"
     )
     parts.append("</svg>")
     return "\n".join(parts)
