@@ -171,7 +171,7 @@ def dataflow_svg() -> str:
 
     x_of = {level.name: _MARGIN + i * (_BOX_W + _GAP) for i, level in enumerate(LEVELS)}
     width = _MARGIN * 2 + (len(LEVELS) + 1) * _BOX_W + len(LEVELS) * _GAP
-    height = _TOP + _BOX_H + 60
+    height = _TOP + _BOX_H + 70
     parts = [
         f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {width} {height}" '
         f'role="img" font-family="sans-serif">',
@@ -211,12 +211,15 @@ def dataflow_svg() -> str:
     cube_lines = ["one per sweep, from the", "results of its points:", "xarray Dataset in Zarr,"]
     cube_lines += ["dims = swept axes, model,", "repeat, fold, recording"]
     parts.append(_box(cube_x, "result cube", cube_lines, stored=True))
-    parts.append(
-        f'<text x="{_MARGIN}" y="{height - 18}" font-size="12" fill="#333">Solid arrows: the '
-        f"output of the level before; dashed: the output of a level further back. Blue: a cache "
-        f"level of the sweep store, keyed by the scene parts it and its inputs read. *: read only "
-        f"where the scene needs it (the seed, by a random effect).</text>"
+    legend = (
+        "Solid arrows: the output of the level before; dashed: the output of a level further "
+        "back. *: read only where the scene needs it (the seed, by a random effect).",
+        "Blue: a cache level of the sweep store, keyed by the scene parts it and every level "
+        "before it read; grey: kept in a worker's memory.",
     )
+    for i, line in enumerate(legend):
+        y_line = height - 30 + 16 * i
+        parts.append(f'<text x="{_MARGIN}" y="{y_line}" font-size="12" fill="#333">{line}</text>')
     parts.append("</svg>")
     return "\n".join(parts)
 
