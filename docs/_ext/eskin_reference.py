@@ -133,45 +133,44 @@ class CubeVariables(SphinxDirective):
         return [_table(("name", "unit", "meaning"), rows, (24, 10, 66), VARIABLES_CLASS)]
 
 
-#: Layout of the data-flow figure, in SVG user units.
-_BOX_W, _BOX_H, _GAP, _TOP, _MARGIN = 190, 150, 46, 70, 12
+#: Layout of the data-flow figure (top to bottom), in SVG user units: boxes, the gap between
+#: two, the left margin, the room on the right for the arcs of outputs that skip a level.
+_BOX_W, _BOX_H, _GAP, _MARGIN, _ARCS = 560, 62, 30, 10, 120
 
 
-def _box(x: float, title: str, lines: Sequence[str], stored: bool) -> str:
+def _box(y: float, title: str, lines: Sequence[str], stored: bool) -> str:
     fill = "#e8f1fb" if stored else "#f4f4f4"
     stroke = "#2f6db5" if stored else "#777"
     out = [
-        f'<rect x="{x}" y="{_TOP}" width="{_BOX_W}" height="{_BOX_H}" rx="8" '
+        f'<rect x="{_MARGIN}" y="{y}" width="{_BOX_W}" height="{_BOX_H}" rx="8" '
         f'fill="{fill}" stroke="{stroke}" stroke-width="1.5"/>',
-        f'<text x="{x + _BOX_W / 2}" y="{_TOP + 24}" text-anchor="middle" '
-        f'font-weight="bold" font-size="15">{html.escape(title)}</text>',
+        f'<text x="{_MARGIN + 14}" y="{y + 22}" font-weight="bold" font-size="16">'
+        f"{html.escape(title)}</text>",
     ]
     for i, line in enumerate(lines):
         out.append(
-            f'<text x="{x + 10}" y="{_TOP + 48 + 17 * i}" font-size="12">{html.escape(line)}</text>'
+            f'<text x="{_MARGIN + 150}" y="{y + 22 + 19 * i}" font-size="14">'
+            f"{html.escape(line)}</text>"
         )
     return "\n".join(out)
 
 
-def _wrapped(label: str, items: Sequence[str], width: int = 26) -> list[str]:
-    lines, current = [], f"{label}:"
-    for item in items:
-        if len(current) + len(item) + 1 > width:
-            lines.append(current)
-            current = "  " + item
-        else:
-            current += f" {item}"
-    lines.append(current)
-    return lines
+def _arrow(y1: float, y2: float) -> str:
+    x = _MARGIN + 60
+    return (
+        f'<line x1="{x}" y1="{y1}" x2="{x}" y2="{y2}" stroke="#444" stroke-width="1.5" '
+        f'marker-end="url(#arrow)"/>'
+    )
 
 
 def dataflow_svg() -> str:
     """The data flow of :data:`pipeline.run.stages.LEVELS`, then the cube, as one SVG document."""
     from pipeline.run.stages import LEVELS
 
-    x_of = {level.name: _MARGIN + i * (_BOX_W + _GAP) for i, level in enumerate(LEVELS)}
-    width = _MARGIN * 2 + (len(LEVELS) + 1) * _BOX_W + len(LEVELS) * _GAP
-    height = _TOP + _BOX_H + 70
+    y_of = {level.name: i * (_BOX_H + _GAP) + _GAP / 2 for i, level in enumerate(LEVELS)}
+    cube_y = len(LEVELS) * (_BOX_H + _GAP) + _GAP / 2
+    width = _MARGIN * 2 + _BOX_W + _ARCS
+    height = cube_y + _BOX_H + 56
     parts = [
         f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {width} {height}" '
         f'role="img" font-family="sans-serif">',
@@ -180,45 +179,38 @@ def dataflow_svg() -> str:
         'markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#444"/></marker></defs>',
     ]
     for level in LEVELS:
-        reads = [read.path + ("*" if read.when is not None else "") for read in level.reads]
-        lines = _wrapped("reads", reads)
-        lines += _wrapped("steps", [step.replace("{model}", "<model>") for step in level.steps])
-        lines.append("kept in the Zarr store" if level.stored else "kept in worker memory")
-        parts.append(_box(x_of[level.name], level.name, lines, level.stored))
+        y = y_of[level.name]
+        reads = ", ".join(r.path + ("*" if r.when is not None else "") for r in level.reads)
+        steps = ", ".join(step.replace("{model}", "<model>") for step in level.steps)
+        kept = "kept in the Zarr store" if level.stored else "kept in a worker's memory"
+        lines = [f"reads {reads}", f"times {steps}; {kept}"]
+        parts.append(_box(y, level.name, lines, level.stored))
         for before in level.after:
-            start, end = x_of[before.name] + _BOX_W, x_of[level.name]
-            if end - start == _GAP:  # neighbours: a straight arrow
-                y = _TOP + _BOX_H / 2
+            start = y_of[before.name] + _BOX_H
+            if y - start == _GAP:  # the level before: a straight arrow
+                parts.append(_arrow(start, y))
+            else:  # a level further back: an arc on the right of the boxes between
+                x, mid = _MARGIN + _BOX_W, (start + y) / 2
+                out = _ARCS * min(1.0, (y - start) / (3 * (_BOX_H + _GAP)))
                 parts.append(
-                    f'<line x1="{start}" y1="{y}" x2="{end}" y2="{y}" stroke="#444" '
-                    f'stroke-width="1.5" marker-end="url(#arrow)"/>'
-                )
-            else:  # a level further back: an arc over the boxes between
-                x1, x2 = x_of[before.name] + _BOX_W / 2, x_of[level.name] + _BOX_W / 2 - 20
-                lift = 22 + 8 * (end - start) / (_BOX_W + _GAP)
-                parts.append(
-                    f'<path d="M{x1},{_TOP} C{x1},{_TOP - lift * 2} {x2},{_TOP - lift * 2} '
-                    f'{x2},{_TOP}" fill="none" stroke="#444" stroke-width="1.2" '
+                    f'<path d="M{x},{start - _BOX_H / 2} C{x + out},{start - _BOX_H / 2} '
+                    f"{x + out},{mid} {x + out},{mid} S{x + out},{y + _BOX_H / 2} "
+                    f'{x},{y + _BOX_H / 2}" fill="none" stroke="#444" stroke-width="1.2" '
                     f'stroke-dasharray="5,3" marker-end="url(#arrow)"/>'
                 )
-    cube_x = _MARGIN + len(LEVELS) * (_BOX_W + _GAP)
-    last = x_of[LEVELS[-1].name] + _BOX_W
-    y = _TOP + _BOX_H / 2
-    parts.append(
-        f'<line x1="{last}" y1="{y}" x2="{cube_x}" y2="{y}" stroke="#444" stroke-width="1.5" '
-        f'marker-end="url(#arrow)"/>'
-    )
-    cube_lines = ["one per sweep, from the", "results of its points:", "xarray Dataset in Zarr,"]
-    cube_lines += ["dims = swept axes, model,", "repeat, fold, recording"]
-    parts.append(_box(cube_x, "result cube", cube_lines, stored=True))
+    parts.append(_arrow(y_of[LEVELS[-1].name] + _BOX_H, cube_y))
+    cube_lines = [
+        "one xarray Dataset per sweep, kept in the Zarr store;",
+        "dims: swept axes, model, repeat, fold, recording",
+    ]
+    parts.append(_box(cube_y, "result cube", cube_lines, stored=True))
     legend = (
-        "Solid arrows: the output of the level before; dashed: the output of a level further "
-        "back. *: read only where the scene needs it (the seed, by a random effect).",
-        "Blue: a cache level of the sweep store, keyed by the scene parts it and every level "
-        "before it read; grey: kept in a worker's memory.",
+        "Solid arrows: the output of the level before; dashed: of a level further back.",
+        "Blue: kept by the sweep store, keyed by the scene parts read up to that level.",
+        "*: read only where the scene needs it (the seed, by a random effect).",
     )
     for i, line in enumerate(legend):
-        y_line = height - 30 + 16 * i
+        y_line = cube_y + _BOX_H + 18 + 15 * i
         parts.append(f'<text x="{_MARGIN}" y="{y_line}" font-size="12" fill="#333">{line}</text>')
     parts.append("</svg>")
     return "\n".join(parts)
