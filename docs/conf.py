@@ -93,7 +93,21 @@ html_theme_options = {
         "reference/cube-variables": [],
     },
 }
-html_sidebars = {"index": []}
+# Top-level pages have no sections to navigate: no left sidebar, more room for tables.
+html_sidebars = {
+    page: []
+    for page in (
+        "index",
+        "getting-started",
+        "tutorial",
+        "model",
+        "scenes",
+        "guarantees",
+        "results",
+        "performance",
+        "development",
+    )
+}
 
 autosummary_generate = True
 autosummary_imported_members = False
