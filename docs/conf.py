@@ -64,6 +64,8 @@ myst_heading_anchors = 3
 nb_execution_mode = "force"
 nb_execution_raise_on_error = True
 nb_execution_timeout = 900
+# In a fresh temporary folder: the tutorial's relative run root never lands in the source tree.
+nb_execution_in_temp = True
 nb_merge_streams = True
 
 autodoc_typehints = "none"
