@@ -39,8 +39,8 @@ def site(tmp_path_factory) -> Path:
         text=True,
         timeout=1200,
     )
+    # -W: any warning (a broken reference, an undocumented name, a failing cell) fails the build.
     assert proc.returncode == 0, proc.stderr[-5000:]
-    assert proc.stderr.strip() == "", proc.stderr[-5000:]
     return out
 
 
