@@ -126,6 +126,10 @@ def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``eskin`` argument parser: its commands (``run``, ``sweep``, ``optimize``, ``server``,
+    ``serve``, ``describe``, ``report``, ``power``) and their options, each command's handler set
+    as ``handler`` on the parsed namespace. A usage error exits with status 2 and one line on
+    stderr."""
     parser = _Parser(
         prog="eskin",
         description="Neuromorphic e-skin design sweeps: spiking taxel readout to texture accuracy.",
@@ -436,6 +440,11 @@ def _energy(args: argparse.Namespace):
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``eskin`` command: parse ``argv`` (default: ``sys.argv[1:]``) with
+    :func:`build_parser`, run the command's handler and return its exit status (see the module
+    docstring). An :class:`pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
+    stderr and returns the error's exit status; an interrupt returns 130.
+    """
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
