@@ -59,9 +59,9 @@ DEFAULT_START_TIMEOUT_S = 900.0
 HOST = "127.0.0.1"
 #: The file of the state folder that holds the local server's auth string.
 AUTH_FILE = "auth-string"
-#: The setting that carries it to the server.
+#: The setting that carries the auth string to the server.
 SERVER_AUTH_ENV = "PREFECT_SERVER_API_AUTH_STRING"
-#: The setting that carries it to every client.
+#: The setting that carries the auth string to every client.
 CLIENT_AUTH_ENV = "PREFECT_API_AUTH_STRING"
 #: In the server's command line; a PID whose command line lacks it is not our server.
 MARKER = "flows.server"
