@@ -53,7 +53,21 @@ _POWER_TEXT = {
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with the command line's error format: one line on stderr, exit status 2."""
+    """argparse with the command line's error format: one line on stderr, exit status 2.
+
+    A command given ``scene_fields=True`` ends its ``--help`` with every scene field, one line
+    each. They are added when the help is formatted, not as the parser's ``epilog``: the docs'
+    command-line page (sphinx-argparse, which renders every epilog) links to the scene-field
+    reference instead of listing them once per command.
+    """
+
+    def __init__(self, *args: Any, scene_fields: bool = False, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self.scene_fields = scene_fields
+
+    def format_help(self) -> str:
+        text = super().format_help()
+        return f"{text}\n{_scene_fields_epilog()}\n" if self.scene_fields else text
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USER_ERROR, f"eskin: error: {message} (see {self.prog} --help)\n")
@@ -126,6 +140,10 @@ def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``eskin`` argument parser: its commands (``run``, ``sweep``, ``optimize``, ``server``,
+    ``serve``, ``describe``, ``report``, ``power``) and their options, each command's handler set
+    as ``handler`` on the parsed namespace. A usage error exits with status 2 and one line on
+    stderr."""
     parser = _Parser(
         prog="eskin",
         description="Neuromorphic e-skin design sweeps: spiking taxel readout to texture accuracy.",
@@ -146,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
         parents=[common],
         help="simulate one scene and print its accuracy, spike metrics and stage timings",
         description="Simulate one scene end to end and print a summary.",
-        epilog=_scene_fields_epilog(),
+        scene_fields=True,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     run.add_argument(
@@ -170,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="sweep a grid of scenes on Dask and write labelled result cubes",
         description="Run the Prefect flow 'sweep': compute the grid's cache misses on Dask "
         "workers and write one xarray cube per sweep under the root.",
-        epilog=_scene_fields_epilog(),
+        scene_fields=True,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sweep.add_argument(
@@ -213,7 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
         "ask-and-tell) whose trials are computed as sweep points, on Dask workers, through the "
         "root's cache. The search is kept in the root: run it again to resume or to continue "
         "it with a larger budget.",
-        epilog=_scene_fields_epilog(),
+        scene_fields=True,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     optimize.add_argument(
@@ -436,6 +454,11 @@ def _energy(args: argparse.Namespace):
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``eskin`` command: parse ``argv`` (default: ``sys.argv[1:]``) with
+    :func:`build_parser`, run the command's handler and return its exit status (see the module
+    docstring). An :class:`~pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
+    stderr and returns the error's exit status; an interrupt returns 130.
+    """
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)

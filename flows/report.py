@@ -4,7 +4,7 @@ It wires three layers together: :mod:`pipeline.report` turns the cubes into the 
 claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.figures`) and renders the files of the report
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
-line's frame-readout options become a :class:`~pipeline.report.FrameReadout` here, checked
+line's frame-readout options become a :class:`~pipeline.report.designs.FrameReadout` here, checked
 before anything is read or written; its energy options arrive as an
 :class:`~pipeline.results.hardware.EnergyModel`.
 """
