@@ -53,21 +53,7 @@ _POWER_TEXT = {
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with the command line's error format: one line on stderr, exit status 2.
-
-    A command given ``scene_fields=True`` ends its ``--help`` with every scene field, one line
-    each. They are added when the help is formatted, not as the parser's ``epilog``: the docs'
-    command-line page (sphinx-argparse, which renders every epilog) links to the scene-field
-    reference instead of listing them once per command.
-    """
-
-    def __init__(self, *args: Any, scene_fields: bool = False, **kwargs: Any):
-        super().__init__(*args, **kwargs)
-        self.scene_fields = scene_fields
-
-    def format_help(self) -> str:
-        text = super().format_help()
-        return f"{text}\n{_scene_fields_epilog()}\n" if self.scene_fields else text
+    """argparse with the command line's error format: one line on stderr, exit status 2."""
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USER_ERROR, f"eskin: error: {message} (see {self.prog} --help)\n")
@@ -164,7 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
         parents=[common],
         help="simulate one scene and print its accuracy, spike metrics and stage timings",
         description="Simulate one scene end to end and print a summary.",
-        scene_fields=True,
+        epilog=_scene_fields_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     run.add_argument(
@@ -188,7 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="sweep a grid of scenes on Dask and write labelled result cubes",
         description="Run the Prefect flow 'sweep': compute the grid's cache misses on Dask "
         "workers and write one xarray cube per sweep under the root.",
-        scene_fields=True,
+        epilog=_scene_fields_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sweep.add_argument(
@@ -231,7 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
         "ask-and-tell) whose trials are computed as sweep points, on Dask workers, through the "
         "root's cache. The search is kept in the root: run it again to resume or to continue "
         "it with a larger budget.",
-        scene_fields=True,
+        epilog=_scene_fields_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     optimize.add_argument(
@@ -456,7 +442,7 @@ def _energy(args: argparse.Namespace):
 def main(argv: list[str] | None = None) -> int:
     """The ``eskin`` command: parse ``argv`` (default: ``sys.argv[1:]``) with
     :func:`build_parser`, run the command's handler and return its exit status (see the module
-    docstring). An :class:`~pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
+    docstring). An :class:`pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
     stderr and returns the error's exit status; an interrupt returns 130.
     """
     args = build_parser().parse_args(argv)
