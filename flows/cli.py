@@ -272,7 +272,10 @@ def build_parser() -> argparse.ArgumentParser:
         "space=FILE --param root=DIR --param budget=N",
     )
     serve.add_argument(
-        "--grid", default="smoke", metavar="NAME|FILE", help="default grid of the deployment"
+        "--grid",
+        default="smoke",
+        metavar="NAME|FILE",
+        help="default grid of the deployment (default: smoke)",
     )
     serve.add_argument(
         "--space",
