@@ -61,4 +61,4 @@ lock:
 	mv "$$tmp/lock" $(LOCK)
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache .hypothesis docs/_build docs/jupyter_execute
+	rm -rf $(VENV) runs .pytest_cache .hypothesis docs/_build docs/jupyter_execute docs/reference/generated
