@@ -27,7 +27,7 @@ with ``t_last`` the time of the last spike (0 at the start). A +1 spike is emitt
 instant the interpolated signal reaches ``r + theta(t)``, a -1 spike at ``r - theta(t)``; the spike
 moves ``r`` by that ``theta(t)`` and sets ``t_last``. Within a segment the condition is a line
 minus a decaying exponential, which is concave, so its first root has a closed-form bracket and is
-solved by safeguarded Newton steps in continuous time (see :func:`_first_reach`); a segment may
+solved by safeguarded Newton steps in continuous time (see ``_first_reach``); a segment may
 hold several spikes. ``theta_min = theta_0`` is the fixed encoder.
 
 Non-ideal encoder (the REAL train)

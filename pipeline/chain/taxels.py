@@ -46,10 +46,12 @@ class TaxelSignals:
 
     @property
     def n_taxels(self) -> int:
+        """Number of taxels (length of ``taxel_row``), distinct delays or not."""
         return len(self.taxel_row)
 
     @property
     def n_samples(self) -> int:
+        """Number of samples of the common time axis (columns of ``signals``)."""
         return self.signals.shape[1]
 
     def taxel(self, index: int) -> np.ndarray:

@@ -8,26 +8,37 @@ correlations.
 
 Data variables
 
-``accuracy``          (axes..., model, repeat, fold)  fraction of a fold's test recordings
-                      classified correctly
-``accuracy_mean``     (axes..., model)        fraction of (recording, repeat) pairs classified
-                      correctly (the mean over folds for points without predictions)
-``accuracy_low``,     (axes..., model)        95 % interval of ``accuracy_mean``: Wilson score
-``accuracy_high``                             over recordings for one repeat, class-stratified
-                      bootstrap over recordings for several (attribute ``interval`` says which)
-``predicted``         (axes..., model, repeat, recording)  int16 out-of-fold predicted class
-``correct``           (axes..., model, repeat, recording)  int8 1 where ``predicted`` is the
-                      recording's ``label``, 0 where not
-``test_fold``         (axes..., repeat, recording)  int16 fold that tested the recording
-``ssnr_db``           (axes...)               pooled SSNR (``+inf``: REAL trains equal TRUE)
-``ste_s2``            (axes...)               the paper's STE, mean over trains
-``ste_sign_safe_s2``  (axes...)               STE with ``|N_real - N_true|``
-``event_rate_hz``     (axes...)               array events per second
-``data_rate_bps``     (axes...)               address-event bits per second
-``equivalent_bits``   (axes...)               ``log2(full_scale_v / threshold_v)``
-``seconds``           (axes..., stage)        wall seconds each stage took when it was computed
-``n_windows_used``    (axes...)               int64 rate-coding windows the point used
-                      (``coding.n_windows`` resolved; -1 where its result does not say)
+``accuracy`` (axes..., model, repeat, fold)
+    fraction of a fold's test recordings classified correctly
+``accuracy_mean`` (axes..., model)
+    fraction of (recording, repeat) pairs classified correctly (the mean over folds for points
+    without predictions)
+``accuracy_low``, ``accuracy_high`` (axes..., model)
+    95 % interval of ``accuracy_mean``: Wilson score over recordings for one repeat,
+    class-stratified bootstrap over recordings for several (attribute ``interval`` says which)
+``predicted`` (axes..., model, repeat, recording)
+    int16 out-of-fold predicted class
+``correct`` (axes..., model, repeat, recording)
+    int8 1 where ``predicted`` is the recording's ``label``, 0 where not
+``test_fold`` (axes..., repeat, recording)
+    int16 fold that tested the recording
+``ssnr_db`` (axes...)
+    pooled SSNR (``+inf``: REAL trains equal TRUE)
+``ste_s2`` (axes...)
+    the paper's STE, mean over trains
+``ste_sign_safe_s2`` (axes...)
+    STE with ``|N_real - N_true|``
+``event_rate_hz`` (axes...)
+    array events per second
+``data_rate_bps`` (axes...)
+    address-event bits per second
+``equivalent_bits`` (axes...)
+    ``log2(full_scale_v / threshold_v)``
+``seconds`` (axes..., stage)
+    wall seconds each stage took when it was computed
+``n_windows_used`` (axes...)
+    int64 rate-coding windows the point used (``coding.n_windows`` resolved; -1 where its result
+    does not say)
 
 A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
 metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of

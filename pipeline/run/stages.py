@@ -6,17 +6,17 @@ Data flows one way::
 
 and :data:`LEVELS` holds one :class:`Level` per kept result of that flow:
 
-==============  ========================================  =====================  =================
-level           reads (scene parts)                       after (levels)         timed steps
-==============  ========================================  =====================  =================
-``recordings``  ``dataset``                               --                     ``load``
-``front_end``   ``readout.full_scale_v``                  recordings             ``front_end``
-``spikes``      ``array``, ``readout``, ``seed`` (only    recordings, front_end  ``taxels``,
-                when a named effect draws random numbers)                        ``readout``,
-                                                                                 ``metrics``
-``rates``       ``coding``                                spikes, recordings     ``coding``
-``results``     ``training``                              rates                  ``train_<model>``
-==============  ========================================  =====================  =================
+==============  =========================================  =====================  =================
+level           reads (scene parts)                        after (levels)         timed steps
+==============  =========================================  =====================  =================
+``recordings``  ``dataset``                                --                     ``load``
+``front_end``   ``readout.full_scale_v``                   recordings             ``front_end``
+``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``taxels``,
+                when a named effect draws random numbers)                         ``readout``,
+                                                                                  ``metrics``
+``rates``       ``coding``                                 spikes, recordings     ``coding``
+``results``     ``training``                               rates                  ``train_<model>``
+==============  =========================================  =====================  =================
 
 Taxel signals are made inside ``spikes``, one recording at a time, and never kept (they are as
 large as the recordings times the taxels). ``recordings``, ``front_end`` and ``rates`` live in
