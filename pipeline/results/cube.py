@@ -133,6 +133,11 @@ RESULT_VALUES: dict[str, int] = {"n_windows_used": -1}
 # One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and
 # plain strings keep cubes comparable with xarray.testing.assert_identical. Read once, at import:
 # the process runs one set of libraries.
+#: The versions of Python and of the libraries that shape the results, as the cube's string
+#: attributes ``version_<name>`` (``version_python``, ``version_torch``, ``version_scikit_learn``,
+#: ...), read at import.
+#:
+#: :meta hide-value:
 DEPENDENCY_VERSIONS: dict[str, str] = {
     "version_python": platform.python_version(),
     **{
@@ -146,22 +151,37 @@ class PointResult(Protocol):
     """What the cube needs of one point (:class:`pipeline.run.records.ResultEntry` is one)."""
 
     @property
-    def fold_accuracy(self) -> Mapping[str, np.ndarray]: ...
+    def fold_accuracy(self) -> Mapping[str, np.ndarray]:
+        """Model name -> float64 (repeats, folds) accuracy in [0, 1] (a ``(folds,)`` array is one
+        repeat)."""
+        ...
 
     @property
-    def seconds(self) -> Mapping[str, float]: ...
+    def seconds(self) -> Mapping[str, float]:
+        """Wall seconds of every step of the point, by step name."""
+        ...
 
     @property
-    def metrics(self) -> SpikeMetrics: ...
+    def metrics(self) -> SpikeMetrics:
+        """The point's spike metrics."""
+        ...
 
     @property
-    def recordings(self) -> RecordingsInfo | None: ...
+    def recordings(self) -> RecordingsInfo | None:
+        """What the point was computed on; None where its result does not say."""
+        ...
 
     @property
-    def out_of_fold(self) -> OutOfFold | None: ...
+    def out_of_fold(self) -> OutOfFold | None:
+        """Every recording's out-of-fold prediction per model and repeat; None where the point
+        kept none."""
+        ...
 
     @property
-    def n_windows_used(self) -> int | None: ...
+    def n_windows_used(self) -> int | None:
+        """Rate-coding windows the point used (``coding.n_windows`` resolved); None where its
+        result does not say."""
+        ...
 
 
 def build_cube(

@@ -101,7 +101,7 @@ __all__ = [
 ]
 
 MAX_BITS = 64
-"""Largest ADC resolution accepted: beyond it ``2**bits`` is a unit mistake, not a design."""
+"""Largest ADC resolution accepted (bits). Beyond it ``2**bits`` is a unit mistake, not a design."""
 
 CHIP = (
     "M. D. Alea et al., IEEE TBioCAS, Dec. 2024 (doi 10.1109/TBCAS.2024.3387545): 192 taxels, "
@@ -329,6 +329,7 @@ class ReadoutPower:
 
     @property
     def total_w(self) -> float:
+        """Static plus dynamic power (W)."""
         return self.static_w + self.dynamic_w
 
     @property
