@@ -207,14 +207,15 @@ class Slot:
 
     @property
     def convert(self) -> Callable[[Any], Any]:
-        """The reader of the field's values: a value as given in a TOML table or dict -> the
-        value of ``kind``; raises TypeError or ValueError, with a message, for one it refuses."""
+        """The reader of the field's values, from a value as given in a TOML table or dict to
+        the value of ``kind``; it raises TypeError or ValueError, with a message, for one it
+        refuses."""
         return _converter(self.kind)
 
     @property
     def only_when(self) -> tuple[str, Any] | None:
-        """For a :func:`part` declared ``only_when``: the sibling field and the value under
-        which it matters."""
+        """The sibling field and the value under which a :func:`part` declared ``only_when``
+        matters; None for any other field."""
         return self.field.metadata.get(_ONLY_WHEN)
 
 

@@ -342,7 +342,7 @@ class Read:
 
     @property
     def argument(self) -> str:
-        """The keyword the compute function gets the part as: the last name of ``path``."""
+        """The keyword the compute function gets the part as, the last name of ``path``."""
         return self.path.rsplit(".", 1)[-1]
 
     def applies(self, scene: Scene) -> bool:
