@@ -242,7 +242,7 @@ def build_model(
     Parameters
     ----------
     model
-        :attr:`Model.FFNN` or :attr:`Model.CNN`.
+        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
     input_shape
         One sample's frame ``(C, H, W)``: channels, taxels (rows), windows (columns).
     n_classes

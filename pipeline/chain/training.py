@@ -339,7 +339,7 @@ def cross_validate(
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
     model
-        :attr:`Model.FFNN` or :attr:`Model.CNN`.
+        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
     training
         Folds, epochs, batch size, learning rate, hidden units and seed.
     class_names
