@@ -125,5 +125,18 @@ def _skip_foreign(app, what, name, obj, skip, options):
     return None
 
 
+def _public_bases(app, name, obj, options, bases):
+    """Show a class's public ancestors in place of a private base (``_FoldModel``): the
+    reference documents public names only."""
+
+    def public(base):
+        if base.__name__.startswith("_"):
+            return [found for parent in base.__bases__ for found in public(parent)]
+        return [base]
+
+    bases[:] = [found for base in list(bases) for found in public(base)]
+
+
 def setup(app):
     app.connect("autodoc-skip-member", _skip_foreign)
+    app.connect("autodoc-process-bases", _public_bases)

@@ -14,8 +14,8 @@ CNN
 
 Both return logits (no softmax); the loss is cross-entropy on logits.
 
-Fold batching
--------------
+Fold-batched models
+-------------------
 A k-fold cross-validation trains ``F`` independent copies of one model. Here they are ONE module
 whose parameters carry a leading fold dimension ``F`` and whose ``forward`` maps
 ``x: float32 (F, B, C, H, W)`` to ``logits: float32 (F, B, n_classes)``; fold ``f`` of the output

@@ -25,8 +25,8 @@ Randomness comes only from generators derived from ``(repeat seed, fold index)``
 (:func:`pipeline.chain.models.fold_generator`), so a fold's result does not depend on which other
 folds it is trained with.
 
-Fold batching
--------------
+Training the folds at once
+--------------------------
 All ``F`` folds train as one computation (``batched=True``): the fold-batched model
 (:mod:`pipeline.chain.models`) takes ``(F, B, ...)`` inputs, the losses of the folds are summed, so
 each fold's parameters receive exactly that fold's gradient, and the Adam update is elementwise with
