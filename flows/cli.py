@@ -221,7 +221,10 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     optimize.add_argument(
-        "--space", required=True, metavar="FILE", help="a space TOML file (see the README)"
+        "--space",
+        required=True,
+        metavar="FILE",
+        help="a space TOML file (see docs/how-to/search.md)",
     )
     optimize.add_argument(
         "--root", metavar="DIR", help="the store's folder, not s3:// (default: runs/<space name>)"
@@ -396,7 +399,7 @@ def _energy_options() -> argparse.ArgumentParser:
     parent = argparse.ArgumentParser(add_help=False)
     group = parent.add_argument_group(
         "energy model (defaults calibrated on the chip of Alea et al., IEEE TBioCAS 2024, and "
-        "taken from the literature: see the README)"
+        "taken from the literature: see docs/how-to/report.md)"
     )
     defaults = EnergyModel()
     for name, p in PARAMETERS.items():

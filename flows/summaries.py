@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # the command line imports this module; xarray loads only whe
 
 
 def result_summary(result: Any) -> dict[str, Any]:
-    """The JSON object of ``eskin run --json`` (its keys are documented in the README).
+    """The JSON object of ``eskin run --json`` (its keys are documented in docs/scenes.md).
 
     Parameters
     ----------
