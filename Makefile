@@ -3,7 +3,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test bench lint lock clean
+.PHONY: run test bench lint docs lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -38,6 +38,12 @@ test: $(VENV)/.installed-test
 bench: $(VENV)/.installed-test
 	$(BIN)/python -m benchmarks
 
+# The documentation site: docs/_build/html/index.html. Warnings (a broken reference, a notebook
+# cell that fails) are errors; the tutorial notebook runs on every build.
+docs: $(VENV)/.installed-test
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
@@ -47,7 +53,7 @@ lock:
 	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
 	$(PYTHON) -m venv "$$tmp/venv"; \
 	"$$tmp/venv/bin/python" -m pip install --quiet --upgrade pip; \
-	"$$tmp/venv/bin/python" -m pip install --quiet '.[test]'; \
+	"$$tmp/venv/bin/python" -m pip install --quiet '.[test,docs]'; \
 	{ grep '^#' $(LOCK) || true; "$$tmp/venv/bin/python" -m pip freeze --exclude eskin-sweep \
 		--exclude pip --exclude setuptools --exclude wheel; } > "$$tmp/lock"; \
 	if grep -qi '^nvidia-' "$$tmp/lock" || ! grep -q '^torch==.*+cpu$$' "$$tmp/lock"; then \
@@ -55,4 +61,4 @@ lock:
 	mv "$$tmp/lock" $(LOCK)
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache .hypothesis
+	rm -rf $(VENV) runs .pytest_cache .hypothesis docs/_build docs/jupyter_execute docs/reference/generated

@@ -23,7 +23,7 @@ from pipeline.design.scene import Model, Scene
 from pipeline.run.simulate import encode, prepare, rate_frames
 
 WORKER_MEMORY_BYTES = 1.5 * 2**30
-"""Memory budget of one Dask worker (the README's target for its peak resident memory)."""
+"""Memory budget of one Dask worker, the peak resident memory target of docs/performance.md."""
 
 
 def scene_frames(scene: Scene) -> tuple[np.ndarray, np.ndarray]:

@@ -13,6 +13,8 @@
 - Compare two designs recording by recording: :func:`compare` (a paired difference in accuracy
   with its 95 % interval and an exact McNemar test); :mod:`pipeline.results.stats` has the
   statistics themselves (accuracy intervals, paired comparisons, Holm's correction, trends).
+- Read the answer, the report's first section: :func:`report_answers` (per model, the most
+  accurate design and the cheapest ones not significantly below it).
 - Write the report: :func:`write_run_report`.
 
 Nothing here imports Prefect.
@@ -20,7 +22,7 @@ Nothing here imports Prefect.
 
 from flows.assembly import best_points
 from flows.progress import SweepFailed
-from flows.report import write_run_report
+from flows.report import report_answers, write_run_report
 from flows.run import run_sweep
 from flows.search import run_optimize
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
@@ -48,6 +50,7 @@ __all__ = [
     "load_space",
     "open_results",
     "open_tree",
+    "report_answers",
     "result_summary",
     "run_optimize",
     "run_scene",

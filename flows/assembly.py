@@ -90,6 +90,8 @@ def assemble_cubes(plan: SweepPlan) -> dict[str, str]:
 
 
 def cube_location(plan: SweepPlan, name: str) -> str:
+    """Where the plan's store keeps the cube of sweep ``name``: a folder, or the URL of its
+    prefix on an object root (:meth:`storage.store.SweepStore.cube_location`)."""
     return SweepStore(plan.root).cube_location(name)
 
 

@@ -126,6 +126,10 @@ def _add_cluster_options(command: argparse.ArgumentParser, workers: str) -> None
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``eskin`` argument parser: its commands (``run``, ``sweep``, ``optimize``, ``server``,
+    ``serve``, ``describe``, ``report``, ``power``) and their options, each command's handler set
+    as ``handler`` on the parsed namespace. A usage error exits with status 2 and one line on
+    stderr."""
     parser = _Parser(
         prog="eskin",
         description="Neuromorphic e-skin design sweeps: spiking taxel readout to texture accuracy.",
@@ -217,7 +221,10 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     optimize.add_argument(
-        "--space", required=True, metavar="FILE", help="a space TOML file (see the README)"
+        "--space",
+        required=True,
+        metavar="FILE",
+        help="a space TOML file (see docs/how-to/search.md)",
     )
     optimize.add_argument(
         "--root", metavar="DIR", help="the store's folder, not s3:// (default: runs/<space name>)"
@@ -268,7 +275,10 @@ def build_parser() -> argparse.ArgumentParser:
         "space=FILE --param root=DIR --param budget=N",
     )
     serve.add_argument(
-        "--grid", default="smoke", metavar="NAME|FILE", help="default grid of the deployment"
+        "--grid",
+        default="smoke",
+        metavar="NAME|FILE",
+        help="default grid of the deployment (default: smoke)",
     )
     serve.add_argument(
         "--space",
@@ -389,7 +399,7 @@ def _energy_options() -> argparse.ArgumentParser:
     parent = argparse.ArgumentParser(add_help=False)
     group = parent.add_argument_group(
         "energy model (defaults calibrated on the chip of Alea et al., IEEE TBioCAS 2024, and "
-        "taken from the literature: see the README)"
+        "taken from the literature: see docs/how-to/report.md)"
     )
     defaults = EnergyModel()
     for name, p in PARAMETERS.items():
@@ -436,6 +446,11 @@ def _energy(args: argparse.Namespace):
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``eskin`` command: parse ``argv`` (default: ``sys.argv[1:]``) with
+    :func:`build_parser`, run the command's handler and return its exit status (see the module
+    docstring). An :class:`pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
+    stderr and returns the error's exit status; an interrupt returns 130.
+    """
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)

@@ -48,6 +48,9 @@ class Export:
     renamed: tuple[str, ...]
 
     def to_json(self) -> dict[str, object]:
+        """The export as plain JSON values, as ``eskin describe --export DIR --json`` prints it:
+        ``{"path", "n_recordings", "renamed"}`` (the path as text, the renamed classes as a
+        list)."""
         return {
             "path": str(self.path),
             "n_recordings": self.n_recordings,

@@ -39,7 +39,7 @@ def hermetic_environment(root: str | Path, *, prefect: bool = True) -> None:
 
     Must run before Prefect is imported (it reads its settings at import). A root where those
     folders cannot be made for want of space or permission raises
-    :class:`storage.StoreWriteError`.
+    :class:`storage.errors.StoreWriteError`.
     """
     state = state_folder(root)
     defaults = {

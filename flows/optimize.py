@@ -44,7 +44,8 @@ def optimize(
     report: bool = False,
     show_progress: bool = False,
 ) -> dict[str, Any]:
-    """Search ``space`` (a space file or a checked :class:`Space`) into cubes under ``root``.
+    """Search ``space`` (a space file or a checked :class:`~pipeline.design.space.Space`) into
+    cubes under ``root``.
 
     As :func:`flows.search.run_optimize`, with ``budget`` trials or ``budget_s`` stage seconds;
     ``report`` writes the report under ``<root>/report`` at the end.

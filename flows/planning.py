@@ -9,8 +9,8 @@ A stored cube is *current* when it was built from what a sweep of this grid woul
 from now, its *source* (:func:`cube_source`): the grid's base scene and the sweep, the names of
 the batches that hold its points' results (a batch never changes once in place, and a result
 computed again lands in a new one), and the code and dependency versions; and when every file
-of it is as written (:meth:`storage.SweepStore.current_note`). Planning reads the cached results
-of the other sweeps only: a re-run with every cube current reads none.
+of it is as written (:meth:`storage.store.SweepStore.current_note`). Planning reads the cached
+results of the other sweeps only: a re-run with every cube current reads none.
 """
 
 from __future__ import annotations
@@ -58,10 +58,14 @@ class SweepPlan:
 
     @functools.cached_property
     def cached(self) -> frozenset[str]:
+        """Result keys of the points whose result is already stored. These are the results
+        planning read, and every point of a sweep whose cube is current."""
         return frozenset(self.records).union(*(self.sweep_keys[name] for name in self.current))
 
     @property
     def missing(self) -> list[str]:
+        """Result keys of the distinct points still to compute (not :attr:`cached`), in the
+        grid's order."""
         return [key for key in self.scenes if key not in self.cached]
 
     @functools.cached_property
@@ -169,8 +173,8 @@ def plan_sweep(grid: Grid, root: str | Path) -> SweepPlan:
     """Tidy the store at ``root``, find which of the (checked) grid's points are cached and
     which stored cubes are current.
 
-    Call it holding the root's lock (:meth:`storage.SweepStore.lock`): no other sweep writes to
-    the root then, so every partial entry is a leftover of a killed run and is removed. A
+    Call it holding the root's lock (:meth:`storage.store.SweepStore.lock`): no other sweep writes
+    to the root then, so every partial entry is a leftover of a killed run and is removed. A
     cached result that fails its checksum is discarded (with a warning) and planned again, and
     the cubes built from its batch are no longer current.
     """
@@ -212,7 +216,7 @@ def cube_source(
     one of its points (result ``keys``) has no stored result.
 
     ``batches`` maps result keys to the batches holding them
-    (:meth:`storage.SweepStore.entry_batches`).
+    (:meth:`storage.store.SweepStore.entry_batches`).
     """
     if any(key not in batches for key in keys):
         return None

@@ -4,7 +4,7 @@
 (:func:`point_failures`), and gives up on a cluster left without workers; a sweep whose points
 failed ends with :class:`SweepFailed` (:func:`failure_message`).
 
-A write that failed for want of space or permission (:class:`storage.StoreWriteError`) is not
+A write that failed for want of space or permission (:class:`storage.errors.StoreWriteError`) is not
 a failed point: every later write would fail alike. The first one cancels the work left and
 stops the sweep, which ends with :class:`SweepStopped`, one line saying what the root keeps
 (:func:`stopped_message`).
@@ -51,7 +51,7 @@ def stopped_message(plan: SweepPlan, error: StoreWriteError) -> str:
 
 
 def write_error(future: Any) -> StoreWriteError | None:
-    """The finished task ``future``'s :class:`storage.StoreWriteError`, if that is how it
+    """The finished task ``future``'s :class:`storage.errors.StoreWriteError`, if that is how it
     failed."""
     if future.status != "error":
         return None

@@ -4,7 +4,7 @@ It wires three layers together: :mod:`pipeline.report` turns the cubes into the 
 claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.figures`) and renders the files of the report
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
-line's frame-readout options become a :class:`~pipeline.report.FrameReadout` here, checked
+line's frame-readout options become a :class:`~pipeline.report.designs.FrameReadout` here, checked
 before anything is read or written; its energy options arrive as an
 :class:`~pipeline.results.hardware.EnergyModel`.
 """
@@ -19,9 +19,13 @@ from typing import TYPE_CHECKING
 from pipeline.errors import EskinError
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import xarray as xr
     from matplotlib.figure import Figure
 
-    from pipeline.report import Report
+    from pipeline.report import FrameReadout, Report
+    from pipeline.report.answer import ModelAnswer
     from pipeline.results.hardware import EnergyModel
 
 DEFAULT_ADC_BITS = 12
@@ -60,15 +64,9 @@ def write_run_report(
         sweep store, or a store with no cubes.
     """
     from flows.environment import hermetic_environment
-    from pipeline.numbers import positive_number
-    from pipeline.results.hardware import MAX_BITS
     from storage import SweepStore, open_results
 
-    problems = []
-    if not 1 <= adc_bits <= MAX_BITS:
-        problems.append(f"--adc-bits {adc_bits}: need 1 to {MAX_BITS}")
-    if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
-        problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
+    problems = _adc_problems(adc_bits, adc_rate_hz)
     if out is None and (problem := needs_report_folder(root)):
         problems.append(problem)
     if problems:
@@ -79,18 +77,17 @@ def write_run_report(
         raise EskinError(f"no result cubes in {store.root}: run 'eskin sweep' on it first")
     with suppress(OSError):  # a read-only root still gets its report elsewhere (--out)
         hermetic_environment(store.root, prefect=False)
-    from pipeline.report import FrameReadout, build_report, sampling_rate_hz
+    from pipeline.report import build_report
     from pipeline.report.cost import sweep_runs
     from pipeline.report.figures import draw_report
     from storage.report import check_report_folder
     from storage.runlog import read_sweep_records
 
-    rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
-    frame = FrameReadout(adc_bits, rate_hz) if rate_hz else None
+    frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
     report = build_report(
         cubes, frame=frame, energy=energy, runs=sweep_runs(read_sweep_records(store.root))
     )
-    if rate_hz is None:
+    if frame is None:
         print(
             "eskin: warning: the cubes do not state the recordings' sampling rate; the report "
             "compares with no frame readout (give --adc-rate-hz)",
@@ -99,6 +96,67 @@ def write_run_report(
     folder = out if out is not None else store.root / "report"
     check_report_folder(folder)  # before the figures: a refused folder costs nothing
     return write_report(folder, report, draw_report(report), show_progress=show_progress)
+
+
+def report_answers(
+    cubes: Mapping[str, xr.Dataset],
+    *,
+    adc_bits: int = DEFAULT_ADC_BITS,
+    adc_rate_hz: float | None = None,
+    energy: EnergyModel | None = None,
+) -> tuple[ModelAnswer, ...]:
+    """The report's answer, one per model, from a run's cubes: the most accurate design and the
+    cheapest designs (by data rate, by readout power) whose accuracy is not significantly below
+    it, as the report's first section gives them.
+
+    Parameters
+    ----------
+    cubes
+        ``{sweep name: cube}`` as :func:`storage.store.open_results` returns them.
+    adc_bits, adc_rate_hz, energy
+        As for :func:`write_run_report`: the frame readout the answer compares with and the
+        power estimate's constants.
+
+    Returns
+    -------
+    tuple of pipeline.report.answer.ModelAnswer
+        In the order of the cubes' models.
+
+    Raises
+    ------
+    EskinError
+        Bad ADC figures, or cubes too old to hold ``accuracy_mean``.
+    """
+    from pipeline.report import build_report
+
+    if problems := _adc_problems(adc_bits, adc_rate_hz):
+        raise EskinError("; ".join(problems))
+    frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
+    return tuple(build_report(cubes, frame=frame, energy=energy).answers)
+
+
+def _adc_problems(adc_bits: int, adc_rate_hz: float | None) -> list[str]:
+    """What is wrong with the frame readout's figures, named as the command line's options."""
+    from pipeline.numbers import positive_number
+    from pipeline.results.hardware import MAX_BITS
+
+    problems = []
+    if not 1 <= adc_bits <= MAX_BITS:
+        problems.append(f"--adc-bits {adc_bits}: need 1 to {MAX_BITS}")
+    if adc_rate_hz is not None and positive_number(adc_rate_hz) is None:
+        problems.append(f"--adc-rate-hz {adc_rate_hz:g}: need a number > 0")
+    return problems
+
+
+def _frame_readout(
+    cubes: Mapping[str, xr.Dataset], adc_bits: int, adc_rate_hz: float | None
+) -> FrameReadout | None:
+    """The frame readout to compare with: ``adc_bits`` at ``adc_rate_hz`` per taxel, by default
+    the recordings' sampling rate as the cubes state it; None where neither says a rate."""
+    from pipeline.report import FrameReadout, sampling_rate_hz
+
+    rate_hz = adc_rate_hz or sampling_rate_hz(cubes)
+    return FrameReadout(adc_bits, rate_hz) if rate_hz else None
 
 
 def needs_report_folder(root: str | Path) -> str | None:

@@ -1,4 +1,5 @@
-"""A whole sweep as one plain call, without Prefect: :func:`run_sweep`, and what it reports.
+"""A whole sweep as one plain call, without Prefect: :func:`~flows.run.run_sweep`, and what it
+reports.
 
 What the ``sweep`` flow (:mod:`flows.sweep`) does, step by step, for a notebook or a script:
 load and check the grid (:mod:`flows.planning`), hold the root's lock, plan, submit the missing
@@ -115,7 +116,7 @@ def run_sweep(
     ------
     EskinError
         Bad input (grid, dataset, root, ``workers``), before anything is written; a root that
-        another sweep holds (:class:`storage.StoreBusyError`).
+        another sweep holds (:class:`storage.errors.StoreBusyError`).
     SweepFailed
         Some points failed; the cubes of the sweeps they are not in are written.
     SweepStopped

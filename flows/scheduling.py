@@ -25,8 +25,9 @@ from pipeline.run.stages import RESULTS, SPIKES, Level
 from storage import SweepStore
 
 #: Tasks per worker thread a sweep's missing points are split into (see
-#: :func:`default_points_per_task`), and the most points one task takes.
+#: :func:`default_points_per_task`).
 TASKS_PER_THREAD = 8
+#: The most points one task takes.
 MAX_POINTS_PER_TASK = 500
 
 

@@ -120,7 +120,7 @@ def make_sampler(kind: Sampler, seed: int) -> Any:
 class Search:
     """One search of ``space`` in the store at ``root``: its study, journal and trials.
 
-    Open it holding the root's lock (:meth:`storage.SweepStore.lock`).
+    Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`).
     """
 
     def __init__(self, space: Space, root: str | Path):
@@ -327,6 +327,7 @@ def _failed_state() -> Any:
 
 
 def default_search_root(space: Space) -> Path:
+    """``runs/<space name>``: the run root of a search given no ``--root``."""
     return DEFAULT_RUNS_DIR / space.name
 
 
@@ -428,7 +429,8 @@ def run_optimize(
     on_batch: Callable[[Search, BatchOutcome], None] | None = None,
     evaluate: Callable[[Search, list[int], Callable[[], Any]], BatchOutcome] | None = None,
 ) -> dict[str, Any]:
-    """Search ``space`` (a file or a :class:`Space`) into the store at ``root``, without Prefect.
+    """Search ``space`` (a file or a :class:`~pipeline.design.space.Space`) into the store at
+    ``root``, without Prefect.
 
     Holds the root's lock, replays the root's journal of this space, asks batches of trials
     until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds

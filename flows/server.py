@@ -13,7 +13,7 @@ fails only when the server process exits, or after ``ESKIN_SERVER_START_TIMEOUT_
 by default), with a :class:`ServerError` naming the log to read.
 
 The local server asks every client for an auth string (Prefect's basic authentication): on
-its first start ``eskin`` draws one (:func:`secrets.token_urlsafe`) and keeps it in
+its first start ``eskin`` draws one (``secrets.token_urlsafe``) and keeps it in
 ``<state>/auth-string``, readable by its owner alone (mode 0600, in a folder only its owner
 enters), starts the server with it (``PREFECT_SERVER_API_AUTH_STRING``) and hands it to every
 client of its own (``PREFECT_API_AUTH_STRING``). Another user of the machine who reaches the
@@ -59,8 +59,9 @@ DEFAULT_START_TIMEOUT_S = 900.0
 HOST = "127.0.0.1"
 #: The file of the state folder that holds the local server's auth string.
 AUTH_FILE = "auth-string"
-#: The settings that carry it: the server's, and every client's.
+#: The setting that carries the auth string to the server.
 SERVER_AUTH_ENV = "PREFECT_SERVER_API_AUTH_STRING"
+#: The setting that carries the auth string to every client.
 CLIENT_AUTH_ENV = "PREFECT_API_AUTH_STRING"
 #: In the server's command line; a PID whose command line lacks it is not our server.
 MARKER = "flows.server"
@@ -83,10 +84,12 @@ class ServerInfo:
 
     @property
     def ui_url(self) -> str:
+        """The server's UI, ``http://127.0.0.1:<port>``."""
         return f"http://{HOST}:{self.port}"
 
     @property
     def api_url(self) -> str:
+        """The server's API, ``<ui_url>/api`` (what ``PREFECT_API_URL`` names)."""
         return f"{self.ui_url}/api"
 
 
@@ -359,6 +362,13 @@ def _watch_idle(state: Path, idle_s: float, server: object) -> None:
 
 
 def main(argv: list[str]) -> int:
+    """Run the local server in this process (``python -m flows.server STATE PORT IDLE_S``).
+
+    ``argv`` holds the state folder, the port and the idle period in seconds, as the process
+    that starts the server passes them. The Prefect API and UI are served on 127.0.0.1 at that
+    port until stopped (SIGTERM) or idle for ``IDLE_S`` seconds; ``server.json`` is then removed
+    if it names this process. Returns the exit status, 0.
+    """
     import uvicorn
 
     state, port, idle_s = Path(argv[0]), int(argv[1]), float(argv[2])

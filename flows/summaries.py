@@ -1,6 +1,6 @@
 """Summaries of a scene's run and of a sweep: plain functions the command line prints.
 
-A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.run.simulate.RunResult`
+A notebook calls them too: :func:`result_summary` turns a :class:`pipeline.run.simulate.SceneResult`
 into the JSON-able dict of ``eskin run --json``, :func:`format_summary` prints it as
 ``eskin run`` does, and :func:`format_sweep_summary` prints a sweep's summary (what
 :func:`flows.run.run_sweep` and the ``sweep`` flow return) with the best point per model
@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # the command line imports this module; xarray loads only whe
 
 
 def result_summary(result: Any) -> dict[str, Any]:
-    """The JSON object of ``eskin run --json`` (its keys are documented in the README).
+    """The JSON object of ``eskin run --json`` (its keys are documented in docs/scenes.md).
 
     Parameters
     ----------
@@ -130,7 +130,7 @@ def format_sweep_summary(
         :func:`flows.assembly.summarize`), ``report`` and ``flow_run_url``.
     cubes
         The sweep's cubes by name, summarized when ``summary`` has no ``sweeps``; default:
-        read from ``summary["root"]`` (:func:`storage.open_results`).
+        read from ``summary["root"]`` (:func:`storage.store.open_results`).
     """
     from flows.assembly import summarize
     from storage import open_results

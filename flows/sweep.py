@@ -78,6 +78,8 @@ def artifact_key(*parts: str) -> str:
 
 @task(name="plan", cache_policy=NO_CACHE)
 def plan_task(grid: Grid, root: str) -> SweepPlan:
+    """Plan the checked ``grid`` in the run root ``root`` (:func:`flows.planning.plan_sweep`)
+    and log how many distinct points are cached and how many are to compute."""
     plan = plan_sweep(grid, root)
     get_run_logger().info(
         "%d distinct points in %d sweeps: %d cached, %d to compute",
@@ -95,7 +97,7 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str,
     return the cube's summary (:func:`flows.assembly.summarize`).
 
     A sweep stopped by a failed write (its points cancelled, or one failed so, or its cube
-    not written: then the state holds the :class:`storage.StoreWriteError`) ends Cancelled: a
+    not written: then the state holds the :class:`storage.errors.StoreWriteError`) ends Cancelled: a
     state, not an exception, so that the terminal shows no traceback (the flow says it once).
     """
     logger = get_run_logger()
@@ -135,6 +137,8 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str,
 
 @task(name="report", cache_policy=NO_CACHE)
 def report_task(root: str) -> str:
+    """Write the report of the run root ``root`` (:func:`flows.report.write_run_report`),
+    publish a link artifact to it, and return the path of its ``report.html``."""
     from flows.report import write_run_report
 
     path = write_run_report(Path(root))

@@ -13,7 +13,7 @@ keep (the recordings, their front end, the rate matrices) stay in memory, a few 
 
 One failing point does not lose the others of its task: they are stored, and the task then
 raises :class:`PointsFailed` naming the points that failed. A write that fails for want of
-space or permission (:class:`storage.StoreWriteError`) ends the task at once: the coordinator
+space or permission (:class:`storage.errors.StoreWriteError`) ends the task at once: the coordinator
 stops the sweep and says so once, so the worker does not log it with its traceback.
 
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
@@ -136,7 +136,7 @@ def ensure_entries(
 
 class _WriteFailureFilter(logging.Filter):
     """Drops a Dask worker's "Compute Failed" record (with its traceback) of a task that a
-    :class:`storage.StoreWriteError` ended: the coordinator reports that once."""
+    :class:`storage.errors.StoreWriteError` ended: the coordinator reports that once."""
 
     def filter(self, record: logging.LogRecord) -> bool:
         marker = f"{StoreWriteError.__name__}("

@@ -32,6 +32,14 @@ from storage.batches import Record, Variables
 
 
 class DeclaredVariable(Protocol):
+    """What the store needs of one declared variable of a kind (see the module docstring).
+
+    ``name`` is its name in the entry and in the batch, ``dims`` its entry-level dimension names
+    (``()`` for a scalar), ``dtype`` a numpy dtype name or ``"str"``, ``units`` and
+    ``long_name`` the attributes written beside its values, and ``optional`` whether an entry
+    may lack it.
+    """
+
     name: str
     dims: tuple[str, ...]
     dtype: str

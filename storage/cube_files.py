@@ -226,7 +226,7 @@ def _manifest(path: Path) -> dict[str, str]:
 
 def manifest_of(files: Mapping[str, bytes]) -> dict[str, str]:
     """sha256 of every file of a cube (relative name -> bytes) but its group metadata, as
-    :func:`_manifest` gives it for a folder."""
+    ``_manifest`` gives it for a folder."""
     return {
         name: hashlib.sha256(data).hexdigest()
         for name, data in sorted(files.items())
@@ -235,6 +235,8 @@ def manifest_of(files: Mapping[str, bytes]) -> dict[str, str]:
 
 
 def cube_path(folder: Path, name: str) -> Path:
+    """The folder of cube ``name`` under the cubes folder ``folder``; ValueError if ``name``
+    cannot name a cube (:func:`checked_name`)."""
     return folder / checked_name(name)
 
 

@@ -51,7 +51,7 @@ class StoreBusyError(StoreError):
 
 class StoreWriteError(StoreError):
     """A write to the run root failed in a way that every later write would too (no space, no
-    quota, no permission: :data:`STOPPING_ERRNOS`); what was written before is kept.
+    quota, no permission: ``STOPPING_ERRNOS``); what was written before is kept.
 
     ``root`` is the run root and ``cause`` the failure in a few words. A sweep stops at the
     first one (exit status 1): its message is one line naming both.
@@ -70,7 +70,7 @@ class StoreWriteError(StoreError):
 
 def write_failure(error: BaseException, root: str | os.PathLike) -> StoreWriteError | None:
     """``error`` (or an error it was raised from) as a :class:`StoreWriteError` on ``root`` if
-    it is one of :data:`STOPPING_ERRNOS`; else None (the caller re-raises ``error``)."""
+    it is one of ``STOPPING_ERRNOS``; else None (the caller re-raises ``error``)."""
     seen: set[int] = set()
     while error is not None and id(error) not in seen:
         seen.add(id(error))

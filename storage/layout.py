@@ -20,8 +20,8 @@ from storage.errors import StoreError, StoreLayoutError, one_line
 
 STORE_NAME = "store.zarr"
 MARKER = "eskin_sweep_store"
-#: The store layout this code writes and reads: 2 stores entries in batches
-#: (:mod:`storage.batches`); 1 stored one group per entry.
+#: The store layout this code writes and reads. Layout 2 stores entries in batches
+#: (:mod:`storage.batches`); layout 1 stored one group per entry.
 VERSION = 2
 # A store of an older layout is kept beside the new one under this name (plus a suffix).
 OLD_STORE_PREFIX = "store.zarr-layout-"

@@ -147,6 +147,7 @@ class ObjectRoot:
         return read_batch(store, kind)
 
     def has_batch(self, kind: str, batch: str) -> bool:
+        """True if the batch ``batch`` of ``kind`` is complete (its group metadata exists)."""
         try:
             self.objects.get(self._key(kind, batch, cube_files.METADATA))
         except FileNotFoundError:
@@ -238,6 +239,7 @@ class ObjectRoot:
         self._clean_versions(name, infos, time.time(), GRACE_S)
 
     def cube_names(self) -> list[str]:
+        """Names of the stored cubes (those with a ``current`` pointer), sorted."""
         names = set()
         for info in self.objects.list(self._key(CUBES) + "/"):
             parts = info.key.split("/")
@@ -246,6 +248,8 @@ class ObjectRoot:
         return sorted(names)
 
     def read_cube(self, name: str, *, lazy: bool) -> xr.Dataset:
+        """The current version of cube ``name``, checked as it is read
+        (:meth:`storage.store.SweepStore.read_cube`); StoreError if there is none."""
         cube_files.checked_name(name)
         version = self._current(name)
         if version is None:
@@ -254,6 +258,8 @@ class ObjectRoot:
         return cube_files.read_group(store, f"cube {name} in {self.objects.url}", lazy=lazy)
 
     def current_note(self, name: str, source: str) -> dict[str, Any] | None:
+        """The note of cube ``name``'s current version if it is intact and was written with
+        ``source``, else None (:meth:`storage.store.SweepStore.current_note`)."""
         cube_files.checked_name(name)
         version = self._current(name)
         if version is None:
@@ -282,10 +288,13 @@ class ObjectRoot:
     # The run log
 
     def append_run(self, line: bytes) -> None:
+        """Add one record of the run log (:mod:`storage.runlog`) as an object of its own: an
+        object root cannot append to a file."""
         # Named by the time in ns, so that a listing's order is the order of writing.
         self.objects.put(f"{RUN_LOG}{time.time_ns():020d}-{uuid.uuid4().hex}.json", line)
 
     def run_lines(self) -> list[bytes]:
+        """Every record of the run log, in the order written."""
         keys = sorted(info.key for info in self.objects.list(RUN_LOG))
         return [self.objects.get(key)[0] for key in keys]
 

@@ -3,9 +3,9 @@
 The folder (``<root>/report`` by default) holds the files that
 :func:`pipeline.report.document.report_files` makes, plus the marker ``.eskin-report``: this
 folder is a report and may be replaced. It is built in full under a temporary name beside the
-target and then swapped in with :func:`storage.replace_folder`, so the target is always a whole
-report, old or new, never half of one. A target that exists and is neither empty nor a report
-(no marker) is refused: a user's own folder is never replaced.
+target and then swapped in with :func:`storage.cube_files.replace_folder`, so the target is always
+a whole report, old or new, never half of one. A target that exists and is neither empty nor a
+report (no marker) is refused: a user's own folder is never replaced.
 """
 
 from __future__ import annotations

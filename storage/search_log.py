@@ -78,14 +78,19 @@ class SearchJournal:
         return [n for n in sorted(self.params) if n not in self.values and n not in self.failed]
 
     def asked(self, number: int, params: Mapping[str, Any]) -> None:
+        """Record that trial ``number`` was asked with ``params`` (values by field), before its
+        point is submitted."""
         self.params[number] = dict(params)
         self._append({"trial": number, "params": dict(params)})
 
     def told(self, number: int, values: Sequence[float]) -> None:
+        """Record trial ``number``'s objective values, in the order of the space's
+        objectives."""
         self.values[number] = [float(v) for v in values]
         self._append({"trial": number, "values": self.values[number]})
 
     def told_failed(self, number: int, why: str) -> None:
+        """Record that trial ``number`` failed, and ``why``."""
         self.failed[number] = why
         self._append({"trial": number, "failed": why})
 

@@ -49,7 +49,7 @@ Why this design
   two workers that made the same key store it twice (equal keys mean equal content) and
   readers take either copy. Nothing is fsynced, so this protects against killed processes,
   not power loss; a torn batch after a power loss fails its checksum on reading instead
-  (:class:`CorruptEntryError`) and is discarded (all its entries) and recomputed.
+  (:class:`storage.errors.CorruptEntryError`) and is discarded (all its entries) and recomputed.
 * **Listing by metadata.** Which keys a kind holds is one directory listing plus, per batch
   not seen before, one read of its small ``zarr.json`` (batches never change once in place,
   so a process remembers their keys).
@@ -139,7 +139,7 @@ class SweepStore:
 
     Attributes
     ----------
-    root : Path or str
+    root : pathlib.Path or str
         The run root, a folder or an object root's URL (``s3://bucket/prefix``,
         :mod:`storage.object_root`); the Zarr store is ``root / "store.zarr"``.
     """
@@ -541,7 +541,7 @@ class SweepStore:
     ) -> None:
         """Store ``cube`` as ``cubes/<name>``, replacing an older cube of that name atomically,
         with the digest ``source`` of what it was built from and a JSON ``note`` if given
-        (:func:`storage.cube_files.write_cube`); :class:`StoreWriteError` as
+        (:func:`storage.cube_files.write_cube`); :class:`storage.errors.StoreWriteError` as
         :meth:`write_entries`."""
         with self._writing():
             if self._objects is not None:

@@ -1,6 +1,6 @@
 """A run root's result cubes as one ``xarray.DataTree``: one child node per sweep.
 
-The tree holds the same cubes as :func:`storage.open_results` (loaded into memory), so a
+The tree holds the same cubes as :func:`storage.store.open_results` (loaded into memory), so a
 notebook can browse a whole run at once (``tree["threshold"]``, ``tree.children``) and apply
 one operation to every cube (``tree.map_over_datasets``).
 """

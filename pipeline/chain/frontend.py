@@ -1,12 +1,20 @@
-"""Front end: one linear scaling per dataset from recording units to volts.
+r"""Front end: one linear scaling per dataset from recording units to volts.
 
 Recordings are scaled once per dataset, not per recording, so that amplitude differences between
-recordings and textures survive. Over all samples ``x`` of all recordings of the dataset::
+recordings and textures survive. Over all samples ``x`` of all recordings of the dataset:
 
-    offset = mean(x)                                  (recording units)
-    p      = percentile_99.9(|x - offset|)            (recording units, linear interpolation)
-    gain   = (full_scale_v / 2) / p                   (V per recording unit)
-    v      = gain * (x - offset)                      (V)
+.. math::
+
+    \begin{aligned}
+    \mathrm{offset} &= \operatorname{mean}(x)
+        && \text{(recording units)} \\
+    p &= \operatorname{percentile}_{99.9}(|x - \mathrm{offset}|)
+        && \text{(recording units, linear interpolation)} \\
+    \mathrm{gain} &= (\mathrm{full\_scale\_v} / 2) / p
+        && \text{(V per recording unit)} \\
+    v &= \mathrm{gain} \, (x - \mathrm{offset})
+        && \text{(V)}
+    \end{aligned}
 
 so 99.9 % of the samples fall within ``+-full_scale_v / 2`` and the rest beyond it. The mean is
 sample-weighted: a longer recording counts more. The fit streams over the recordings (the

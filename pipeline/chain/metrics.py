@@ -1,8 +1,10 @@
 r"""Spike-train metrics: SSNR, STE, equivalent resolution, event and data rates.
 
-Spike signal-to-noise ratio, per train, from the TRUE and REAL spike counts::
+Spike signal-to-noise ratio, per train, from the TRUE and REAL spike counts:
 
-    ssnr_db = 20 * log10(N_true / |N_real - N_true|)
+.. math::
+
+    \mathrm{ssnr\_db} = 20 \log_{10} \frac{N_\mathrm{true}}{|N_\mathrm{real} - N_\mathrm{true}|}
 
 * ``N_real == N_true`` (including both 0): ``+inf`` (no count error).
 * ``N_true == 0 < N_real``: ``-inf`` (the limit of the formula: all spikes are noise).
@@ -11,9 +13,12 @@ Over a dataset the counts are pooled (:func:`pooled_ssnr_db`):
 ``20 * log10(sum N_true / sum |N_real - N_true|)``, which is ``+inf`` only when every train is
 exact and never NaN.
 
-Spike timing error, per train, as the paper writes it::
+Spike timing error, per train, as the paper writes it:
 
-    ste_s2 = sum_i (dt_i - mean(dt))**2 / N_real * (N_real - N_true)
+.. math::
+
+    \mathrm{ste\_s2} = \frac{\sum_i (dt_i - \operatorname{mean}(dt))^2}{N_\mathrm{real}}
+        \, (N_\mathrm{real} - N_\mathrm{true})
 
 with ``dt_i`` the time from TRUE spike ``i`` to the nearest REAL spike. Its quirks, kept on
 purpose: it is 0 whenever the counts agree however far the spikes moved, and it is negative when

@@ -14,8 +14,8 @@ CNN
 
 Both return logits (no softmax); the loss is cross-entropy on logits.
 
-Fold batching
--------------
+Fold-batched models
+-------------------
 A k-fold cross-validation trains ``F`` independent copies of one model. Here they are ONE module
 whose parameters carry a leading fold dimension ``F`` and whose ``forward`` maps
 ``x: float32 (F, B, C, H, W)`` to ``logits: float32 (F, B, n_classes)``; fold ``f`` of the output
@@ -242,7 +242,7 @@ def build_model(
     Parameters
     ----------
     model
-        :attr:`Model.FFNN` or :attr:`Model.CNN`.
+        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
     input_shape
         One sample's frame ``(C, H, W)``: channels, taxels (rows), windows (columns).
     n_classes

@@ -9,7 +9,9 @@ starts at ``k = 0``. Whenever ``u`` reaches ``k + 1`` a +1 spike is emitted and 
 one; whenever it reaches ``k - 1`` a -1 spike is emitted and ``k`` shrinks by one. Reaching a level
 counts (``>=``). Sample by sample this is the play (backlash) operator
 
-    k_n = clip(k_{n-1}, floor(u_n), ceil(u_n))
+.. math::
+
+    k_n = \operatorname{clip}(k_{n-1}, \lfloor u_n \rfloor, \lceil u_n \rceil)
 
 and a segment from ``u_{n-1}`` to ``u_n`` emits one spike per level it crosses, each at its own
 interpolated time ``t = (n - 1 + (m - u_{n-1}) / (u_n - u_{n-1})) / fs``, in time order. Times are
@@ -21,25 +23,39 @@ Decaying-threshold encoder
 ``readout.encoder = "decaying"`` (as in the decaying-threshold encoder of Alea et al., IEEE
 TBioCAS 2024): the reference ``r`` starts at the first sample and the threshold is
 
-    theta(t) = theta_min + (theta_0 - theta_min) * exp(-(t - t_last) / tau)
+.. math::
+
+    \theta(t) = \theta_{\min} + (\theta_0 - \theta_{\min}) \, e^{-(t - t_\mathrm{last}) / \tau}
 
 with ``t_last`` the time of the last spike (0 at the start). A +1 spike is emitted at the first
 instant the interpolated signal reaches ``r + theta(t)``, a -1 spike at ``r - theta(t)``; the spike
 moves ``r`` by that ``theta(t)`` and sets ``t_last``. Within a segment the condition is a line
 minus a decaying exponential, which is concave, so its first root has a closed-form bracket and is
-solved by safeguarded Newton steps in continuous time (see :func:`_first_reach`); a segment may
+solved by safeguarded Newton steps in continuous time (see ``_first_reach``); a segment may
 hold several spikes. ``theta_min = theta_0`` is the fixed encoder.
 
 Non-ideal encoder (the REAL train)
 ----------------------------------
-The scene's effects act in this order (each only when the scene names it)::
+The scene's effects act in this order (each only when the scene names it):
 
-    v_t      = x_t + o_t (amplifier_offset, per taxel)  + n_t[i] (amplifier_noise, per sample)
-    v_t      = clip(v_t, -rail, +rail)                                          (saturation)
-    theta_t  = theta * (1 + sigma_rel * z_t)                     (threshold_mismatch, per taxel)
-    up, down = theta_t + c_up_t, theta_t + c_down_t              (comparator_offset, per taxel)
-    decision at sample i: v[i] - r >= up + e[i]  if v[i] >= r,  else  r - v[i] >= down + e[i]
-                                                        (comparator_noise, per sample)
+.. math::
+
+    \begin{aligned}
+    v_t &= x_t + o_t + n_t[i]
+        && \text{($o_t$ amplifier\_offset, per taxel; $n_t$ amplifier\_noise, per sample)} \\
+    v_t &= \operatorname{clip}(v_t, -\mathrm{rail}, +\mathrm{rail})
+        && \text{(saturation)} \\
+    \theta_t &= \theta \, (1 + \sigma_\mathrm{rel} \, z_t)
+        && \text{(threshold\_mismatch, per taxel)} \\
+    \mathrm{up}, \mathrm{down} &= \theta_t + c^\mathrm{up}_t, \; \theta_t + c^\mathrm{down}_t
+        && \text{(comparator\_offset, per taxel)} \\
+    \text{decision at sample } i\text{:} \quad
+        & \begin{cases}
+          v[i] - r \ge \mathrm{up} + e[i] & \text{if } v[i] \ge r, \\
+          r - v[i] \ge \mathrm{down} + e[i] & \text{else}
+          \end{cases}
+        && \text{(comparator\_noise, per sample)}
+    \end{aligned}
 
 For the decaying encoder ``theta_t`` is the taxel's curve: one mismatch draw scales both
 ``theta_0`` and ``theta_min``, a comparator offset shifts both ends of its comparator's curve,

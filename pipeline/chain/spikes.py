@@ -52,10 +52,12 @@ class SpikeTrains:
 
     @property
     def n_recordings(self) -> int:
+        """Number of recordings (rows of ``count``)."""
         return self.count.shape[0]
 
     @property
     def n_taxels(self) -> int:
+        """Number of taxels per recording (columns of ``count``), in raster order."""
         return self.count.shape[1]
 
     def train(self, recording: int, taxel: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,9 +1,11 @@
-"""A taxel array from one recorded channel, by fractional time shifts.
+r"""A taxel array from one recorded channel, by fractional time shifts.
 
 A texture scanned at speed ``v`` (mm/s) along the unit direction ``(d_x, d_y)`` reaches taxel
 ``(i, j)`` of a grid with pitch ``p`` (mm) after the delay
 
-    tau_ij = (i * d_y + j * d_x) * p / v          [s]
+.. math::
+
+    \tau_{ij} = (i \, d_y + j \, d_x) \, p / v \qquad [\mathrm{s}]
 
 so taxel ``(i, j)`` sees ``x(t - tau_ij)``. All taxels share one output time axis
 ``t_n = tau_max + n / fs`` (re-zeroed so spike times start at 0): the part of the recording
@@ -46,10 +48,12 @@ class TaxelSignals:
 
     @property
     def n_taxels(self) -> int:
+        """Number of taxels (length of ``taxel_row``), distinct delays or not."""
         return len(self.taxel_row)
 
     @property
     def n_samples(self) -> int:
+        """Number of samples of the common time axis (columns of ``signals``)."""
         return self.signals.shape[1]
 
     def taxel(self, index: int) -> np.ndarray:

@@ -25,8 +25,8 @@ Randomness comes only from generators derived from ``(repeat seed, fold index)``
 (:func:`pipeline.chain.models.fold_generator`), so a fold's result does not depend on which other
 folds it is trained with.
 
-Fold batching
--------------
+Training the folds at once
+--------------------------
 All ``F`` folds train as one computation (``batched=True``): the fold-batched model
 (:mod:`pipeline.chain.models`) takes ``(F, B, ...)`` inputs, the losses of the folds are summed, so
 each fold's parameters receive exactly that fold's gradient, and the Adam update is elementwise with
@@ -339,7 +339,7 @@ def cross_validate(
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
     model
-        :attr:`Model.FFNN` or :attr:`Model.CNN`.
+        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
     training
         Folds, epochs, batch size, learning rate, hidden units and seed.
     class_names

@@ -61,6 +61,8 @@ class Range:
     also: tuple[str, ...] = ()
 
     def holds(self, value: Any) -> bool:
+        """Whether the number ``value`` (or literal) is accepted: one of ``also`` or within the
+        bounds."""
         if value in self.also:
             return True
         if self.low is not None and (value <= self.low if self.low_open else value < self.low):
@@ -88,9 +90,11 @@ class NonEmpty:
     """Accepted values of a list: any but the empty one."""
 
     def holds(self, value: Any) -> bool:
+        """Whether the list ``value`` has at least one item."""
         return len(value) > 0
 
     def text(self, units: str) -> str:
+        """The requirement in words: ``"a non-empty list"`` (``units`` is not used)."""
         return "a non-empty list"
 
 
@@ -135,7 +139,7 @@ def param(
     Parameters
     ----------
     default, default_factory
-        As for :func:`dataclasses.field`.
+        As for ``dataclasses.field``.
     units, long_name
         CF units ("1" when dimensionless or a label) and a prose name; result cubes write them
         on every coordinate the field becomes.
@@ -203,12 +207,15 @@ class Slot:
 
     @property
     def convert(self) -> Callable[[Any], Any]:
+        """The reader of the field's values, from a value as given in a TOML table or dict to
+        the value of ``kind``; it raises TypeError or ValueError, with a message, for one it
+        refuses."""
         return _converter(self.kind)
 
     @property
     def only_when(self) -> tuple[str, Any] | None:
-        """For a :func:`part` declared ``only_when``: the sibling field and the value under
-        which it matters."""
+        """The sibling field and the value under which a :func:`part` declared ``only_when``
+        matters; None for any other field."""
         return self.field.metadata.get(_ONLY_WHEN)
 
 
@@ -262,16 +269,19 @@ class Resolved:
 
     @property
     def units(self) -> str:
+        """CF units of the field; ``"1"`` for a whole entry."""
         return "1" if self.declared is None else self.declared.units
 
     @property
     def long_name(self) -> str:
+        """Prose name of the field, or of a whole entry (``"parameters of the ... effect"``)."""
         if self.entry is not None:
             return f"parameters of the {self.entry.value} {_noun(type(self.entry))}"
         return "" if self.declared is None else self.declared.long_name
 
     @property
     def declared(self) -> Declared | None:
+        """The leaf field's declaration; None for a whole entry."""
         return None if self.entry is not None else self.slot.declared
 
 

@@ -124,6 +124,8 @@ class Sweep:
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """Cube sizes along :attr:`dims` (one size, the axes' common length, for a zipped
+        sweep)."""
         if self.mode == SweepMode.ZIP:
             return (len(self.axes[0].values),)
         return tuple(len(axis.values) for axis in self.axes)
@@ -147,8 +149,9 @@ class GridPoint:
     """One point of a sweep: where it sits in the cube and the scene it simulates.
 
     ``key`` is the scene's result cache key (``cache_key(scene, "results")``), computed once
-    when the point is made; ``memo`` (not kept) is as for :meth:`Scene.canonical`, for points
-    made by the many that share scene parts.
+    when the point is made; ``memo`` (not kept) is as for
+    :meth:`~pipeline.design.scene.Scene.canonical`, for points made by the many that share scene
+    parts.
     """
 
     sweep: str
@@ -177,7 +180,8 @@ class Grid:
         base_dir: Path | None = None,
         max_points: int | None = None,
     ) -> Grid:
-        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem.
+        """Validate ``data`` (the TOML layout); raise :class:`~pipeline.errors.SceneError`
+        listing every problem.
 
         A grid of more than ``max_points`` points (counted from its axis sizes, none built:
         :func:`too_large`) is refused with its count, its cost and the advice to search it.
@@ -347,16 +351,17 @@ def cost_kind(scene: Scene) -> str:
     return json.dumps(form, sort_keys=True, separators=(",", ":"))
 
 
-#: Memory and time planning takes per point (load, check, distinct points, cache keys, cached
-#: entries), measured at 1,000,000 points by ``benchmarks/planning.py`` (peak resident memory
-#: above the interpreter's, CPU time), rounded up.
+#: Memory planning takes per point (load, check, distinct points, cache keys, cached entries),
+#: in bytes, measured at 1,000,000 points by ``benchmarks/planning.py`` (peak resident memory
+#: above the interpreter's), rounded up.
 PLAN_BYTES_PER_POINT = 1_000
+#: Time planning takes per point, in CPU seconds, measured and rounded up likewise.
 PLAN_SECONDS_PER_POINT = 20e-6
-#: The share of the machine's memory a plan may take (the sweep needs the rest), and the
-#: longest a command may plan before it says anything.
+#: The share of the machine's memory a plan may take (the sweep needs the rest).
 PLAN_MEMORY_SHARE = 0.5
+#: The longest a command may plan before it says anything (s).
 PLAN_MAX_S = 120.0
-#: Stage seconds of a typical point, for the cost of a grid too large to plan: the ``paper``
+#: Stage seconds of a typical point, for the cost of a grid too large to plan. The ``paper``
 #: grid's mean (483 stage seconds over 48 points, 2 cores).
 TYPICAL_POINT_S = 10.0
 
@@ -412,6 +417,7 @@ def _duration(seconds: float) -> str:
 
 
 def builtin_grid_names() -> tuple[str, ...]:
+    """Names of the built-in grids (the TOML files of :mod:`pipeline.design.grids`), sorted."""
     files = resources.files("pipeline.design.grids").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
 
@@ -459,11 +465,12 @@ class DatasetFacts:
         Recordings of the smallest class.
     shortest : str
         Name of the shortest recording (the first of equally short ones) as
-        :attr:`pipeline.recordings.sources.Recordings.names` gives it: ``"<class>/<file name>"`` for
-        a folder dataset (its path relative to the dataset folder), ``"Texture3/segment07"``,
-        ``"<class>/rec03"``; empty if unknown.
+        :attr:`pipeline.recordings.recording_set.Recordings.names` gives it:
+        ``"<class>/<file name>"`` for a folder dataset (its path relative to the dataset folder),
+        ``"Texture3/segment07"``, ``"<class>/rec03"``; empty if unknown.
     dataset : str
-        Name of the dataset (:attr:`pipeline.recordings.sources.Recordings.name`); empty if unknown.
+        Name of the dataset (:attr:`pipeline.recordings.recording_set.Recordings.name`); empty if
+        unknown.
     smallest_class : str
         Name of the smallest class (the first of equally small ones); empty if unknown.
     """
@@ -580,14 +587,16 @@ def _misfits(
 
 
 def check_scene_fits(scene: Scene, facts: DatasetFacts) -> None:
-    """Raise :class:`SceneError` listing every misfit of ``scene`` (:func:`scene_misfits`)."""
+    """Raise :class:`~pipeline.errors.SceneError` listing every misfit of ``scene``
+    (:func:`scene_misfits`)."""
     problems = scene_misfits(scene, facts)
     if problems:
         raise SceneError([f"{field}: {text}" for field, text in problems], repr(scene.name))
 
 
 def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
-    """Check every point against its recordings; raise :class:`SceneError` listing all misfits.
+    """Check every point against its recordings; raise :class:`~pipeline.errors.SceneError`
+    listing all misfits.
 
     Parameters
     ----------

@@ -262,6 +262,7 @@ class ArraySpec:
 
     @property
     def n_taxels(self) -> int:
+        """Number of taxels, ``rows * cols``."""
         return self.rows * self.cols
 
 
@@ -319,21 +320,25 @@ class ReadoutSpec:
 
     @property
     def theta_min_v(self) -> float:
-        """The lowest threshold the encoder reaches: ``threshold_v`` for a fixed threshold."""
+        """The lowest threshold the encoder reaches (V), ``threshold_v`` for a fixed threshold."""
         if self.encoder is Encoder.DECAYING:
             return self.decay.theta_min_v
         return self.threshold_v
 
     @property
     def is_ideal(self) -> bool:
+        """Whether the readout names no effect (its REAL train is its TRUE train)."""
         return not self.effects
 
     @property
     def is_random(self) -> bool:
+        """Whether a named effect draws random numbers (every effect but ``saturation``), so
+        that the scene's ``seed`` matters."""
         return any(e in RANDOM_EFFECTS for e in self.effects)
 
     @property
     def equivalent_bits(self) -> float:
+        """Resolution in bits, ``log2(full_scale_v / threshold_v)`` (of the first threshold)."""
         return math.log2(self.full_scale_v / self.threshold_v)
 
 
@@ -391,7 +396,8 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>") -> Scene:
-        """Validate ``data`` (the TOML layout) and build a scene; raise :class:`SceneError`."""
+        """Validate ``data`` (the TOML layout) and build a scene; raise
+        :class:`~pipeline.errors.SceneError`."""
         problems: list[str] = []
         scene = fields.read(cls, data, "", problems)
         if problems:
@@ -576,6 +582,7 @@ def scene_fields() -> list[fields.FieldInfo]:
 
 
 def builtin_scene_names() -> tuple[str, ...]:
+    """Names of the built-in scenes (the TOML files of :mod:`pipeline.design.scenes`), sorted."""
     files = resources.files("pipeline.design.scenes").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
 
@@ -588,10 +595,10 @@ class SceneVariants:
     """Copies of one scene with the same dotted fields replaced, each field from its own list.
 
     ``variants.scene(indices)`` is ``scene.replace(**{field: values[i] ...})`` over ``axes``
-    and ``indices``: the same scene, or a :class:`SceneError` with the same problems, but each
-    scene part (``dataset``, ``array``, ...) is read and validated once per distinct
-    combination of the value indices of the fields in it (a part no field is in, once), and
-    the scenes share their parts. A grid whose fields take a few values each thus validates a
+    and ``indices``: the same scene, or a :class:`~pipeline.errors.SceneError` with the same
+    problems, but each scene part (``dataset``, ``array``, ...) is read and validated once per
+    distinct combination of the value indices of the fields in it (a part no field is in, once),
+    and the scenes share their parts. A grid whose fields take a few values each thus validates a
     few parts, not every point, and its scenes' canonical forms can be written once per part
     (:meth:`Scene.canonical` with a memo).
 

@@ -71,8 +71,9 @@ from pipeline.design.scene import Model, Scene, SceneVariants
 from pipeline.errors import SceneError
 from pipeline.results.hardware import event_power_w
 
-#: The name of the trial cube's sweep and of its dimension.
+#: The name of the trial cube's sweep.
 TRIALS = "trials"
+#: The name of the trial cube's dimension.
 TRIAL_DIM = "trial"
 
 
@@ -162,11 +163,13 @@ class Objective:
 
     @property
     def name(self) -> str:
+        """The metric's name, with ``.<model>`` for a model's accuracy (``"accuracy.ffnn"``)."""
         return self.metric.value + (f".{self.model}" if self.model else "")
 
     @property
     def sign(self) -> float:
-        """+1 for a minimised objective, -1 for a maximised one: ``sign * value`` is minimised."""
+        """+1 for a minimised objective and -1 for a maximised one, so that ``sign * value`` is
+        minimised."""
         return 1.0 if self.direction is Direction.MIN else -1.0
 
 
@@ -185,7 +188,8 @@ class Space:
     def from_dict(
         cls, data: Mapping[str, Any], source: str = "<dict>", base_dir: Path | None = None
     ) -> Space:
-        """Validate ``data`` (the TOML layout); raise :class:`SceneError` listing every problem."""
+        """Validate ``data`` (the TOML layout); raise :class:`~pipeline.errors.SceneError`
+        listing every problem."""
         problems: list[str] = []
         space = _read_space(data, base_dir or Path.cwd(), problems)
         if problems:
@@ -206,6 +210,7 @@ class Space:
 
     @property
     def fields(self) -> tuple[str, ...]:
+        """The dotted scene fields searched, one per dimension, in order."""
         return tuple(d.field for d in self.dimensions)
 
     def scene(self, params: Mapping[str, Any]) -> Scene:
@@ -245,7 +250,8 @@ def _named(axes: tuple[SweepAxis, ...]) -> tuple[SweepAxis, ...]:
 
 
 def load_space(path: str | Path) -> Space:
-    """A space TOML file; raise :class:`SceneError` naming the file and every problem."""
+    """A space TOML file; raise :class:`~pipeline.errors.SceneError` naming the file and every
+    problem."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))

@@ -424,7 +424,7 @@ def folder_layout(recordings: Recordings, *, source: str = "") -> FolderLayout:
 
     Names keep ``A-Z a-z 0-9 . _ -``; any run of other characters becomes ``_``, a leading ``.``
     (hidden, hence ignored by the loader) gets a ``_`` in front, and names are cut to
-    :data:`MAX_NAME_CHARS`. A recording's name is the part of its name after ``"<class>/"``
+    ``MAX_NAME_CHARS`` characters. A recording's name is the part of its name after ``"<class>/"``
     (when it starts so) without a ``.csv``/``.npy`` suffix. When the names of a group (the
     classes, or the recordings of one class) then clash (also ignoring case) or would not sort
     into their order, every name of the group gets its zero-padded position in front

@@ -26,7 +26,7 @@ Three sources (``pipeline.design.scene.DatasetKind``):
     class folder is an error.
 
 Loading never executes code from data: ``.npy`` files are read with ``allow_pickle=False``,
-TOML with :mod:`tomllib`, CSV as text.
+TOML with ``tomllib``, CSV as text.
 
 Every problem a user can cause raises :class:`pipeline.errors.DatasetError` with one line that
 names the dataset and each offending file or recording (all problems found, at most

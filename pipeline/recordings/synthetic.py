@@ -93,22 +93,22 @@ the taxel delays).
 
 Classes
 -------
-======  ====================  ========  ======  =====  ========  ======  ========  =====
-index   name                  shape     P (mm)  A(um)  sigma(um) l (mm)  lambda/mm H(um)
-======  ====================  ========  ======  =====  ========  ======  ========  =====
-0       sine-0.35mm-smooth    sine      0.35    2      2.1       0.02    1         7
-1       sine-0.35mm-rough     sine      0.35    2      4.2       0.04    1         7
-2       sine-0.35mm-gritty    sine      0.35    2      2.1       0.02    2.5       7
-3       sine-0.30mm-smooth    sine      0.30    2      2.1       0.02    1         7
-4       sine-0.42mm-smooth    sine      0.42    2      2.1       0.02    1         7
-5       sawtooth-0.50mm-deep  sawtooth  0.50    7.5    15        0.02    2         12
-6       bumps-0.75mm          bumps     0.75    2.5    1.7       0.02    1.5       6.5
-7       bumps-0.90mm          bumps     0.90    2.5    1.7       0.02    1.5       6.5
-8       square-0.75mm         square    0.75    1.7    1.7       0.02    1.5       6.5
-9       grit-fine             none      --      0      1.4       0.02    3         5.5
-10      grit-coarse           none      --      0      2         0.06    1         11.5
-11      random-rough          none      --      0      9.5       0.03    0         0
-======  ====================  ========  ======  =====  ========  ======  ========  =====
+======  ====================  ========  ======  =====  =========  ======  =========  =====
+index   name                  shape     P (mm)  A(um)  sigma(um)  l (mm)  lambda/mm  H(um)
+======  ====================  ========  ======  =====  =========  ======  =========  =====
+0       sine-0.35mm-smooth    sine      0.35    2      2.1        0.02    1          7
+1       sine-0.35mm-rough     sine      0.35    2      4.2        0.04    1          7
+2       sine-0.35mm-gritty    sine      0.35    2      2.1        0.02    2.5        7
+3       sine-0.30mm-smooth    sine      0.30    2      2.1        0.02    1          7
+4       sine-0.42mm-smooth    sine      0.42    2      2.1        0.02    1          7
+5       sawtooth-0.50mm-deep  sawtooth  0.50    7.5    15         0.02    2          12
+6       bumps-0.75mm          bumps     0.75    2.5    1.7        0.02    1.5        6.5
+7       bumps-0.90mm          bumps     0.90    2.5    1.7        0.02    1.5        6.5
+8       square-0.75mm         square    0.75    1.7    1.7        0.02    1.5        6.5
+9       grit-fine             none      --      0      1.4        0.02    3          5.5
+10      grit-coarse           none      --      0      2          0.06    1          11.5
+11      random-rough          none      --      0      9.5        0.03    0          0
+======  ====================  ========  ======  =====  =========  ======  =========  =====
 
 Mechanics (friction coefficients, material stiffness ``k_m``, relaxing share ``r``, Stribeck
 speed ``v_c``, patchiness ``s``)::
@@ -243,40 +243,47 @@ __all__ = [
 DEFAULT_FS_HZ = 2000.0
 
 # Contact and press
-#: Mean time at which the fingertip meets the surface (s) and the half-width of its jitter (s).
+#: Mean time at which the fingertip meets the surface (s).
 CONTACT_S = 0.03
+#: Half-width of the jitter of the contact time (s).
 CONTACT_JITTER_S = 0.01
-#: Target normal force of the press (N) and the half-width of its per-touch jitter (relative).
+#: Target normal force of the press (N).
 PRESS_FORCE_N = 0.15
+#: Half-width of the press force's per-touch jitter (relative).
 FORCE_SPREAD = 0.15
 #: Approach speed of the fingertip into the surface (mm/s).
 APPROACH_MM_S = 3.0
 #: Stiffness of the fingertip pad in the normal direction (N/mm), in series with the material's.
 FINGER_STIFFNESS_N_PER_MM = 1.0
-#: Moving mass of the fingertip (kg) and the damping ratio of its impact ring.
+#: Moving mass of the fingertip (kg).
 FINGER_MASS_KG = 0.01
+#: Damping ratio of the fingertip's impact ring.
 RING_DAMPING = 0.3
 #: Time constant of the viscoelastic relaxation of the normal force while holding the height (s).
 RELAX_S = 2.0
 
 # Sliding
-#: Time from contact to the start of the tangential motion (s) and its jitter's half-width (s).
+#: Time from contact to the start of the tangential motion (s).
 HOLD_S = 0.08
+#: Half-width of the jitter of that time (s).
 HOLD_JITTER_S = 0.02
-#: Nominal sliding speed (mm/s), its per-touch spread (relative s.d.), the time constant of the
-#: robot's acceleration (s) and the RMS of the slow speed wobble within a touch (relative).
+#: Nominal sliding speed (mm/s).
 SCAN_SPEED_MM_S = 20.0
+#: Per-touch spread of the sliding speed (relative s.d.).
 SPEED_SPREAD = 0.03
+#: Time constant of the robot's acceleration (s).
 ACCEL_S = 0.15
+#: RMS of the slow speed wobble within a touch (relative).
 SPEED_WOBBLE_RMS = 0.08
-#: Tangential stiffness of the pad and the robot's drive (N/mm): the stick phase loads it.
+#: Tangential stiffness of the pad and the robot's drive (N/mm), which the stick phase loads.
 SHEAR_STIFFNESS_N_PER_MM = 0.02
 #: Standard deviation of the log of each stick-slip cycle's depth factor.
 SLIP_DEPTH_SPREAD = 0.6
 
 # The material sample along the sliding path
-#: Period (mm) and correlation length (mm) of a sample's slow variation along the path.
+#: Period (mm) of a sample's slow variation along the path.
 MAP_PERIOD_MM = 400.0
+#: Correlation length (mm) of a sample's slow variation along the path.
 MAP_CORRELATION_MM = 6.0
 #: Share ``rho`` of the variation a touch meets that is the sample's own (the rest is the touch's:
 #: its path crosses the sample at a slightly different place).
@@ -293,8 +300,9 @@ TEXTURE_COUPLING = 0.4
 GRID_MM = 0.005
 
 # Sensor
-#: Corner of the sensor's first-order AC coupling (Hz) and of its anti-aliasing low-pass (Hz).
+#: Corner of the sensor's first-order AC coupling (Hz).
 SENSOR_HIGHPASS_HZ = 4.0
+#: Corner of the sensor's anti-aliasing low-pass (Hz).
 SENSOR_BAND_HZ = 250.0
 #: Order of that Butterworth low-pass.
 SENSOR_FILTER_ORDER = 8

@@ -137,7 +137,7 @@ class TouchStatistics:
 
     @property
     def span_s(self) -> float:
-        """Time the envelope windows cover (s): ``n_windows * window_s``."""
+        """Time the envelope windows cover (s), ``n_windows * window_s``."""
         return self.n_windows * self.window_s
 
     def to_dict(self) -> dict[str, Any]:

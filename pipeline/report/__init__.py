@@ -3,13 +3,13 @@
 Stages, each a module with the frozen dataclasses it returns:
 
 - :mod:`~pipeline.report.paper`: the paper's numbers (claims, Table I), in one place;
-- :mod:`~pipeline.report.panels`: the paper's figures (:class:`Panel`) and the fields that feed
-  them;
+- :mod:`~pipeline.report.panels`: the paper's figures (:class:`~pipeline.report.panels.Panel`)
+  and the fields that feed them;
 - :mod:`~pipeline.report.cubes`: reading result cubes (the layout of :mod:`pipeline.results.cube`);
 - :mod:`~pipeline.report.evidence`: the run's per-recording results and the paired and trend
   tests on them (fixed seeds);
 - :mod:`~pipeline.report.designs`: the run's distinct designs, their accuracy and costs, the
-  frame-based readout (:class:`FrameReadout`);
+  frame-based readout (:class:`~pipeline.report.designs.FrameReadout`);
 - :mod:`~pipeline.report.answer`: per model, the cheapest design not significantly below the
   best (Holm-corrected paired tests);
 - :mod:`~pipeline.report.curves`: accuracy curves along a sweep and Fig. 9's lines;
@@ -19,8 +19,10 @@ Stages, each a module with the frozen dataclasses it returns:
 - :mod:`~pipeline.report.fronts`: accuracy against data rate, event rate, bits, compute time
   and readout power, with designs indistinguishable from the front marked;
 - :mod:`~pipeline.report.cost`: the front rule, observation time, the sweep's own cost;
-- :mod:`~pipeline.report.analysis`: :func:`build_report`, all of the above from the cubes;
-- :mod:`~pipeline.report.figures`: matplotlib figures of a :class:`Report`;
+- :mod:`~pipeline.report.analysis`: :func:`~pipeline.report.analysis.build_report`, all of the
+  above from the cubes;
+- :mod:`~pipeline.report.figures`: matplotlib figures of a
+  :class:`~pipeline.report.analysis.Report`;
 - :mod:`~pipeline.report.blocks`, :mod:`~pipeline.report.render`: typed document blocks and
   their Markdown and HTML renderers;
 - :mod:`~pipeline.report.document`: the report's blocks and the files of its folder.

@@ -1,4 +1,5 @@
-"""The whole report's numbers and sentences from a run root's cubes (:func:`build_report`)."""
+"""The whole report's numbers and sentences from a run root's cubes
+(:func:`~pipeline.report.analysis.build_report`)."""
 
 from __future__ import annotations
 
@@ -105,12 +106,13 @@ def build_report(
     Parameters
     ----------
     cubes
-        ``{sweep name: cube}`` as :func:`storage.open_results` returns them.
+        ``{sweep name: cube}`` as :func:`~storage.store.open_results` returns them.
     frame
         The frame-based ADC readout the answer, Table I and the fronts compare with; None leaves
         that comparison unknown.
     energy
-        Constants of the readout power estimate (default: :class:`EnergyModel`'s).
+        Constants of the readout power estimate (default:
+        :class:`~pipeline.results.hardware.EnergyModel`'s).
     runs
         The run log's sweeps of this root (the sweep's own cost).
 

@@ -83,11 +83,14 @@ class Candidate:
 
     @property
     def frame_power_w(self) -> float | None:
+        """Frame readout's power for this design's array, static plus dynamic, in W (None when
+        unknown)."""
         return None if self.frame_power is None else self.frame_power.total_w
 
     @property
     def energy_per_decision_j(self) -> float:
-        """Readout energy of one decision: power times the seconds observed (NaN: unknown)."""
+        """Readout energy of one decision in J, power times the seconds observed (NaN when
+        unknown)."""
         return self.power_w * self.design.observation_s
 
     @property
@@ -107,6 +110,8 @@ class Candidate:
 
     @property
     def power_ratio(self) -> float:
+        """Frame readout's power over this design's (NaN when either is unknown, inf when this
+        design draws none)."""
         return _ratio(self.frame_power_w, self.power_w)
 
 
@@ -206,6 +211,7 @@ def model_answer(
     )
 
 
+#: Headers of the small table's columns after the first, the model's name (:func:`glance_header`).
 GLANCE_COLUMNS = (
     "design",
     "accuracy [95 % interval]",

@@ -75,6 +75,8 @@ class Claim:
 
     @property
     def sentence(self) -> str:
+        """The claim and this run's finding in one sentence, with the verdict when the run has
+        the claim's cubes."""
         if self.verdict is Verdict.ABSENT:
             return f"The paper finds {self.paper}; {self.finding}."
         return f"The paper finds {self.paper}; here {self.finding}, so this run {self.verdict}."

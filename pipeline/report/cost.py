@@ -48,6 +48,7 @@ class SweepCost:
 
     @property
     def total_s(self) -> float:
+        """Stage seconds summed over every stage (s)."""
         return float(sum(s for _, s in self.stage_seconds))
 
 

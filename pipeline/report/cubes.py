@@ -39,6 +39,7 @@ def sweep_dims(cube: xr.Dataset) -> tuple[str, ...]:
 
 
 def is_one_dimensional(cube: xr.Dataset) -> bool:
+    """Whether ``cube`` holds accuracy along exactly one sweep dimension (a curve's cube)."""
     return "accuracy_mean" in cube and len(sweep_dims(cube)) == 1
 
 

@@ -66,6 +66,7 @@ class Accuracy:
 
     @property
     def has_interval(self) -> bool:
+        """Whether both ends of the 95 % interval are known (finite)."""
         return math.isfinite(self.low) and math.isfinite(self.high)
 
 
@@ -79,6 +80,7 @@ class Setting:
 
     @property
     def text(self) -> str:
+        """``field = value units``, e.g. ``"readout.threshold_v = 0.09 V"``."""
         return f"{self.field} = {self.value}" + (f" {self.units}" if self.units else "")
 
 
@@ -113,6 +115,7 @@ class Design:
 
     @property
     def n_taxels(self) -> int | None:
+        """Taxels of the array, ``rows * cols`` (None when either is unknown)."""
         return None if self.rows is None or self.cols is None else self.rows * self.cols
 
 
@@ -127,14 +130,17 @@ class Cost(enum.Enum):
 
     @property
     def stem(self) -> str:
+        """File stem of the figure of accuracy against this cost (``"front_data_rate"``)."""
         return self.value[0]
 
     @property
     def axis(self) -> str:
+        """Label of that figure's cost axis, with the unit."""
         return self.value[1]
 
     @property
     def short(self) -> str:
+        """Short name of the cost in sentences (``"data rate"``)."""
         return self.value[2]
 
 
@@ -147,9 +153,14 @@ class FrameReadout:
     rate_hz: float
 
     def data_rate_bps(self, n_taxels: int) -> float:
+        """Bits per second of this readout for an array of ``n_taxels`` taxels,
+        ``n_taxels * rate_hz * bits`` (:func:`~pipeline.results.hardware.frame_data_rate_bps`)."""
         return float(frame_data_rate_bps(n_taxels, self.rate_hz, self.bits))
 
     def power(self, n_taxels: int, energy: EnergyModel) -> ReadoutPower:
+        """Static and dynamic power of this readout for an array of ``n_taxels`` taxels under the
+        constants ``energy`` (:func:`~pipeline.results.hardware.frame_static_power_w`,
+        :func:`~pipeline.results.hardware.frame_dynamic_power_w`), in W."""
         return ReadoutPower(
             float(frame_static_power_w(n_taxels, energy)),
             float(frame_dynamic_power_w(n_taxels, self.rate_hz, self.bits, energy)),

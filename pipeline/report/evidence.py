@@ -33,8 +33,9 @@ from pipeline.report.panels import DATASET_KIND, DATASET_PATH
 from pipeline.results.stats import PairedComparison, Trend, compare_paired, trend
 
 REPORT_SEED = 20_240_531
-"""The report's fixed seed: the root of every bootstrap generator (:func:`rng_for`)."""
+"""The report's fixed seed, the root of every bootstrap generator (:func:`rng_for`)."""
 RESAMPLES = 2000
+"""Bootstrap resamples of every paired comparison and trend the report tests."""
 ALPHA = 0.05
 """Significance level of every test the report judges a claim or a design by."""
 
@@ -52,8 +53,9 @@ class Evidence:
     ----------
     labels : int64 (n,)
         Class of each of the run's ``n`` recordings.
-    correct : dict[(result key, model), int8 (repeats, n)]
-        1 right, 0 wrong, -1 no prediction; only points that kept predictions are here.
+    correct : dict
+        ``(result key, model)`` -> int8 ``(repeats, n)``: 1 right, 0 wrong, -1 no prediction;
+        only points that kept predictions are here.
     """
 
     labels: np.ndarray
@@ -173,7 +175,7 @@ def compare_points(
     Parameters
     ----------
     cubes
-        The run's cubes (:func:`storage.open_results`).
+        The run's cubes (:func:`~storage.store.open_results`).
     model
         ``"ffnn"`` or ``"cnn"``.
     a, b

@@ -38,6 +38,7 @@ from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si
 from pipeline.results.cube import field_attrs
 
+#: Resolution of the PNG figures (dots per inch).
 PNG_DPI = 150
 YLABEL = "accuracy (%; bars: 95 % interval)"
 
@@ -49,7 +50,8 @@ _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
 
 def draw_report(report: Report) -> dict[str, Figure]:
-    """One figure per stem of :attr:`Report.figure_stems`, in that order."""
+    """One figure per stem of :attr:`~pipeline.report.analysis.Report.figure_stems`, in that
+    order."""
     chance = report.chance
     curves = report.curves
     draw = {
@@ -169,7 +171,7 @@ def curve_figure(
 
 
 def sweep_figure(plot: SweepPlot, chance: float | None) -> Figure:
-    """Accuracy along any one-dimensional sweep (:class:`SweepPlot`)."""
+    """Accuracy along any one-dimensional sweep (:class:`~pipeline.report.sweeps.SweepPlot`)."""
     return curve_figure(
         plot.title, plot.curves, plot.xlabel, chance, log=plot.log, ticks=plot.ticks
     )

@@ -82,6 +82,7 @@ class Front:
 
     @property
     def models(self) -> tuple[str, ...]:
+        """Names of the models with points on the fronts, each once, in the order of the points."""
         return tuple(dict.fromkeys(p.model for p in self.points))
 
 

@@ -30,8 +30,9 @@ _STYLE = (
 
 
 def render_markdown(blocks: Sequence[Block], *, figure_folder: str = FIGURES) -> str:
-    """Markdown of ``blocks``; a figure links ``<figure_folder>/<name>.png``; :class:`Details`
-    become a ``<details>`` element (collapsed where the Markdown viewer renders HTML)."""
+    """Markdown of ``blocks``; a figure links ``<figure_folder>/<name>.png``;
+    :class:`~pipeline.report.blocks.Details` become a ``<details>`` element (collapsed where the
+    Markdown viewer renders HTML)."""
     return "\n".join(_markdown_lines(blocks, figure_folder))
 
 

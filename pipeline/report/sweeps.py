@@ -38,6 +38,7 @@ class SweepPlot:
 
     @property
     def stem(self) -> str:
+        """File stem of the figure, ``"sweep_<sweep name>"`` (:func:`safe_stem`)."""
         return "sweep_" + safe_stem(self.sweep)
 
 
@@ -59,6 +60,7 @@ class Heatmap:
 
     @property
     def stem(self) -> str:
+        """File stem of the figure, ``"heatmap_<sweep name>"`` (:func:`safe_stem`)."""
         return "heatmap_" + safe_stem(self.sweep)
 
 

@@ -1,13 +1,14 @@
 """The front of a search: the Pareto-optimal trials over two or three objectives, and hypervolume.
 
-Objectives are turned into costs to minimise (``sign * value``, :attr:`Objective.sign`). Trial
-``a`` *dominates* ``b`` when it is no worse in every objective and better in one; the *front* is
-the trials no other trial dominates (:func:`pareto_mask`; two trials of one design, the same
-result key, are one point). A trial off the front is compared with the front trial dominating
-it that is best in the first accuracy objective, by the report's paired test on the same
-recordings (:meth:`pipeline.report.evidence.Evidence.compare`, one unadjusted test per trial,
-alpha 0.05); one the test cannot tell from it is *indistinguishable* and kept beside the front,
-as the report's hardware fronts do.
+Objectives are turned into costs to minimise (``sign * value``,
+:attr:`~pipeline.design.space.Objective.sign`). Trial ``a`` *dominates* ``b`` when it is no worse
+in every objective and better in one; the *front* is the trials no other trial dominates
+(:func:`pareto_mask`; two trials of one design, the same result key, are one point). A trial off
+the front is compared with the front trial dominating it that is best in the first accuracy
+objective, by the report's paired test on the same recordings
+(:meth:`pipeline.report.evidence.Evidence.compare`, one unadjusted test per trial, alpha 0.05);
+one the test cannot tell from it is *indistinguishable* and kept beside the front, as the
+report's hardware fronts do.
 
 The *hypervolume* of a front (:func:`hypervolume`) is the volume of objective space, in costs,
 that its points dominate and that a reference point bounds: ``lambda(U_p [p, r])``. It is
@@ -73,8 +74,8 @@ def trial_costs(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.ndarray
 
 
 def front_cube(trials: xr.Dataset, objectives: Sequence[Objective]) -> xr.Dataset:
-    """The front of a trial cube (dimension :data:`TRIAL_DIM`), with the indistinguishable
-    trials beside it (see the module docstring)."""
+    """The front of a trial cube (dimension :data:`~pipeline.design.space.TRIAL_DIM`), with the
+    indistinguishable trials beside it (see the module docstring)."""
     values = objective_values(trials, objectives)
     costs = values * np.array([o.sign for o in objectives])
     keys = [str(k) for k in trials["result_key"].values]
@@ -108,8 +109,8 @@ def front_cube(trials: xr.Dataset, objectives: Sequence[Objective]) -> xr.Datase
 
 def trial_cube(cube: xr.Dataset, numbers: Sequence[int], space_name: str) -> xr.Dataset:
     """A trial grid's cube (:meth:`pipeline.design.space.Space.trial_grid`) along
-    :data:`TRIAL_DIM`, the trials' ``numbers`` its coordinate; the searched fields stay
-    coordinates along it (attribute ``field``), as every other scene field does."""
+    :data:`~pipeline.design.space.TRIAL_DIM`, the trials' ``numbers`` its coordinate; the searched
+    fields stay coordinates along it (attribute ``field``), as every other scene field does."""
     (dim,) = cube["result_key"].dims
     renamed = cube.rename_dims({dim: TRIAL_DIM}).drop_indexes(dim)
     attrs = {"units": "1", "long_name": "trial of the search, in the order asked"}

@@ -8,26 +8,37 @@ correlations.
 
 Data variables
 
-``accuracy``          (axes..., model, repeat, fold)  fraction of a fold's test recordings
-                      classified correctly
-``accuracy_mean``     (axes..., model)        fraction of (recording, repeat) pairs classified
-                      correctly (the mean over folds for points without predictions)
-``accuracy_low``,     (axes..., model)        95 % interval of ``accuracy_mean``: Wilson score
-``accuracy_high``                             over recordings for one repeat, class-stratified
-                      bootstrap over recordings for several (attribute ``interval`` says which)
-``predicted``         (axes..., model, repeat, recording)  int16 out-of-fold predicted class
-``correct``           (axes..., model, repeat, recording)  int8 1 where ``predicted`` is the
-                      recording's ``label``, 0 where not
-``test_fold``         (axes..., repeat, recording)  int16 fold that tested the recording
-``ssnr_db``           (axes...)               pooled SSNR (``+inf``: REAL trains equal TRUE)
-``ste_s2``            (axes...)               the paper's STE, mean over trains
-``ste_sign_safe_s2``  (axes...)               STE with ``|N_real - N_true|``
-``event_rate_hz``     (axes...)               array events per second
-``data_rate_bps``     (axes...)               address-event bits per second
-``equivalent_bits``   (axes...)               ``log2(full_scale_v / threshold_v)``
-``seconds``           (axes..., stage)        wall seconds each stage took when it was computed
-``n_windows_used``    (axes...)               int64 rate-coding windows the point used
-                      (``coding.n_windows`` resolved; -1 where its result does not say)
+``accuracy`` (axes..., model, repeat, fold)
+    fraction of a fold's test recordings classified correctly
+``accuracy_mean`` (axes..., model)
+    fraction of (recording, repeat) pairs classified correctly (the mean over folds for points
+    without predictions)
+``accuracy_low``, ``accuracy_high`` (axes..., model)
+    95 % interval of ``accuracy_mean``: Wilson score over recordings for one repeat,
+    class-stratified bootstrap over recordings for several (attribute ``interval`` says which)
+``predicted`` (axes..., model, repeat, recording)
+    int16 out-of-fold predicted class
+``correct`` (axes..., model, repeat, recording)
+    int8 1 where ``predicted`` is the recording's ``label``, 0 where not
+``test_fold`` (axes..., repeat, recording)
+    int16 fold that tested the recording
+``ssnr_db`` (axes...)
+    pooled SSNR (``+inf``: REAL trains equal TRUE)
+``ste_s2`` (axes...)
+    the paper's STE, mean over trains
+``ste_sign_safe_s2`` (axes...)
+    STE with ``|N_real - N_true|``
+``event_rate_hz`` (axes...)
+    array events per second
+``data_rate_bps`` (axes...)
+    address-event bits per second
+``equivalent_bits`` (axes...)
+    ``log2(full_scale_v / threshold_v)``
+``seconds`` (axes..., stage)
+    wall seconds each stage took when it was computed
+``n_windows_used`` (axes...)
+    int64 rate-coding windows the point used (``coding.n_windows`` resolved; -1 where its result
+    does not say)
 
 A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
 metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of
@@ -122,6 +133,11 @@ RESULT_VALUES: dict[str, int] = {"n_windows_used": -1}
 # One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and
 # plain strings keep cubes comparable with xarray.testing.assert_identical. Read once, at import:
 # the process runs one set of libraries.
+#: The versions of Python and of the libraries that shape the results, as the cube's string
+#: attributes ``version_<name>`` (``version_python``, ``version_torch``, ``version_scikit_learn``,
+#: ...), read at import.
+#:
+#: :meta hide-value:
 DEPENDENCY_VERSIONS: dict[str, str] = {
     "version_python": platform.python_version(),
     **{
@@ -135,22 +151,37 @@ class PointResult(Protocol):
     """What the cube needs of one point (:class:`pipeline.run.records.ResultEntry` is one)."""
 
     @property
-    def fold_accuracy(self) -> Mapping[str, np.ndarray]: ...
+    def fold_accuracy(self) -> Mapping[str, np.ndarray]:
+        """Model name -> float64 (repeats, folds) accuracy in [0, 1] (a ``(folds,)`` array is one
+        repeat)."""
+        ...
 
     @property
-    def seconds(self) -> Mapping[str, float]: ...
+    def seconds(self) -> Mapping[str, float]:
+        """Wall seconds of every step of the point, by step name."""
+        ...
 
     @property
-    def metrics(self) -> SpikeMetrics: ...
+    def metrics(self) -> SpikeMetrics:
+        """The point's spike metrics."""
+        ...
 
     @property
-    def recordings(self) -> RecordingsInfo | None: ...
+    def recordings(self) -> RecordingsInfo | None:
+        """What the point was computed on; None where its result does not say."""
+        ...
 
     @property
-    def out_of_fold(self) -> OutOfFold | None: ...
+    def out_of_fold(self) -> OutOfFold | None:
+        """Every recording's out-of-fold prediction per model and repeat; None where the point
+        kept none."""
+        ...
 
     @property
-    def n_windows_used(self) -> int | None: ...
+    def n_windows_used(self) -> int | None:
+        """Rate-coding windows the point used (``coding.n_windows`` resolved); None where its
+        result does not say."""
+        ...
 
 
 def build_cube(
@@ -303,6 +334,13 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
     if name in RESULT_VALUES:
         return RESULTS.record.variable(name).attrs()
     return field_attrs(name)
+
+
+def declared_names() -> tuple[str, ...]:
+    """Every variable and coordinate name a cube declares with :func:`describe`, swept scene
+    fields aside: the cube's own (:data:`CUBE_VARIABLES`), the spike metrics and
+    :data:`RESULT_VALUES`, in that order."""
+    return (*CUBE_VARIABLES, *METRICS, *RESULT_VALUES)
 
 
 def metric_attrs(name: str) -> dict[str, str]:

@@ -9,18 +9,33 @@ comparators, up and down) emits a signed spike when its signal moves by one thre
 sends every spike as an address event. Its rates are the ones :mod:`pipeline.chain.metrics`
 measures: ``event_rate_hz`` (spikes per second of the whole array) and ``data_rate_bps =
 event_rate_hz * (ceil(log2 n) + 1)`` (taxel address plus polarity bit per event; time is implicit
-in the asynchronous bus). Power::
+in the asynchronous bus). Power:
 
-    P_event = n * (P_fe + P_cmp)                                   static  [W]
-            + event_rate_hz * E_event + data_rate_bps * E_link     dynamic [W]
+.. math::
+
+    \begin{aligned}
+    P_\mathrm{event} &= n \, (P_\mathrm{fe} + P_\mathrm{cmp})
+        && \text{static [W]} \\
+    &\quad + \mathrm{event\_rate\_hz} \cdot E_\mathrm{event}
+        + \mathrm{data\_rate\_bps} \cdot E_\mathrm{link}
+        && \text{dynamic [W]}
+    \end{aligned}
 
 *Frame readout* (the conventional alternative): every taxel is sampled by an ADC of ``bits``
 resolution at ``sampling_rate_hz`` and every sample is sent. One ADC serves ``m`` taxels through
-a multiplexer (``ceil(n / m)`` ADCs, each converting at ``m * sampling_rate_hz``)::
+a multiplexer (``ceil(n / m)`` ADCs, each converting at ``m * sampling_rate_hz``):
 
-    R_frame = n * sampling_rate_hz * bits                                         [bit/s]
-    P_frame = n * P_fe + ceil(n / m) * P_adc                              static  [W]
-            + n * sampling_rate_hz * (FOM * 2**bits + bits * E_link)      dynamic [W]
+.. math::
+
+    \begin{aligned}
+    R_\mathrm{frame} &= n \cdot \mathrm{sampling\_rate\_hz} \cdot \mathrm{bits}
+        && \text{[bit/s]} \\
+    P_\mathrm{frame} &= n \, P_\mathrm{fe} + \lceil n / m \rceil \, P_\mathrm{adc}
+        && \text{static [W]} \\
+    &\quad + n \cdot \mathrm{sampling\_rate\_hz}
+        \cdot (\mathrm{FOM} \cdot 2^\mathrm{bits} + \mathrm{bits} \cdot E_\mathrm{link})
+        && \text{dynamic [W]}
+    \end{aligned}
 
 with the Walden figure of merit ``FOM = P / (2**ENOB * f_s)``, so that one conversion costs
 ``FOM * 2**bits`` whatever the rate (``bits`` stands for the effective number of bits).
@@ -101,7 +116,7 @@ __all__ = [
 ]
 
 MAX_BITS = 64
-"""Largest ADC resolution accepted: beyond it ``2**bits`` is a unit mistake, not a design."""
+"""Largest ADC resolution accepted (bits). Beyond it ``2**bits`` is a unit mistake, not a design."""
 
 CHIP = (
     "M. D. Alea et al., IEEE TBioCAS, Dec. 2024 (doi 10.1109/TBCAS.2024.3387545): 192 taxels, "
@@ -329,6 +344,7 @@ class ReadoutPower:
 
     @property
     def total_w(self) -> float:
+        """Static plus dynamic power (W)."""
         return self.static_w + self.dynamic_w
 
     @property

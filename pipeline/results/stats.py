@@ -13,10 +13,14 @@ which recording ``i`` is right, and ``acc = sum_i s_i / (n R)``.
 Accuracy interval (:func:`accuracy_interval`)
 
 * ``R == 1``: the Wilson score interval for ``k = sum_i s_i`` successes in ``n`` trials,
-  ``(p + z^2/2n +- z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n)`` with ``p = k/n`` and ``z`` the
-  ``(1 + confidence)/2`` normal quantile (:func:`wilson_interval`: SciPy's
-  ``scipy.stats.binomtest(k, n).proportion_ci(confidence, method="wilson")`` step for step, for
-  many proportions at once, equal to it bit for bit in the tests).
+
+  .. math::
+
+      \frac{p + \frac{z^2}{2n} \pm z \sqrt{\frac{p(1-p)}{n} + \frac{z^2}{4n^2}}}{1 + \frac{z^2}{n}}
+
+  with ``p = k/n`` and ``z`` the ``(1 + confidence)/2`` normal quantile (:func:`wilson_interval`:
+  SciPy's ``scipy.stats.binomtest(k, n).proportion_ci(confidence, method="wilson")`` step for
+  step, for many proportions at once, equal to it bit for bit in the tests).
 * ``R > 1``: the repeats of one recording are not independent (they share the recording), so a
   binomial interval on ``n R`` trials would be too narrow. Instead, a percentile bootstrap over
   recordings: each resample draws, *within each class*, as many recordings as the class has, with
@@ -34,22 +38,37 @@ Paired comparison (:func:`compare_paired`) of ``a`` against ``b`` on the same re
 * p-value, two-sided. ``R == 1``: the exact McNemar test, the binomial test of ``only_a``
   successes in ``only_a + only_b`` trials with probability 1/2 (:func:`scipy.stats.binomtest`);
   ``p = 1`` when no pair is discordant. ``R > 1`` (McNemar would treat the repeats as
-  independent): the bootstrap p-value ``p = min(1, 2 (min(#{d* <= 0}, #{d* >= 0}) + 1) / (B + 1))``
+  independent): the bootstrap p-value
+
+  .. math::
+
+      p = \min\left(1, \frac{2 \, (\min(\#\{d^* \le 0\}, \#\{d^* \ge 0\}) + 1)}{B + 1}\right)
+
   over the ``B`` resamples: about the smallest ``1 - confidence`` whose percentile interval
   excludes 0, with the usual ``+1`` so that a finite number of resamples never reports
   ``p = 0`` (the smallest p is ``2 / (B + 1)``); ``p = 1`` when the observed difference is 0.
 
 Multiple comparisons (:func:`holm`): Holm-Bonferroni step-down adjusted p-values. With the ``m``
 p-values sorted ascending, ``p_(1) <= ... <= p_(m)``,
-``adj_(j) = max_{i <= j} min(1, (m - i + 1) p_(i))``, returned in the input's order; reject the
-hypotheses whose adjusted p-value is below ``alpha`` (family-wise error rate ``alpha``).
+
+.. math::
+
+    \mathrm{adj}_{(j)} = \max_{i \le j} \min\bigl(1, (m - i + 1) \, p_{(i)}\bigr),
+
+returned in the input's order; reject the hypotheses whose adjusted p-value is below ``alpha``
+(family-wise error rate ``alpha``).
 
 Trend (:func:`trend`) of accuracy along a swept value ``x`` (one design point per level ``l``):
 the least-squares slope of the points' accuracies ``acc_l`` on ``x_l``,
-``slope = sum_l (x_l - mean x) acc_l / sum_l (x_l - mean x)^2`` (accuracy per unit of ``x``). Its
-interval and two-sided p-value come from the stratified bootstrap, paired across levels (the same
-resampled recordings at every level), as for :func:`compare_paired` with ``R > 1`` (``p = 1``
-when the observed slope is 0).
+
+.. math::
+
+    \mathrm{slope} = \frac{\sum_l (x_l - \operatorname{mean} x) \, \mathrm{acc}_l}
+                          {\sum_l (x_l - \operatorname{mean} x)^2}
+
+(accuracy per unit of ``x``). Its interval and two-sided p-value come from the stratified
+bootstrap, paired across levels (the same resampled recordings at every level), as for
+:func:`compare_paired` with ``R > 1`` (``p = 1`` when the observed slope is 0).
 
 Every percentile interval is widened, if needed, to contain its estimate (a percentile interval
 of a skewed bootstrap distribution can miss it by a resample), so ``low <= estimate <= high``

@@ -138,7 +138,7 @@ class RecordingsInfo:
     Attributes
     ----------
     dataset_name : str or None
-        :attr:`pipeline.recordings.sources.Recordings.name`.
+        :attr:`pipeline.recordings.recording_set.Recordings.name`.
     class_names : tuple[str, ...] or None
         Class names, in label order.
     sampling_rate_hz : float or None
@@ -157,7 +157,7 @@ class OutOfFold:
     Attributes
     ----------
     recording_names : tuple[str, ...]
-        ``n`` distinct recording names (:attr:`pipeline.recordings.sources.Recordings.names`).
+        ``n`` distinct recording names (:attr:`pipeline.recordings.recording_set.Recordings.names`).
     labels : int64 (n,)
         Class index of each recording.
     predicted : dict[str, int64 (repeats, n)]

@@ -6,17 +6,17 @@ Data flows one way::
 
 and :data:`LEVELS` holds one :class:`Level` per kept result of that flow:
 
-==============  ========================================  =====================  =================
-level           reads (scene parts)                       after (levels)         timed steps
-==============  ========================================  =====================  =================
-``recordings``  ``dataset``                               --                     ``load``
-``front_end``   ``readout.full_scale_v``                  recordings             ``front_end``
-``spikes``      ``array``, ``readout``, ``seed`` (only    recordings, front_end  ``taxels``,
-                when a named effect draws random numbers)                        ``readout``,
-                                                                                 ``metrics``
-``rates``       ``coding``                                spikes, recordings     ``coding``
-``results``     ``training``                              rates                  ``train_<model>``
-==============  ========================================  =====================  =================
+==============  =========================================  =====================  =================
+level           reads (scene parts)                        after (levels)         timed steps
+==============  =========================================  =====================  =================
+``recordings``  ``dataset``                                --                     ``load``
+``front_end``   ``readout.full_scale_v``                   recordings             ``front_end``
+``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``taxels``,
+                when a named effect draws random numbers)                         ``readout``,
+                                                                                  ``metrics``
+``rates``       ``coding``                                 spikes, recordings     ``coding``
+``results``     ``training``                               rates                  ``train_<model>``
+==============  =========================================  =====================  =================
 
 Taxel signals are made inside ``spikes``, one recording at a time, and never kept (they are as
 large as the recordings times the taxels). ``recordings``, ``front_end`` and ``rates`` live in
@@ -141,6 +141,8 @@ class Stopwatch:
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:
+        """Time the ``with`` block as step ``name``, adding its wall seconds to ``seconds[name]``
+        (a step timed twice is summed); ``on_stage(name)`` is called when the step first starts."""
         if self.on_stage is not None and name not in self.seconds:
             self.on_stage(name)
         start = time.perf_counter()
@@ -178,12 +180,12 @@ class Rates:
 
     Attributes
     ----------
-    counts : int64 (n_recordings, channels, n_taxels, n_windows)
-        REAL spikes per window.
-    dropped : int64 (n_recordings, n_taxels)
-        REAL spikes outside every window.
-    labels : int64 (n_recordings,)
-        Class index of each recording, into ``class_names``.
+    counts : int64
+        REAL spikes per window, shape ``(n_recordings, channels, n_taxels, n_windows)``.
+    dropped : int64
+        REAL spikes outside every window, shape ``(n_recordings, n_taxels)``.
+    labels : int64
+        Class index of each recording, into ``class_names``, shape ``(n_recordings,)``.
     class_names : tuple[str, ...]
         Class names.
     """
@@ -330,9 +332,9 @@ class Read:
     path : str
         A top-level scene part (``"dataset"``, ``"seed"``) or one field of one (dotted,
         ``"readout.full_scale_v"``); the compute function gets it as its last name.
-    when : callable, optional
+    when : callable or None
         Read (passed, and hashed into the key) only for scenes where ``when(scene)`` holds;
-        otherwise passed as None.
+        otherwise passed as None. None (the default): read for every scene.
     """
 
     path: str
@@ -340,12 +342,16 @@ class Read:
 
     @property
     def argument(self) -> str:
+        """The keyword the compute function gets the part as, the last name of ``path``."""
         return self.path.rsplit(".", 1)[-1]
 
     def applies(self, scene: Scene) -> bool:
+        """Whether ``scene`` reads the part (``when`` holds, or there is no ``when``)."""
         return self.when is None or self.when(scene)
 
     def value(self, scene: Scene) -> Any:
+        """The part's value in ``scene`` (a value object or a field's value), or None where it
+        does not apply."""
         return fields.get(scene, self.path) if self.applies(scene) else None
 
 
@@ -366,7 +372,7 @@ class Level:
         ``compute(**outputs_of_after, **parts_read, watch=stopwatch) -> output``.
     steps : tuple of str
         The steps it times, in order; ``{model}`` stands for each model the scene trains.
-    record : Record or None
+    record : ~pipeline.run.records.Record or None
         What the sweep store keeps of its output (a cache level); None: workers keep its output
         in memory.
     """
@@ -504,6 +510,7 @@ def _result_entry(
     )
 
 
+#: Reads or generates the recordings (``dataset``); workers keep them in memory.
 RECORDINGS = Level(
     name="recordings",
     reads=(Read("dataset"),),
@@ -511,6 +518,7 @@ RECORDINGS = Level(
     compute=load,
     steps=("load",),
 )
+#: Fits one dataset-wide front-end scaling to ``readout.full_scale_v``; kept in memory.
 FRONT_END = Level(
     name="front_end",
     reads=(Read("readout.full_scale_v"),),
@@ -518,6 +526,8 @@ FRONT_END = Level(
     compute=fit,
     steps=("front_end",),
 )
+#: Encodes every taxel of every recording (TRUE and REAL trains) and measures the trains; the
+#: sweep store keeps its output.
 SPIKES = Level(
     name="spikes",
     reads=(Read("array"), Read("readout"), Read("seed", when=_draws_random_numbers)),
@@ -538,6 +548,7 @@ SPIKES = Level(
         decode=decode_spike_entry,
     ),
 )
+#: Rate-codes the REAL trains (``coding``), labelled by the recordings' classes; kept in memory.
 RATES = Level(
     name="rates",
     reads=(Read("coding"),),
@@ -545,6 +556,8 @@ RATES = Level(
     compute=code_rates,
     steps=("coding",),
 )
+#: Cross-validates every model ``training`` names on the same frames; the sweep store keeps its
+#: output, the point's result, with all a cube reads of it.
 RESULTS = Level(
     name="results",
     reads=(Read("training"),),

@@ -102,3 +102,10 @@ def test_write_run_report_checks_the_adc_before_reading_anything(tmp_path):
     with pytest.raises(EskinError, match=r"--adc-bits 0: need 1 to 64; --adc-rate-hz -1: need"):
         write_run_report(tmp_path, adc_bits=0, adc_rate_hz=-1.0)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_report_answers_checks_the_adc_as_the_report_does():
+    from flows.api import report_answers
+
+    with pytest.raises(EskinError, match=r"--adc-bits 65: need 1 to 64; --adc-rate-hz 0: need"):
+        report_answers({}, adc_bits=65, adc_rate_hz=0.0)

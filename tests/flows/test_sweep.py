@@ -235,13 +235,13 @@ def test_malformed_address(capsys, tmp_path):
     assert "expected tcp://HOST:PORT" in err
 
 
-def test_the_readme_queries_run_on_a_sweep(smoke_sweep):
+def test_the_cube_guide_queries_run_on_a_sweep(smoke_sweep):
     import re
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "how-to" / "cubes.md").read_text()
     block = next(
-        b for b in re.findall(r"```python\n(.*?)```", readme, flags=re.S) if "open_results" in b
+        b for b in re.findall(r"```python\n(.*?)```", guide, flags=re.S) if "open_results" in b
     )
     namespace: dict = {}
     exec(block.replace('"runs/paper"', repr(str(smoke_sweep[0]))), namespace)
