@@ -40,7 +40,14 @@ bench: $(VENV)/.installed-test
 
 # The documentation site: docs/_build/html/index.html. Warnings (a broken reference, a notebook
 # cell that fails) are errors; the tutorial notebook runs on every build.
+# Importing the API for its pages imports Prefect: its state, like that of Dask, matplotlib and
+# the notebook kernel, stays under docs/_build.
+DOCS_STATE := docs/_build/.state
 docs: $(VENV)/.installed-test
+	mkdir -p $(DOCS_STATE)
+	PREFECT_HOME=$(CURDIR)/$(DOCS_STATE)/prefect MPLCONFIGDIR=$(CURDIR)/$(DOCS_STATE)/mpl \
+	DASK_TEMPORARY_DIRECTORY=$(CURDIR)/$(DOCS_STATE)/dask PREFECT_SERVER_ANALYTICS_ENABLED=false \
+	DO_NOT_TRACK=1 IPYTHONDIR=$(CURDIR)/$(DOCS_STATE)/ipython \
 	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 

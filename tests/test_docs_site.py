@@ -34,7 +34,7 @@ def site(tmp_path_factory) -> Path:
     proc = subprocess.run(
         [*SPHINX, "-d", str(base / "doctrees"), str(DOCS), str(out)],
         cwd=ROOT,
-        env=hermetic_env(base),
+        env=hermetic_env(base, IPYTHONDIR=str(base / "ipython")),
         capture_output=True,
         text=True,
         timeout=1200,
