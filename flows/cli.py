@@ -8,8 +8,22 @@ prints both readouts' power and data rate for an array and an event rate, withou
 
 Exit status: 0 on success, 2 for bad input or usage (one line ``eskin: error: ...`` on stderr
 naming what and where), 1 for a run that failed on good input (a point that failed more often
-than Dask allows, a Prefect server that could not start), 130 when interrupted (Ctrl-C,
-SIGTERM).
+than Dask allows, a Prefect server that could not start) or a refused ``server stop``, 130 when
+interrupted (Ctrl-C, SIGTERM).
+
+A sweep or a search whose Prefect server stopped answering (stopped, killed, restarted) goes
+on and ends as it would have: its results are complete, and if the server did not answer again
+before the end it adds one line ``eskin: note: the Prefect record of this run is incomplete
+(...)`` on stderr (``"prefect_record": "incomplete"`` with ``--json``). Its exit status is
+still 0: the store, not Prefect, holds the results, and a script that goes on to the report
+must not take complete results for a failure.
+
+An interrupted run (Ctrl-C, SIGTERM) unwinds: its local Dask cluster is closed, its Prefect
+run marked crashed if the server answers. Whatever it is doing (planning, writing, waiting for
+a server or a cluster that is gone), it exits within :data:`UNWIND_S` seconds of the signal:
+then it kills whatever it started that still runs (never the shared Prefect server) and exits
+with status 130. A run that is done is given :data:`EXIT_GRACE_S` seconds to exit, so that
+Prefect's own flushes at exit never hold it.
 
 JSON numbers that are infinite (an SSNR of a REAL train equal to its TRUE train) are written as the
 strings ``"inf"`` and ``"-inf"``: JSON has no infinity, and ``float("inf")`` reads them back.
@@ -18,11 +32,13 @@ strings ``"inf"`` and ``"-inf"``: JSON has no infinity, and ``float("inf")`` rea
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -38,6 +54,17 @@ if TYPE_CHECKING:
     from storage import SweepStore
 
 EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130
+#: Seconds from an interrupt (Ctrl-C, SIGTERM) to the hard stop of what the command started.
+UNWIND_S = 8.0
+#: Seconds a command that is done has to exit before it exits at once.
+EXIT_GRACE_S = 5.0
+
+#: Whether :func:`main` runs as the program (not called from Python): only then does it stop
+#: processes and exit hard.
+_program = False
+#: Whether an interrupt arrived (Prefect's handler may have turned it into another exception).
+_signalled = threading.Event()
 
 
 _POWER_TEXT = {
@@ -260,6 +287,12 @@ def build_parser() -> argparse.ArgumentParser:
         "in <state>/auth-string (only its owner may read it), which the UI asks for too.",
     )
     server.add_argument("action", choices=["start", "status", "stop"])
+    server.add_argument(
+        "--force",
+        action="store_true",
+        help="stop: stop the server even while sweeps or searches use it (refused otherwise, "
+        "naming them); they go on computing and end with their Prefect record incomplete",
+    )
     server.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     server.set_defaults(handler=_server)
 
@@ -451,15 +484,33 @@ def main(argv: list[str] | None = None) -> int:
     docstring). An :class:`pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
     stderr and returns the error's exit status; an interrupt returns 130.
     """
+    global _program
+    _program = argv is None
     args = build_parser().parse_args(argv)
+    status = _handled(args)
+    if _program:
+        _exit_after(EXIT_GRACE_S, status)
+    return status
+
+
+def _handled(args: argparse.Namespace) -> int:
+    """The handler's exit status; errors and interrupts as the module docstring says."""
     try:
         return args.handler(args)
     except EskinError as exc:
-        print(f"eskin: error: {exc}", file=sys.stderr)
-        return exc.exit_status
+        if not _signalled.is_set():
+            print(f"eskin: error: {exc}", file=sys.stderr)
+            return exc.exit_status
     except KeyboardInterrupt:
-        print("eskin: interrupted", file=sys.stderr)
-        return 130
+        pass
+    except Exception:
+        if not _signalled.is_set():
+            raise
+    # Interrupted: a SIGTERM that Prefect's handler saw may come out as another exception.
+    if _program:
+        _stop_started_processes()
+    print("eskin: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -550,28 +601,58 @@ def _run_flow(
     format_text: Callable[[dict[str, Any]], str],
 ) -> int:
     """Run a flow (``run(store)``) on ``store``'s root holding its lock, with the Prefect server
-    up, and print its summary (``format_text`` of it, or JSON with ``--json``)."""
+    up and the run's record active (:mod:`flows.record`), and print its summary
+    (``format_text`` of it, or JSON with ``--json``), then the record's note if it is
+    incomplete."""
     from flows.environment import hermetic_environment
+    from flows.record import recording
     from flows.server import prefect_server
 
-    # SIGTERM unwinds like Ctrl-C, so the local Dask cluster is stopped (the default action
-    # would kill this process alone).
-    signal.signal(signal.SIGTERM, _interrupt)
+    _handle_interrupts()
     start = time.perf_counter()
     # Refuse a second run on this root before Prefect starts; the flow's own lock nests in it.
     with store.lock():
         hermetic_environment(store.root)
         if args.json or args.quiet:
             os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
-        with prefect_server(show_progress=not args.quiet):
-            summary = run(store)
+        with (
+            prefect_server(show_progress=not args.quiet) as api_url,
+            recording(api_url) as record,
+        ):
+            summary = _outcome(record, run, store)
     # The whole run as the user waits for it, the server start included.
     summary["seconds"] = time.perf_counter() - start
+    summary["prefect_record"] = "complete" if record.complete else "incomplete"
     if args.json:
         print(json.dumps(json_safe(summary), indent=2))
     else:
         print(format_text(summary))
+    if not record.complete:
+        print(record.incomplete_note(), file=sys.stderr)
     return 0
+
+
+def _outcome(record: Any, run: Callable[[SweepStore], Any], store: SweepStore) -> Any:
+    """``run(store)``'s result: the flow's, or, when Prefect failed to record the end of a
+    flow whose body had ended, the body's own (:attr:`flows.record.Record.outcome`), its final
+    state then left to the record."""
+    from prefect.states import Completed, Failed, State
+
+    try:
+        return run(store)
+    except Exception as error:
+        outcome = record.outcome
+        if not outcome.done or error is outcome.error:
+            raise  # the run's own failure, or Prefect's before the run began
+        record.was_down = True
+        if outcome.error is not None:
+            record.final_state(Failed(message=str(outcome.error)))
+            raise outcome.error from None
+        if isinstance(outcome.value, State):  # a flow that ended so (a failed write)
+            record.final_state(outcome.value)
+            return outcome.value.result()
+        record.final_state(Completed(message="recorded after the server answered again"))
+        return outcome.value
 
 
 def _optimize_checked(args: argparse.Namespace) -> int:
@@ -644,6 +725,8 @@ def _server(args: argparse.Namespace) -> int:
         if server.auth_file().is_file() and "PREFECT_API_URL" not in os.environ:
             info["auth_string_file"] = str(server.auth_file())
     elif args.action == "stop":
+        if not args.force:
+            server.check_stoppable()
         stopped = server.stop()
         info = {
             "running": False,
@@ -673,6 +756,97 @@ def _server(args: argparse.Namespace) -> int:
 
 def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def _handle_interrupts() -> None:
+    """SIGTERM unwinds like Ctrl-C, so the local Dask cluster is stopped (the default action
+    would kill this process alone). Run as the program, the first interrupt also starts the
+    deadline (:data:`UNWIND_S`) after which the command stops what it started and exits.
+
+    The deadline is started from Python's signal wake-up file, written for every signal that
+    has a Python handler, whichever handler runs: Prefect replaces this one with its own while a
+    flow runs.
+    """
+    signal.signal(signal.SIGTERM, _interrupt)
+    if not _program:
+        return
+    read, write = os.pipe()
+    os.set_blocking(write, False)
+    signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+
+    def watch() -> None:
+        while True:
+            received = os.read(read, 64)
+            if {signal.SIGINT, signal.SIGTERM} & set(received):
+                _signalled.set()
+                _exit_after(UNWIND_S, EXIT_INTERRUPTED)
+                return
+
+    threading.Thread(target=watch, name="eskin-interrupts", daemon=True).start()
+
+
+def _exit_after(seconds: float, status: int) -> None:
+    """Exit with ``status`` in ``seconds`` unless the process has ended by then."""
+    timer = threading.Timer(seconds, _exit_now, args=(status,))
+    timer.daemon = True
+    timer.start()
+
+
+def _exit_now(status: int) -> None:
+    """Kill what this command started (never the Prefect server) and exit with ``status``."""
+    if status == EXIT_INTERRUPTED:
+        _stop_started_processes(grace_s=0.0)
+        print("eskin: interrupted", file=sys.stderr)
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(status)
+
+
+def _stop_started_processes(grace_s: float = 2.0) -> None:
+    """Stop every process this command started that still runs (the local Dask workers and
+    anything they started), SIGTERM then SIGKILL after ``grace_s``; the shared Prefect server,
+    which outlives sweeps, and Python's resource tracker, which ends with this process, are
+    left alone."""
+    import psutil
+
+    from flows.server import MARKER
+
+    def command(process: psutil.Process) -> str:
+        try:
+            return " ".join(process.cmdline())
+        except psutil.Error:
+            return ""
+
+    try:
+        children = psutil.Process().children(recursive=True)
+    except psutil.Error:
+        return
+    spared = set()
+    for child in children:
+        line = command(child)
+        if MARKER in line:
+            spared |= {child.pid, *(p.pid for p in _descendants(child))}
+        elif "resource_tracker" in line:
+            spared.add(child.pid)
+    targets = [child for child in children if child.pid not in spared]
+    for process in targets:
+        with contextlib.suppress(psutil.Error):
+            process.kill() if grace_s <= 0 else process.terminate()
+    _, alive = psutil.wait_procs(targets, timeout=max(grace_s, 0.1))
+    for process in alive:
+        with contextlib.suppress(psutil.Error):
+            process.kill()
+    psutil.wait_procs(alive, timeout=1)
+
+
+def _descendants(process: Any) -> list[Any]:
+    import psutil
+
+    try:
+        return process.children(recursive=True)
+    except psutil.Error:
+        return []
 
 
 def _report(args: argparse.Namespace) -> int:

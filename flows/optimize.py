@@ -5,7 +5,9 @@ task (``trials-<first>-<last>``) that submits the batch's missing points to Dask
 and tells the trials; after each batch the current front is a table artifact
 (``<space>-front``), the trials told so far a progress artifact against the budget, and a
 run-logger line says what the batch computed and found cached. Prefect runs only in this
-process; the Dask workers run the plain functions of :mod:`flows.work`, as in a sweep.
+process; the Dask workers run the plain functions of :mod:`flows.work`, as in a sweep. As a
+sweep's, the search's artifacts and log lines go through the run's record
+(:mod:`flows.record`): a Prefect server that stops answering does not stop the search.
 """
 
 from __future__ import annotations
@@ -15,14 +17,10 @@ import sys
 from typing import Any
 
 from prefect import flow, get_run_logger, task
-from prefect.artifacts import (
-    create_progress_artifact,
-    create_table_artifact,
-    update_progress_artifact,
-)
 from prefect.cache_policies import NO_CACHE
 
-from flows.search import BatchOutcome, Search, check_budget, run_optimize
+from flows.record import Record, run_recorded
+from flows.search import BatchOutcome, Search, check_budget, default_search_root, run_optimize
 from flows.sweep import artifact_key, flow_run_url
 from pipeline.design.space import Space
 
@@ -55,7 +53,6 @@ def optimize(
     url = flow_run_url()
     if show_progress and url:
         print(f"Prefect flow run: {url}", file=sys.stderr)
-    progress: dict[str, Any] = {}
 
     def evaluate(search: Search, numbers: list[int], client_for: Any) -> BatchOutcome:
         from prefect.utilities.annotations import quote
@@ -63,17 +60,14 @@ def optimize(
         run = batch_task.submit(quote(search), numbers, quote(client_for), numbers[0], numbers[-1])
         return run.result()
 
-    def on_batch(search: Search, outcome: BatchOutcome) -> None:
+    def on_batch(record: Record, search: Search, outcome: BatchOutcome) -> None:
         name = search.space.name
         done = search.told / budget if budget else min(1.0, search.seconds_spent() / budget_s)
-        if "artifact" not in progress:
-            progress["artifact"] = create_progress_artifact(
-                progress=100 * done,
-                key=artifact_key(name, "progress"),
-                description=f"Budget of search {name!r} spent (trials or stage seconds).",
-            )
-        else:
-            update_progress_artifact(artifact_id=progress["artifact"], progress=100 * done)
+        record.progress(
+            artifact_key(name, "progress"),
+            100 * done,
+            f"Budget of search {name!r} spent (trials or stage seconds).",
+        )
         rows = [
             {
                 "trial": row["trial"],
@@ -83,10 +77,10 @@ def optimize(
             }
             for row in search.front_rows()
         ]
-        create_table_artifact(
-            key=artifact_key(name, "front"),
-            table=rows,
-            description=f"The current front of search {name!r} after {search.told} trials "
+        record.table(
+            artifact_key(name, "front"),
+            rows,
+            f"The current front of search {name!r} after {search.told} trials "
             "(on_front false: off the front, but a paired test cannot tell it from it).",
         )
         logger.info(
@@ -101,22 +95,32 @@ def optimize(
             sum(r["on_front"] for r in rows),
         )
 
-    summary = run_optimize(
-        space,
-        root,
-        budget=budget,
-        budget_s=budget_s,
-        workers=workers,
-        address=address,
-        on_batch=on_batch,
-        evaluate=evaluate,
-    )
-    summary["flow_run_url"] = url
-    if report:
-        from flows.sweep import report_task
+    def body(record: Record) -> dict[str, Any]:
+        summary = run_optimize(
+            space,
+            root,
+            budget=budget,
+            budget_s=budget_s,
+            workers=workers,
+            address=address,
+            on_batch=lambda search, outcome: on_batch(record, search, outcome),
+            evaluate=evaluate,
+        )
+        summary["flow_run_url"] = url
+        if report:
+            from flows.sweep import report_task
 
-        summary["report"] = report_task(summary["root"])
-    return summary
+            summary["report"] = report_task(summary["root"])
+        return summary
+
+    shown = (
+        root
+        if root is not None
+        else default_search_root(space)
+        if isinstance(space, Space)
+        else None
+    )
+    return run_recorded(body, what="search", root=str(shown or "its default root"))
 
 
 def _rounded(value: Any) -> Any:

@@ -8,10 +8,16 @@ A write that failed for want of space or permission (:class:`storage.errors.Stor
 a failed point: every later write would fail alike. The first one cancels the work left and
 stops the sweep, which ends with :class:`SweepStopped`, one line saying what the root keeps
 (:func:`stopped_message`).
+
+Whatever stops a sweep, what sees its work cancelled names the real cause (:class:`StopCause`):
+a write that failed, an interrupt (Ctrl-C, SIGTERM), a cluster that was lost, or the error
+that stopped it. A Prefect server that stops answering never stops a sweep
+(:mod:`flows.record`).
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -34,6 +40,43 @@ class SweepFailed(EskinError):
 class SweepStopped(SweepFailed):
     """A write to the run root failed for want of space or permission: the sweep stopped early,
     keeping the points written before (exit status 1)."""
+
+
+class StopCause:
+    """Why a sweep stopped, for the tasks that find their points cancelled.
+
+    Whatever stops the sweep notes the cause (:meth:`note`) before the work is cancelled or
+    the cluster closed; a task that finds its points cancelled reads it (:meth:`wait`). Points
+    cancelled when nothing noted a cause were cancelled by the cluster: it was lost.
+    """
+
+    CLUSTER_LOST = "the Dask cluster was lost (its scheduler or workers went away)"
+
+    def __init__(self) -> None:
+        self._why: str | None = None
+        self._noted = threading.Event()
+
+    def note(self, error: BaseException) -> None:
+        """Note ``error`` as the cause (the first one noted stays)."""
+        if not self._noted.is_set():
+            self._why = describe_stop(error)
+            self._noted.set()
+
+    def wait(self, timeout_s: float = 10.0) -> str:
+        """The cause, waiting up to ``timeout_s`` for it to be noted (the work is cancelled
+        just before), else :data:`CLUSTER_LOST`."""
+        return self._why if self._noted.wait(timeout_s) and self._why else self.CLUSTER_LOST
+
+
+def describe_stop(error: BaseException) -> str:
+    """The cause of a stop, as the sweep's tasks say it."""
+    if isinstance(error, StoreWriteError):
+        return f"a write to the run root failed ({error})"
+    if not isinstance(error, Exception):  # KeyboardInterrupt, Prefect's TerminationSignal
+        return "it was interrupted (Ctrl-C or SIGTERM)"
+    if isinstance(error, EskinError):
+        return str(error)
+    return f"{type(error).__name__}: {error}"
 
 
 def stopped_message(plan: SweepPlan, error: StoreWriteError) -> str:

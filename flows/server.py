@@ -28,6 +28,17 @@ period it keeps the lock and shuts the server down. A sweep that wants a lease m
 for that shutdown to end, finds no server, and starts a new one, so a sweep never gets a server
 that is about to stop. The kernel drops a killed process's locks, so a killed sweep holds no
 lease.
+
+Which runs use the local server is told by a registry beside its state: a sweep or a search
+(its flow, from the command line or a deployment) keeps ``runs/<id>.json`` there, naming its
+process (PID and start time), what it is and its run root, for as long as it runs
+(:func:`registered_run`). :func:`running_runs` lists the entries whose process still runs
+(the same PID *and* start time, so a killed run's entry, or its PID reused, never counts) and
+removes the others. ``eskin server stop`` refuses while it lists any, unless forced.
+
+The server restarts on the port it last had (kept in ``<state>/port``) when that port is free,
+so a run whose server was stopped or killed finds it again at the same address once anything
+starts it again, and so do the UI's bookmarks.
 """
 
 from __future__ import annotations
@@ -43,6 +54,7 @@ import sys
 import threading
 import time
 import urllib.request
+import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -66,6 +78,10 @@ CLIENT_AUTH_ENV = "PREFECT_API_AUTH_STRING"
 #: In the server's command line; a PID whose command line lacks it is not our server.
 MARKER = "flows.server"
 STOP_GRACE_S = 30.0
+#: The folder of the state folder that registers the runs using the server.
+RUNS_DIR = "runs"
+#: The file of the state folder that keeps the port the server last listened on.
+PORT_FILE = "port"
 
 
 class ServerError(EskinError):
@@ -221,6 +237,94 @@ def _using(info: ServerInfo, auth: str) -> Iterator[None]:
             yield
 
 
+@dataclass(frozen=True)
+class RunningRun:
+    """A run registered as using the local server, whose process still runs."""
+
+    pid: int
+    what: str
+    root: str
+
+    def __str__(self) -> str:
+        return f"{self.what} of {self.root} (PID {self.pid})"
+
+
+class ServerBusyError(EskinError):
+    """``eskin server stop`` refused: runs use the server (exit status 1)."""
+
+    exit_status = 1
+
+
+def _process_started(pid: int) -> float | None:
+    """The start time of process ``pid`` (psutil's), None if it does not run."""
+    import psutil
+
+    try:
+        process = psutil.Process(pid)
+        if process.status() == psutil.STATUS_ZOMBIE:
+            return None
+        return process.create_time()
+    except psutil.Error:
+        return None
+
+
+@contextlib.contextmanager
+def registered_run(api_url: str | None, *, what: str, root: str) -> Iterator[None]:
+    """Register this process as a run of ``what`` in ``root`` using the local server, for the
+    block, if ``api_url`` is that server's API (a server named by ``PREFECT_API_URL`` that is
+    not the local one is not ours to stop)."""
+    state = server_dir()
+    info = _recorded(state)
+    if info is None or api_url != info.api_url:
+        yield
+        return
+    folder = state / RUNS_DIR
+    folder.mkdir(mode=0o700, exist_ok=True)
+    entry = folder / f"{uuid.uuid4().hex}.json"
+    pid = os.getpid()
+    entry.write_text(
+        json.dumps({"pid": pid, "started": _process_started(pid), "what": what, "root": root})
+    )
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            entry.unlink()
+
+
+def running_runs(state: Path | None = None) -> list[RunningRun]:
+    """The runs registered with the local server of ``state`` whose process still runs; the
+    entries of runs that ended without removing theirs (killed) are removed."""
+    folder = (state or server_dir()) / RUNS_DIR
+    found = []
+    for entry in sorted(folder.glob("*.json")) if folder.is_dir() else ():
+        try:
+            data = json.loads(entry.read_text())
+            pid, started = int(data["pid"]), data["started"]
+            run = RunningRun(pid, str(data["what"]), str(data["root"]))
+        except FileNotFoundError:
+            continue  # removed as it ended
+        except (OSError, ValueError, KeyError, TypeError):
+            started, run = None, None  # unreadable: not a live run's
+        if run is not None and started is not None and _process_started(run.pid) == started:
+            found.append(run)
+        else:
+            with contextlib.suppress(OSError):
+                entry.unlink()
+    return found
+
+
+def check_stoppable(state: Path | None = None) -> None:
+    """Raise :class:`ServerBusyError`, naming them, if runs use the local server."""
+    runs = running_runs(state)
+    if runs:
+        raise ServerBusyError(
+            f"the Prefect server is in use by {len(runs)} running run(s): "
+            f"{'; '.join(map(str, runs))}; stopping it would leave their Prefect record "
+            "incomplete (their results would still be complete): wait for them, or use --force"
+        )
+
+
 def stop(state: Path | None = None) -> ServerInfo | None:
     """Stop the local server of ``state`` (SIGTERM, SIGKILL after a grace); return what ran."""
     state = state or server_dir()
@@ -245,7 +349,7 @@ def _start(state: Path, auth: str, *, show_progress: bool) -> ServerInfo:
 
     timeout_s = _seconds_from_env(START_TIMEOUT_ENV, DEFAULT_START_TIMEOUT_S)
     idle_s = _seconds_from_env(IDLE_ENV, DEFAULT_IDLE_S)
-    port = _free_port()
+    port = _free_port(_last_port(state))
     log_path = state / "server.log"
     env = {
         **os.environ,
@@ -270,6 +374,7 @@ def _start(state: Path, auth: str, *, show_progress: bool) -> ServerInfo:
         )
     info = ServerInfo(process.pid, port, state)
     (state / "server.json").write_text(json.dumps({"pid": info.pid, "port": info.port}))
+    (state / PORT_FILE).write_text(f"{port}\n")
     start = time.monotonic()
     with tqdm(
         desc=f"starting the Prefect server on {info.ui_url}",
@@ -329,12 +434,29 @@ def _exclusive(path: Path) -> Iterator[None]:
         yield
 
 
-def _free_port() -> int:
+def _last_port(state: Path) -> int | None:
+    """The port the server of ``state`` last listened on, if known."""
+    try:
+        return int((state / PORT_FILE).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _free_port(wanted: int | None = None) -> int:
+    """``wanted`` if it is free on 127.0.0.1, else a free port."""
     import socket
 
-    with socket.socket() as s:
-        s.bind((HOST, 0))
-        return s.getsockname()[1]
+    for port in (wanted, 0) if wanted else (0,):
+        with socket.socket() as s:
+            # As the server binds (uvicorn): connections of its last run in TIME_WAIT do not
+            # keep it from its port.
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                s.bind((HOST, port))
+            except OSError:
+                continue
+            return s.getsockname()[1]
+    raise ServerError("no free port on 127.0.0.1")
 
 
 # ---------------------------------------------------------------------------------------------

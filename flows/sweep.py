@@ -15,6 +15,12 @@ The command line loads and checks the grid before Prefect starts and hands the c
 Prefect runs only in this process; the Dask workers run the plain functions of
 :mod:`flows.work` and never call the Prefect API (worker processes that did would each start a
 temporary Prefect server of their own when no real one is configured).
+
+No step of the sweep waits for the Prefect server or fails with it: artifacts and run-logger
+lines go through the run's :class:`flows.record.Record`, which keeps what the server could not
+take and sends it when the server answers again. A sweep whose server stopped, was killed or
+restarted computes, stores and writes its cubes as any other. What stops a sweep is named in
+the state of every sweep task it stopped (:class:`flows.progress.StopCause`).
 """
 
 from __future__ import annotations
@@ -26,12 +32,6 @@ from pathlib import Path
 from typing import Any
 
 from prefect import flow, get_run_logger, task
-from prefect.artifacts import (
-    create_link_artifact,
-    create_progress_artifact,
-    create_table_artifact,
-    update_progress_artifact,
-)
 from prefect.cache_policies import NO_CACHE
 from prefect.states import Cancelled, Failed, State
 from prefect.task_runners import ThreadPoolTaskRunner
@@ -40,15 +40,18 @@ from prefect.utilities.annotations import quote
 from flows.assembly import assemble, cube_location
 from flows.planning import SweepPlan, checked_grid, open_root, plan_sweep
 from flows.progress import (
+    StopCause,
     SweepFailed,
     SweepStopped,
     completed_points,
+    describe_stop,
     failure_message,
     point_failures,
     progress_bar,
     stopped_message,
     write_error,
 )
+from flows.record import Record, active_record, run_recorded
 from flows.report import needs_report_folder
 from flows.run import log_sweep_run, sweep_summary
 from flows.scheduling import submit_missing, sweep_client
@@ -92,12 +95,15 @@ def plan_task(grid: Grid, root: str) -> SweepPlan:
 
 
 @task(name="sweep", cache_policy=NO_CACHE, task_run_name="sweep-{name}")
-def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str, Any] | State:
+def sweep_task(
+    plan: SweepPlan, name: str, futures: dict[str, Any], cause: StopCause
+) -> dict[str, Any] | State:
     """Wait for the sweep's points, assemble its cube, publish its best points as a table;
     return the cube's summary (:func:`flows.assembly.summarize`).
 
-    A sweep stopped by a failed write (its points cancelled, or one failed so, or its cube
-    not written: then the state holds the :class:`storage.errors.StoreWriteError`) ends Cancelled: a
+    A sweep whose points were cancelled ends Cancelled, its message naming why
+    (``cause``: a write that failed, an interrupt, a lost cluster); one whose cube could not
+    be written ends Cancelled with the :class:`storage.errors.StoreWriteError` as its data. A
     state, not an exception, so that the terminal shows no traceback (the flow says it once).
     """
     logger = get_run_logger()
@@ -111,8 +117,10 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str,
             wait(mine)
         except FuturesCancelledError:  # the sweep stopped: its work left was cancelled
             pass
-    if any(f.status == "cancelled" or write_error(f) for f in mine):
-        return Cancelled(message=f"sweep {name!r} stopped: a write to the run root failed")
+    written = next(filter(None, map(write_error, mine)), None)
+    if written is not None or any(f.status == "cancelled" for f in mine):
+        why = describe_stop(written) if written is not None else cause.wait()
+        return Cancelled(message=f"sweep {name!r} stopped: {why}")
     failed = [
         why for f in mine for why in point_failures(f, [k for k in keys if k in futures]).values()
     ]
@@ -123,10 +131,10 @@ def sweep_task(plan: SweepPlan, name: str, futures: dict[str, Any]) -> dict[str,
     except StoreWriteError as error:
         return Cancelled(message=str(error), data=error)
     rows = summary["best"]
-    create_table_artifact(
-        key=artifact_key(plan.grid.name, name, "best"),
-        table=[{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
-        description=f"Sweep {name!r} of grid {plan.grid.name!r}: the best point per model "
+    _record().table(
+        artifact_key(plan.grid.name, name, "best"),
+        [{"model": r["model"], "accuracy": round(r["accuracy"], 4), **r["at"]} for r in rows],
+        f"Sweep {name!r} of grid {plan.grid.name!r}: the best point per model "
         f"(mean accuracy over folds) of {len(keys)} points. Cube: {cube_location(plan, name)}",
     )
     for r in rows:
@@ -142,13 +150,21 @@ def report_task(root: str) -> str:
     from flows.report import write_run_report
 
     path = write_run_report(Path(root))
-    create_link_artifact(
-        key=artifact_key(Path(root).name, "report"),
-        link=path.absolute().as_uri(),
-        link_text=str(path),
-        description="The sweep's report: figures, the paper's claims, Table I.",
+    _record().link(
+        artifact_key(Path(root).name, "report"),
+        path.absolute().as_uri(),
+        str(path),
+        "The sweep's report: figures, the paper's claims, Table I.",
     )
     return str(path)
+
+
+def _record() -> Record:
+    """The run's record (:func:`flows.record.run_recorded` makes it active for the flow)."""
+    record = active_record()
+    if record is None:
+        raise RuntimeError("a sweep task runs only in the sweep flow, whose record is active")
+    return record
 
 
 @flow(
@@ -177,7 +193,8 @@ def sweep(
 
     A write to the root that fails for want of space or permission stops the sweep: the work
     left is cancelled and the run ends Failed; calling the flow raises
-    :class:`flows.progress.SweepStopped`, whose one line says how many points are kept.
+    :class:`flows.progress.SweepStopped`, whose one line says how many points are kept. A
+    Prefect server that stops answering does not stop it (:mod:`flows.record`).
     """
     start = time.perf_counter()
     logger = get_run_logger()
@@ -186,52 +203,63 @@ def sweep(
     if report and root is not None and (problem := needs_report_folder(root)):
         raise EskinError(f"report: {problem}")
     store = open_root(grid, root, dataset)
-    summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
-    if show_progress and summary["flow_run_url"]:
-        print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
-    # One sweep per root: a second one is refused here (the command line takes the lock before
-    # it starts Prefect, and this nests in it). The kernel drops it if this process is killed
-    # (an object root's lease expires).
-    with store.lock():
-        plan = plan_task(grid, str(store.root))
-        futures: dict[str, Any] = {}
-        runs: list[Any] = []
-        stop: StoreWriteError | None = None
-        try:
-            with sweep_client(plan, workers=workers, address=address) as client:
-                if client is not None:
-                    summary["dashboard"] = client.dashboard_link
-                    logger.info("Dask dashboard: %s", client.dashboard_link)
-                    if show_progress:
-                        print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
-                    futures = submit_missing(plan, client)
-                # Quoted: Prefect would walk the plan and the futures for each task's inputs.
-                runs = [
-                    sweep_task.submit(quote(plan), s.name, quote(futures)) for s in plan.grid.sweeps
-                ]
-                if futures:
-                    _follow(plan, client, futures, show_progress)
-                for run in runs:
-                    run.wait()
-        except StoreWriteError as error:  # the work left is cancelled, the cluster closed
-            stop = error
-        for run in runs:
-            run.wait()
-        stop = stop or next(filter(None, map(_write_failure, runs)), None)
-        if stop is not None:
-            # A state, not an exception: one line on the terminal, no traceback; calling the
-            # flow raises its data.
-            message = stopped_message(plan, stop)
-            return Failed(message=message, data=SweepStopped(message))
-        failed = [run.state.message for run in runs if not run.state.is_completed()]
-        if failed:
-            raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
-        sweeps = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
-    summary |= sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
-    log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
-    if report:
-        summary["report"] = report_task(plan.root)
-    return summary
+
+    def body(record: Record) -> dict[str, Any] | State:
+        summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
+        if show_progress and summary["flow_run_url"]:
+            print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
+        # One sweep per root: a second one is refused here (the command line takes the lock
+        # before it starts Prefect, and this nests in it). The kernel drops it if this process
+        # is killed (an object root's lease expires).
+        with store.lock():
+            plan = plan_task(grid, str(store.root))
+            futures: dict[str, Any] = {}
+            runs: list[Any] = []
+            stop: StoreWriteError | None = None
+            cause = StopCause()
+            try:
+                with sweep_client(plan, workers=workers, address=address) as client:
+                    try:
+                        if client is not None:
+                            summary["dashboard"] = client.dashboard_link
+                            logger.info("Dask dashboard: %s", client.dashboard_link)
+                            if show_progress:
+                                print(f"Dask dashboard: {client.dashboard_link}", file=sys.stderr)
+                            futures = submit_missing(plan, client)
+                        # Quoted: Prefect would walk the plan and the futures for each task's
+                        # inputs.
+                        runs = [
+                            sweep_task.submit(quote(plan), s.name, quote(futures), quote(cause))
+                            for s in plan.grid.sweeps
+                        ]
+                        if futures:
+                            _follow(plan, client, futures, show_progress, record)
+                        for run in runs:
+                            run.wait()
+                    except BaseException as error:
+                        cause.note(error)  # before the cluster closes and the tasks wake
+                        raise
+            except StoreWriteError as error:  # the work left is cancelled, the cluster closed
+                stop = error
+            for run in runs:
+                run.wait()
+            stop = stop or next(filter(None, map(_write_failure, runs)), None)
+            if stop is not None:
+                # A state, not an exception: one line on the terminal, no traceback; calling
+                # the flow raises its data.
+                message = stopped_message(plan, stop)
+                return Failed(message=message, data=SweepStopped(message))
+            failed = [run.state.message for run in runs if not run.state.is_completed()]
+            if failed:
+                raise SweepFailed(f"{len(failed)} of {len(runs)} sweeps failed: {failed[0]}")
+            sweeps = {s.name: run.result() for s, run in zip(plan.grid.sweeps, runs, strict=True)}
+        summary |= sweep_summary(plan, sweeps, len(futures), time.perf_counter() - start)
+        log_sweep_run(plan, summary, warn=logger.warning)  # before the report, which shows it
+        if report:
+            summary["report"] = report_task(plan.root)
+        return summary
+
+    return run_recorded(body, what=f"sweep {grid.name!r}", root=str(store.root))
 
 
 def _write_failure(run: Any) -> StoreWriteError | None:
@@ -242,15 +270,15 @@ def _write_failure(run: Any) -> StoreWriteError | None:
     return error if isinstance(error, StoreWriteError) else None
 
 
-def _follow(plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress: bool) -> None:
-    """Follow every submitted point: the bar per point, the API and log every few seconds."""
+def _follow(
+    plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress: bool, record: Record
+) -> None:
+    """Follow every submitted point: the bar per point, the record and log every few seconds."""
     logger = get_run_logger()
     total, done, failures = len(plan.scenes), len(plan.cached), 0
-    artifact = create_progress_artifact(
-        progress=100 * done / total,
-        key=artifact_key(plan.grid.name, "progress"),
-        description=f"Points of grid {plan.grid.name!r} done (cached ones count as done).",
-    )
+    key = artifact_key(plan.grid.name, "progress")
+    description = f"Points of grid {plan.grid.name!r} done (cached ones count as done)."
+    record.progress(key, 100 * done / total, description)
     last = time.monotonic()
     with progress_bar(plan, show_progress) as bar:
         for _, failure in completed_points(client, futures):
@@ -261,7 +289,7 @@ def _follow(plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress
                 logger.error("point failed: %s", failure)
             if time.monotonic() - last >= REPORT_EVERY_S or done == total:
                 last = time.monotonic()
-                update_progress_artifact(artifact_id=artifact, progress=100 * done / total)
+                record.progress(key, 100 * done / total, description)
                 logger.info(
                     "%d of %d points done (%d cached, %d failed)",
                     done,
