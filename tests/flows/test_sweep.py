@@ -31,7 +31,9 @@ def test_cold_run_summary(smoke_sweep):
         "seconds",
         "flow_run_url",
         "dashboard",
+        "prefect_record",
     }
+    assert summary["prefect_record"] == "complete"
     cubes = open_results(root)
     assert summary["sweeps"] == {name: summarize(cube) for name, cube in cubes.items()}
     assert summary["flow_run_url"].startswith("http://127.0.0.1:")
