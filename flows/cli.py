@@ -501,11 +501,13 @@ def _handled(args: argparse.Namespace) -> int:
         if not _signalled.is_set():
             print(f"eskin: error: {exc}", file=sys.stderr)
             return exc.exit_status
-    except KeyboardInterrupt:
-        pass
     except Exception:
         if not _signalled.is_set():
             raise
+    except (SystemExit, GeneratorExit):
+        raise
+    except BaseException:  # KeyboardInterrupt; Prefect's TerminationSignal for a SIGTERM
+        pass
     # Interrupted: a SIGTERM that Prefect's handler saw may come out as another exception.
     if _program:
         _stop_started_processes()
