@@ -102,7 +102,7 @@ class Record:
         self._logs: deque[dict[str, Any]] = deque()
         self._artifacts: dict[str, Any] = {}
         self._sending = False
-        self._closing = False
+        self._closed = False
         context = contextvars.copy_context()  # the settings of the run: API URL, auth string
         self._thread = threading.Thread(
             target=context.run, args=(self._run,), name="eskin-prefect-record", daemon=True
@@ -165,9 +165,6 @@ class Record:
         """Send what is held if the server answers (for at most ``timeout_s``); return whether
         the record is complete. A server that does not answer now is not waited for."""
         deadline = time.monotonic() + timeout_s
-        with self._cond:
-            self._closing = True
-            self._cond.notify_all()
         if self.down_since is not None and self.api_url and healthy(self.api_url):
             self.down_since = None  # back: send at once rather than at the next probe
             self._reconnected()
@@ -176,6 +173,9 @@ class Record:
                 if self.down_since is not None:
                     break
                 self._cond.wait(0.1)
+        with self._cond:
+            self._closed = True  # what is still held stays so: nothing waits for it now
+            self._cond.notify_all()
         self._drain_events(max(0.5, min(5.0, deadline - time.monotonic())))
         return self.complete
 
@@ -217,14 +217,12 @@ class Record:
         import prefect.settings as names
 
         with names.temporary_settings({names.PREFECT_CLIENT_MAX_RETRIES: 0}):
-            while True:
+            while not self._closed:
                 with self._cond:
-                    if not self._held() and not self._closing:
+                    if not self._held() and not self._closed:
                         self._cond.wait(SEND_EVERY_S)
-                    if self._closing and (not self._held() or self.down_since is not None):
-                        self._cond.notify_all()
-                        if not self._held():
-                            return
+                if self._closed:
+                    return
                 if self.down_since is not None:
                     if not (self.api_url and healthy(self.api_url)):
                         with self._cond:
@@ -279,8 +277,11 @@ class Record:
 
     def _reconnected(self) -> None:
         """The server answers again: have Prefect's events client send what it kept."""
+        from prefect.settings import PREFECT_API_URL
+
         self.reconnected_at = time.time()
-        if self.flow_run_id is None:
+        # Without an API URL Prefect would start a temporary server to take the event.
+        if self.flow_run_id is None or not PREFECT_API_URL.value():
             return
         with contextlib.suppress(Exception):
             from prefect.events import emit_event

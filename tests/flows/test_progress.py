@@ -42,3 +42,24 @@ def test_a_worker_leaves_a_write_failure_to_the_coordinator_and_logs_other_failu
     quiet = _WriteFailureFilter()
     assert not quiet.filter(record("StoreWriteError('cannot write to run root r: x')"))
     assert quiet.filter(record("OSError(5, 'Input/output error')"))
+
+
+def test_every_stop_names_its_real_cause():
+    import threading
+
+    from flows.progress import StopCause, describe_stop
+    from storage import StoreWriteError
+
+    written = StoreWriteError("/runs/x", "no space left on the device")
+    assert describe_stop(written).startswith("a write to the run root failed (")
+    assert describe_stop(KeyboardInterrupt()) == "it was interrupted (Ctrl-C or SIGTERM)"
+    assert describe_stop(RuntimeError("boom")) == "RuntimeError: boom"
+    for error in (KeyboardInterrupt(), RuntimeError("boom")):
+        assert "write" not in describe_stop(error)
+
+    cause = StopCause()
+    assert cause.wait(timeout_s=0.01) == StopCause.CLUSTER_LOST  # cancelled with no cause noted
+    threading.Timer(0.05, cause.note, args=(KeyboardInterrupt(),)).start()
+    assert cause.wait(timeout_s=5) == "it was interrupted (Ctrl-C or SIGTERM)"
+    cause.note(written)  # the first cause stays
+    assert cause.wait(timeout_s=0) == "it was interrupted (Ctrl-C or SIGTERM)"

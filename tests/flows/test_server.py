@@ -193,3 +193,46 @@ def test_start_lock_serialises_concurrent_starts(state):
     # The leases were released with the processes: the monitor could lock exclusively now.
     with open(state / "leases.lock", "a+") as lease:
         fcntl.flock(lease, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+
+def register(state, pid: int, started: float | None, root: str = "/runs/x") -> None:
+    """Write a registry entry as :func:`flows.server.registered_run` does."""
+    folder = state / server.RUNS_DIR
+    folder.mkdir(parents=True, exist_ok=True)
+    entry = {"pid": pid, "started": started, "what": "sweep 'smoke'", "root": root}
+    (folder / f"{pid}-{started}.json").write_text(json.dumps(entry))
+
+
+def test_server_stop_is_refused_while_a_live_run_uses_it_unless_forced(tmp_path):
+    """A live run's entry refuses ``server stop`` in one line naming it (exit 1); a killed
+    run's entry, or one whose PID was reused, never blocks it and is removed."""
+    state = tmp_path / "cli-state"
+    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"])
+    try:
+        started = psutil.Process(live.pid).create_time()
+        register(state, live.pid, started, "/runs/live")
+        register(state, os.getpid(), started - 1000.0, "/runs/reused")  # alive, another start
+        dead = subprocess.Popen([sys.executable, "-c", "pass"])
+        dead.wait()
+        register(state, dead.pid, started, "/runs/killed")
+        assert server.running_runs(state) == [
+            server.RunningRun(live.pid, "sweep 'smoke'", "/runs/live")
+        ]
+        assert len(list((state / server.RUNS_DIR).iterdir())) == 1, "stale entries kept"
+        refused = eskin("server", "stop", env=env)
+        assert refused.returncode == 1 and refused.stdout == ""
+        lines = refused.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(
+            "eskin: error: the Prefect server is in use by 1 running run(s): "
+            f"sweep 'smoke' of /runs/live (PID {live.pid});"
+        )
+        assert lines[0].endswith("or use --force")
+        forced = eskin("server", "stop", "--force", env=env)
+        assert forced.returncode == 0 and "no Prefect server was running" in forced.stdout
+    finally:
+        live.kill()
+        live.wait()
+    assert server.running_runs(state) == []
+    stopped = eskin("server", "stop", env=env)
+    assert stopped.returncode == 0, stopped.stderr

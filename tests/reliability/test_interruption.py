@@ -11,6 +11,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import psutil
@@ -167,12 +168,15 @@ def test_sigterm_stops_the_sweep_and_everything_it_started(smoke_sweep, tmp_path
     children: list[psutil.Process] = []
     try:
         children = children_after_first_point(sweep, root)
+        sent = time.monotonic()
         sweep.send_signal(signal.SIGTERM)
         _, err = sweep.communicate(timeout=120)
-        assert sweep.returncode == 130
-        assert "eskin: interrupted" in err.splitlines()
-        _, alive = psutil.wait_procs(children, timeout=30)
-        assert alive == [], f"left running after SIGTERM: {alive}"
+        took = time.monotonic() - sent
+        assert sweep.returncode == 130 and took < 10, (took, err[-3000:])
+        assert err.strip().splitlines()[-1] == "eskin: interrupted"
+        assert "a write to the run root failed" not in err
+        _, alive = psutil.wait_procs(children, timeout=10)
+        assert alive == [], f"left running 10 s after SIGTERM: {alive}"
     finally:
         stop(sweep)
         kill_by_pid(children)
@@ -245,3 +249,46 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     assert proc.stderr.count("RuntimeWarning") >= 2
     assert store.read_valid(SPIKES.record, spikes_key) is not None
     assert_same_cubes(smoke_sweep[0], root)
+
+
+#: A command stuck where no interrupt reaches it: it swallows KeyboardInterrupt, and has started
+#: a process of its own.
+STUCK = """
+import subprocess, sys, time
+from flows import cli
+cli._program = True
+cli._handle_interrupts()
+child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(300)"])
+print(child.pid, flush=True)
+while True:
+    try:
+        time.sleep(100)
+    except KeyboardInterrupt:
+        pass
+"""
+
+
+def test_an_interrupted_command_that_cannot_unwind_exits_within_10_s():
+    """The deadline: whatever the command is stuck in, it stops what it started and exits
+    with status 130 within 10 s of SIGTERM."""
+    from flows.cli import EXIT_INTERRUPTED, UNWIND_S
+
+    assert UNWIND_S < 10
+    stuck = subprocess.Popen(
+        [sys.executable, "-c", STUCK], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    child = None
+    try:
+        child = psutil.Process(int(stuck.stdout.readline()))
+        time.sleep(0.5)
+        sent = time.monotonic()
+        stuck.send_signal(signal.SIGTERM)
+        _, err = stuck.communicate(timeout=30)
+        took = time.monotonic() - sent
+        assert stuck.returncode == EXIT_INTERRUPTED and took < 10, (took, err)
+        assert err.strip().splitlines()[-1] == "eskin: interrupted"
+        assert not child.is_running() or child.status() == psutil.STATUS_ZOMBIE
+    finally:
+        stop(stuck)
+        if child is not None and child.is_running():
+            child.kill()
