@@ -36,6 +36,7 @@ import numpy as np
 from flows.environment import tune_allocator
 from pipeline.design.scene import Scene
 from pipeline.run import stages
+from pipeline.run.records import Charge, Paid, StepSeconds
 from pipeline.run.stages import Level, Stopwatch
 from storage import StoreWriteError, SweepStore
 
@@ -227,12 +228,19 @@ def _entry_bytes(level: Level, entry: Any) -> int:
 
 
 class _Point:
-    """The levels of one scene as one task needs them: each read, recalled or computed once."""
+    """The levels of one scene as one task needs them: each read, recalled or computed once.
+
+    ``paid`` gathers the seconds this point's computation paid, by charge and step: every level
+    it ran (an output it found, kept by the worker or stored, costs it nothing), and the paid
+    seconds of a stored spike train made for it by another task (its ``paid_for``), so that
+    each second a worker spent is charged to one point.
+    """
 
     def __init__(self, task: _Task, scene: Scene, keys: Mapping[str, str]):
         self.task = task
         self.scene = scene
         self.keys = keys
+        self.paid: Paid = {charge: {} for charge in Charge}
         self._made: dict[str, tuple[Any, dict[str, float]]] = {}
 
     def made(self, level: Level) -> tuple[Any, dict[str, float]]:
@@ -245,10 +253,12 @@ class _Point:
         if not level.stored:
             return self._in_memory(level)
         key = self.keys[level.name]
+        point = self.keys[stages.RESULTS.name]
         entry = self.task.entry(level, key)
         if entry is None:
             watch = Stopwatch(None)
             output = level.run(self.scene, self._inputs(level), watch)
+            self._pay(watch.paid)
             seconds = {
                 step: value
                 for before in _accounted(level)
@@ -257,10 +267,12 @@ class _Point:
             upstream = {each.name: each for each in level.upstream()}
             entry = level.record.make(
                 output,
-                {**seconds, **watch.seconds},
+                StepSeconds({**seconds, **watch.seconds}, _copy(self.paid), point),
                 lambda name: self.made(upstream[name])[0],
             )
             self.task.add(level, key, entry)
+        elif getattr(entry, "paid_for", None) == point and getattr(entry, "paid", None):
+            self._pay(entry.paid)  # a train another task made for this point
         return entry, entry.seconds
 
     def _in_memory(self, level: Level) -> tuple[Any, dict[str, float]]:
@@ -272,6 +284,7 @@ class _Point:
                 return kept[key]
         watch = Stopwatch(None)
         made = (level.run(self.scene, self._inputs(level), watch), dict(watch.seconds))
+        self._pay(watch.paid)
         with _kept_lock:
             kept[key] = made
             while len(kept) > _KEPT_PER_LEVEL:
@@ -280,6 +293,16 @@ class _Point:
 
     def _inputs(self, level: Level) -> dict[str, Any]:
         return {before.name: self.made(before)[0] for before in level.after}
+
+    def _pay(self, paid: Paid) -> None:
+        for charge, steps in paid.items():
+            mine = self.paid[charge]
+            for step, value in steps.items():
+                mine[step] = mine.get(step, 0.0) + value
+
+
+def _copy(paid: Paid) -> Paid:
+    return {charge: dict(steps) for charge, steps in paid.items()}
 
 
 def _accounted(level: Level) -> tuple[Level, ...]:
