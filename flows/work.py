@@ -16,6 +16,14 @@ raises :class:`PointsFailed` naming the points that failed. A write that fails f
 space or permission (:class:`storage.errors.StoreWriteError`) ends the task at once: the coordinator
 stops the sweep and says so once, so the worker does not log it with its traceback.
 
+What a task times: every level it runs for a point, on a :class:`pipeline.run.stages.Stopwatch`;
+each entry keeps the work seconds of its point's steps and the seconds the point paid, by charge
+(:class:`_Point`): a level whose output the point found (kept by the worker, in the store, made
+for another point) costs it nothing, and the task's own set-up (importing torch, the first time
+in the process) is charged to the first point it computes, as shared ``setup``. So the paid
+seconds of a sweep's points sum to its workers' busy time but for the tasks' store reads and
+writes.
+
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
 oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
 the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
@@ -110,15 +118,17 @@ def ensure_entries(
     PointsFailed
         Some scenes failed (after the others' entries were stored).
     """
-    import torch
+    start = time.perf_counter()
+    import torch  # a worker pays its import once, in its first task
 
     torch.set_num_threads(1)
     tune_allocator()
     _quiet_write_failures()
+    setup_s = time.perf_counter() - start
     wanted = stages.level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
-    task = _Task(SweepStore.open(root))
+    task = _Task(SweepStore.open(root), setup_s)
     keys, failures = [], {}
     for scene, scene_keys in points:
         key = scene_keys[wanted.name]
@@ -160,8 +170,9 @@ class _Task:
     other tasks (shared spike trains) are written before it starts.
     """
 
-    def __init__(self, store: SweepStore):
+    def __init__(self, store: SweepStore, setup_s: float = 0.0):
         self.store = store
+        self.setup_s = setup_s
         self._stored: dict[str, frozenset[str]] = {}
         self._pending: dict[str, dict[str, Any]] = {}
         self._pending_bytes = 0
@@ -193,6 +204,12 @@ class _Task:
         self._pending.setdefault(level.name, {})[key] = entry
         self._pending_bytes += _entry_bytes(level, entry)
         self._remember(level.name, key, entry)
+
+    def take_setup(self) -> float:
+        """The task's one-off setup seconds (importing torch), to charge to the first point it
+        computes; 0 after that."""
+        setup_s, self.setup_s = self.setup_s, 0.0
+        return setup_s
 
     def flush_if_due(self) -> None:
         """Flush when the pending entries are :data:`FLUSH_S` old or hold :data:`FLUSH_BYTES`."""
@@ -256,6 +273,7 @@ class _Point:
         point = self.keys[stages.RESULTS.name]
         entry = self.task.entry(level, key)
         if entry is None:
+            self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
             watch = Stopwatch(None)
             output = level.run(self.scene, self._inputs(level), watch)
             self._pay(watch.paid)
@@ -282,6 +300,7 @@ class _Point:
             if key in kept:
                 kept.move_to_end(key)
                 return kept[key]
+        self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
         watch = Stopwatch(None)
         made = (level.run(self.scene, self._inputs(level), watch), dict(watch.seconds))
         self._pay(watch.paid)
@@ -298,7 +317,8 @@ class _Point:
         for charge, steps in paid.items():
             mine = self.paid[charge]
             for step, value in steps.items():
-                mine[step] = mine.get(step, 0.0) + value
+                if value:
+                    mine[step] = mine.get(step, 0.0) + value
 
 
 def _copy(paid: Paid) -> Paid:

@@ -29,7 +29,7 @@ from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import CHARGE_DIM, CUBE_VARIABLES
 from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
-from pipeline.run.stages import COMPILE_STEP
+from pipeline.run.stages import SETUP_STEP
 
 DATA = Path(__file__).parent / "data"
 GOLDEN = DATA / "golden_cubes"
@@ -305,18 +305,18 @@ def old_seconds_layout(cube: xr.Dataset) -> xr.Dataset:
     """``cube`` in the seconds layout of the golden files, the one change they do not hold.
 
     The golden files have ``seconds`` (axes..., stage): work seconds, the stages of that time.
-    Cubes now hold those values as ``work_seconds``, with stage ``compile`` added (NaN for the
+    Cubes now hold those values as ``work_seconds``, with stage ``setup`` added (NaN for the
     golden entries, which predate it), and ``seconds`` (axes..., stage, charge) holds the paid
     seconds (NaN throughout: the golden entries state none). Both are checked here, then
-    ``work_seconds`` without ``compile`` is compared as the old ``seconds``, under its old
+    ``work_seconds`` without ``setup`` is compared as the old ``seconds``, under its old
     description (its new one is checked against the declaration).
     """
     if CHARGE_DIM not in cube.dims:
         return cube
     assert np.isnan(cube["seconds"].values).all(), "golden entries state no paid seconds"
-    assert np.isnan(cube["work_seconds"].sel(stage=COMPILE_STEP).values).all()
+    assert np.isnan(cube["work_seconds"].sel(stage=SETUP_STEP).values).all()
     assert cube["work_seconds"].attrs == CUBE_VARIABLES["work_seconds"]
-    old = cube.drop_vars(["seconds", CHARGE_DIM]).drop_sel(stage=[COMPILE_STEP])
+    old = cube.drop_vars(["seconds", CHARGE_DIM]).drop_sel(stage=[SETUP_STEP])
     old = old.rename({"work_seconds": "seconds"})
     old["seconds"].attrs = {"units": "s", "long_name": _OLD_SECONDS_LONG_NAME}
     return old

@@ -18,10 +18,11 @@ argument types, and the CPU, so an edited or upgraded source is compiled afresh.
 processes that start on an empty cache may each compile the same kernel once; numba writes
 every cache file to a temporary name and renames it, so none reads a half-written file.
 
-One-off costs are kept apart from a step's work: :func:`compile_seconds` is the wall time the
-calling thread has spent importing numba and in numba's compiler lock (loading cached kernels or
-compiling them, nested calls counted once), so a timer can book it as shared by every later call
-(:class:`pipeline.run.stages.Stopwatch` does), and :func:`once` runs a warm-up once per process.
+One-off costs are kept apart from a step's work: :func:`one_off_seconds` is the wall time the
+calling thread has spent importing numba, in numba's compiler lock (loading cached kernels or
+compiling them, nested calls counted once) and in blocks marked :func:`one_off` (importing torch
+and scikit-learn the first time), so a timer can book it as shared by every later call
+(:class:`pipeline.run.stages.Stopwatch` does); :func:`once` runs a warm-up once per process.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ import functools
 import sys
 import threading
 import time
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 _DEFAULTS = {"cache": True, "nogil": True}
@@ -52,10 +54,26 @@ class _CompileClock(threading.local):
 _clock = _CompileClock()
 
 
-def compile_seconds() -> float:
-    """Wall seconds the calling thread has spent so far importing numba and loading or compiling
-    kernels (monotonic; take differences)."""
+def one_off_seconds() -> float:
+    """Wall seconds the calling thread has spent so far on one-off work: importing numba,
+    loading or compiling kernels, blocks marked :func:`one_off` (monotonic; take differences)."""
     return _clock.total_s
+
+
+@contextmanager
+def one_off() -> Iterator[None]:
+    """Count the block's wall time in :func:`one_off_seconds`: for work a process does once
+    whoever asks first, such as importing a library (nested one-off time counted once)."""
+    outermost = _clock.depth == 0
+    if outermost:
+        _clock.started = time.perf_counter()
+    _clock.depth += 1
+    try:
+        yield
+    finally:
+        _clock.depth -= 1
+        if outermost:
+            _clock.total_s += time.perf_counter() - _clock.started
 
 
 class _Kernel:
@@ -107,7 +125,7 @@ def once(key: Hashable, warm_up: Callable[[], object]) -> None:
 
 
 def _import_numba() -> Any:
-    """numba, imported (its import time counted in :func:`compile_seconds`) with the compiler-lock
+    """numba, imported (its import time counted in :func:`one_off_seconds`) with the compiler-lock
     listener registered."""
     if "numba" in sys.modules and _listening:
         return sys.modules["numba"]

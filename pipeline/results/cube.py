@@ -37,16 +37,18 @@ Data variables
 ``seconds`` (axes..., stage, charge)
     wall seconds a worker paid computing the point, by stage and by ``charge``: ``own`` (work
     for the point itself) or ``shared`` (work its worker's later points reused without paying
-    again: the recordings' load, the front-end fit, the numba kernels' load or compile, stage
-    ``compile``). Each second a worker spent is charged to exactly one point (the one whose
+    again: the recordings' load, the front-end fit, and under stage ``setup`` a worker's
+    one-off work: importing numba, torch and scikit-learn, loading or compiling the numba
+    kernels). Each second a worker spent is charged to exactly one point (the one whose
     computation paid it), so that summed over a sweep's distinct points they give the workers'
-    busy time; a stage whose output the point found made (a kept recording set, a stored spike
-    train) is 0. NaN for points stored before paid seconds were kept.
+    busy time but for the tasks' store reads and writes; a stage whose output the point found
+    made (a kept recording set, a stored spike train) is 0. NaN for points stored before paid
+    seconds were kept.
 ``work_seconds`` (axes..., stage)
     wall seconds of the stage's work for the point, as measured when it ran, wherever and for
     whichever point (a spike train or a load that several points share counts in each of them;
-    kernel loads and compiles left out): what the design costs to compute, as the compute-time
-    front plots it
+    one-off work left out): what the design costs to compute, as the compute-time front plots
+    it
 ``n_windows_used`` (axes...)
     int64 rate-coding windows the point used (``coding.n_windows`` resolved; -1 where its result
     does not say)

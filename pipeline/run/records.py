@@ -28,7 +28,8 @@ the strings ``recording``; and ``metrics`` as for spikes. Attributes ``dataset_n
 ``class_names`` and ``sampling_rate_hz`` where the writer stated them.
 
 Every entry's attributes hold ``seconds`` (step name -> wall seconds of the step's work for the
-entry's point, as measured when each step ran, kernel loads and compiles left out; finite floats)
+entry's point, as measured when each step ran, one-off work (imports, kernel loads) left out;
+finite floats)
 and, in entries written since they were kept apart, ``paid_seconds`` (charge, ``own`` or
 ``shared``, -> step name -> wall seconds): what the worker spent computing the entry, each second
 charged to one point only (:class:`Charge`); a spike entry also holds ``paid_for``, the result key
@@ -72,10 +73,11 @@ class Charge(enum.StrEnum):
 
     ``own``: work for the point itself (its spike train, frames, training). ``shared``: work
     that later points of the same worker reuse without paying it again: loading the recordings,
-    fitting the front end (the steps :attr:`pipeline.run.stages.Level.shared` declares) and
-    loading or compiling the numba kernels (step :data:`pipeline.run.stages.COMPILE_STEP`,
-    wherever it happens). Either is charged to the point whose computation paid it, and to no
-    other: a point that found the work done pays nothing for it.
+    fitting the front end (the steps :attr:`pipeline.run.stages.Level.shared` declares) and a
+    worker's one-off work, importing numba, torch and scikit-learn and loading or compiling the
+    numba kernels (step :data:`pipeline.run.stages.SETUP_STEP`, wherever it happens). Either is
+    charged to the point whose computation paid it, and to no other: a point that found the
+    work done pays nothing for it.
     """
 
     OWN = "own"
@@ -93,9 +95,9 @@ class StepSeconds:
     Attributes
     ----------
     work : dict[str, float]
-        Wall seconds of each step's work for the point, as measured when the step ran (kernel
-        loads and compiles left out): of its own level's steps and of the levels upstream that
-        the entry accounts for.
+        Wall seconds of each step's work for the point, as measured when the step ran (one-off
+        work, imports and kernel loads, left out): of its own level's steps and of the levels
+        upstream that the entry accounts for.
     paid : Paid
         Wall seconds the worker spent computing the entry for the point, by charge and step:
         what the point's own computation ran (nothing for an output it found made).

@@ -5,8 +5,8 @@ times each stage (wall seconds, ``time.perf_counter``). Stages:
 
 ``load``       read or generate the recordings
 ``front_end``  fit one scaling for the whole dataset (:mod:`pipeline.chain.frontend`)
-``compile``    load (or, the first time, compile) the numba kernels: once per process; later
-               scenes of the same process pay nothing here
+``setup``      import numba, torch and scikit-learn and load (or, the first time, compile)
+               the numba kernels: once per process; later scenes of the process pay nothing
 ``taxels``     fractional-delay taxel signals of every recording
 ``readout``    TRUE and REAL spike trains (an ideal scene encodes once and reuses the train)
 ``metrics``    SSNR, STE, event and data rates
@@ -109,8 +109,9 @@ def run_scene(
 
 
 def _paid_by_stage(watch: Stopwatch, names: tuple[str, ...]) -> dict[str, float]:
-    """The wall seconds of every stage, in order: its work, and under ``compile`` every kernel
-    load or compile, wherever it happened (they sum to the run's time in its stages)."""
+    """The wall seconds of every stage, in order: its work, and under ``setup`` every one-off
+    second (an import, a kernel load or compile), wherever it happened (they sum to the run's
+    time in its stages)."""
     paid = watch.paid_total()
     return {name: paid.get(name, 0.0) for name in names}
 

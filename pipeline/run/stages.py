@@ -11,8 +11,9 @@ level           reads (scene parts)                        after (levels)       
 ==============  =========================================  =====================  =================
 ``recordings``  ``dataset``                                --                     ``load``
 ``front_end``   ``readout.full_scale_v``                   recordings             ``front_end``
-``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``taxels``,
-                when a named effect draws random numbers)                         ``readout``,
+``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``setup``,
+                when a named effect draws random numbers)                         ``taxels``,
+                                                                                  ``readout``,
                                                                                   ``metrics``
 ``rates``       ``coding``                                 spikes, recordings     ``coding``
 ``results``     ``training``                               rates                  ``train_<model>``
@@ -40,6 +41,15 @@ A part read only under a condition (the seed) is passed as None when the conditi
 A stored level's entry holds the seconds of its own steps, of every stored level upstream of it
 (their entries' seconds) and of the in-memory levels upstream of it that no such stored level
 covers: a result entry holds every step of its point, which is all a cube reads.
+
+Seconds come in two kinds (:class:`Stopwatch`). *Work* seconds are what each step's work took,
+whichever point it was done for (the entries' ``seconds``). *Paid* seconds are what a worker
+spent computing for one point, each second charged to exactly one point
+(:class:`~pipeline.run.records.Charge`): ``own`` for the point's own work, ``shared`` for work
+the worker's later points reuse: the steps a level declares :attr:`Level.shared` (``load``,
+``front_end``) and the one-off :data:`SETUP_STEP` (importing numba, torch and scikit-learn;
+loading or compiling the numba kernels, wherever it happens), so that summed over a sweep's
+distinct points they count each second once.
 
 Adding a stage: write its compute function (keyword-only arguments as above; it times each of
 its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
@@ -114,12 +124,12 @@ if TYPE_CHECKING:
 # the sweep's coordinator imports this registry (cache keys, cube stages) and never trains.
 
 __all__ = [
-    "COMPILE_STEP",
     "FRONT_END",
     "LEVELS",
     "RATES",
     "RECORDINGS",
     "RESULTS",
+    "SETUP_STEP",
     "SPIKES",
     "Charge",
     "Level",
@@ -140,19 +150,21 @@ __all__ = [
 ]
 
 
-#: The step that loads or compiles the numba kernels: the spikes level's warm-up
-#: (:func:`warm_kernels`), and the kernel loads or compiles inside any other step
-#: (:func:`pipeline.chain.jit.compile_seconds`), all charged :attr:`Charge.SHARED`.
-COMPILE_STEP = "compile"
+#: A worker process's one-off work, charged :attr:`Charge.SHARED` to the point that paid it:
+#: importing numba, torch and scikit-learn, and loading (or, the first time, compiling) the numba
+#: kernels: the spikes level's warm-up (:func:`warm_kernels`), and every such second inside any
+#: other step (:func:`pipeline.chain.jit.one_off_seconds`).
+SETUP_STEP = "setup"
 
 
 class Stopwatch:
     """Accumulates wall seconds per step and reports each step the first time it starts.
 
-    ``seconds`` is each step's work, its wall seconds less the time spent loading or compiling
-    kernels within it; ``paid`` is the same time by :class:`Charge`, each step's work under its
-    declared charge (:func:`step_charge`) and the kernels' load or compile time under
-    ``shared`` / :data:`COMPILE_STEP`, so that ``paid`` sums to the wall time of the steps.
+    ``seconds`` is each step's work, its wall seconds less the one-off time within it (importing
+    a library, loading or compiling kernels: :func:`pipeline.chain.jit.one_off_seconds`);
+    ``paid`` is the same time by :class:`Charge`, each step's work under its declared charge
+    (:func:`step_charge`) and the one-off time under ``shared`` / :data:`SETUP_STEP`, so that
+    ``paid`` sums to the wall time of the steps.
     """
 
     def __init__(self, on_stage: Callable[[str], None] | None):
@@ -166,18 +178,18 @@ class Stopwatch:
         (a step timed twice is summed); ``on_stage(name)`` is called when the step first starts."""
         if self.on_stage is not None and name not in self.seconds:
             self.on_stage(name)
-        compiled = jit.compile_seconds()
+        one_off_before = jit.one_off_seconds()
         start = time.perf_counter()
         try:
             yield
         finally:
             wall = time.perf_counter() - start
-            compile_s = min(max(jit.compile_seconds() - compiled, 0.0), wall)
-            work = wall - compile_s
+            one_off = min(max(jit.one_off_seconds() - one_off_before, 0.0), wall)
+            work = wall - one_off
             self.seconds[name] = self.seconds.get(name, 0.0) + work
             _add(self.paid[step_charge(name)], name, work)
-            if compile_s > 0.0:
-                _add(self.paid[Charge.SHARED], COMPILE_STEP, compile_s)
+            if one_off > 0.0:
+                _add(self.paid[Charge.SHARED], SETUP_STEP, one_off)
 
     def paid_total(self) -> dict[str, float]:
         """Paid seconds per step, both charges summed (the steps' wall time)."""
@@ -318,9 +330,9 @@ def encode_spikes(
     seed: int | None,
     watch: Stopwatch,
 ) -> Spikes:
-    """Warm the kernels up (step ``compile``), encode every taxel of every recording, then measure
+    """Warm the kernels up (step ``setup``), encode every taxel of every recording, then measure
     the trains (step ``metrics``)."""
-    with watch.stage(COMPILE_STEP):
+    with watch.stage(SETUP_STEP):
         warm_kernels(readout)
     encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
     with watch.stage("metrics"):
@@ -376,11 +388,11 @@ def classify(
     *, rates: Rates, training: TrainingSpec, watch: Stopwatch
 ) -> dict[Model, CrossValidation]:
     """Cross-validate every model ``training`` names on the same frames (steps ``train_<m>``)."""
-    from pipeline.chain.training import cross_validate
-
     accuracy = {}
     for model in training.models:
         with watch.stage(f"train_{model.value}"):
+            with jit.one_off():  # torch and scikit-learn: once per process
+                from pipeline.chain.training import cross_validate
             accuracy[model] = cross_validate(
                 rates.counts, rates.labels, model, training, class_names=rates.class_names
             )
@@ -611,8 +623,8 @@ SPIKES = Level(
     reads=(Read("array"), Read("readout"), Read("seed", when=_draws_random_numbers)),
     after=(RECORDINGS, FRONT_END),
     compute=encode_spikes,
-    steps=(COMPILE_STEP, "taxels", "readout", "metrics"),
-    shared=(COMPILE_STEP,),
+    steps=(SETUP_STEP, "taxels", "readout", "metrics"),
+    shared=(SETUP_STEP,),
     record=Record(
         name="spikes",
         entry_type=SpikeEntry,

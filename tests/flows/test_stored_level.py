@@ -125,7 +125,7 @@ def test_a_level_registered_in_a_test_is_computed_stored_read_back_and_timed(reg
         assert set(entry.seconds) == {
             "load",
             "front_end",
-            "compile",
+            "setup",
             "taxels",
             "readout",
             "metrics",
@@ -139,7 +139,7 @@ def test_a_level_registered_in_a_test_is_computed_stored_read_back_and_timed(reg
     assert cube["stage"].values.tolist() == [
         "load",
         "front_end",
-        "compile",
+        "setup",
         "taxels",
         "readout",
         "metrics",

@@ -49,7 +49,7 @@ def test_hypervolume_counts_the_dominated_unit_cells(rows):
 
 
 def test_search_seconds_count_the_paid_seconds_of_each_point_once():
-    stages = ["load", "compile", "readout", "coding", "train_ffnn"]
+    stages = ["load", "setup", "readout", "coding", "train_ffnn"]
     # (trial, stage, charge): own, shared.
     paid = np.zeros((4, 5, 2))
     paid[0] = [[0, 2.0], [0, 0.5], [1.0, 0], [0.1, 0], [3.0, 0]]  # paid the load, the compile
@@ -64,7 +64,7 @@ def test_search_seconds_count_the_paid_seconds_of_each_point_once():
             "result_key": ("trial", ["p", "p", "q", "r"]),
         },
     )
-    total = search_seconds(cube, ["a", "a", "a", "b"], ("compile", "readout"))
+    total = search_seconds(cube, ["a", "a", "a", "b"], ("setup", "readout"))
     assert total == pytest.approx(6.6 + 4.2 + 4.6)
 
 

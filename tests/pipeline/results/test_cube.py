@@ -533,7 +533,7 @@ def mixed_entry(point) -> ResultEntry:
     # Paid seconds: stated by the points of one threshold only (the others' results are older).
     paid = None
     if i == 0:
-        paid = {Charge.OWN: {"coding": 0.25 + t}, Charge.SHARED: {"load": 0.5 * r, "compile": 2.0}}
+        paid = {Charge.OWN: {"coding": 0.25 + t}, Charge.SHARED: {"load": 0.5 * r, "setup": 2.0}}
     return ResultEntry(
         folds, seconds, metrics(ssnr_db=10.0 * t, ste_s2=0.1 * i), None, oof, paid=paid
     )

@@ -211,7 +211,7 @@ def test_spike_steps_are_those_of_the_levels_up_to_the_spike_trains():
     assert steps_through("spikes") == (
         "load",
         "front_end",
-        "compile",
+        "setup",
         "taxels",
         "readout",
         "metrics",
@@ -225,7 +225,7 @@ def test_stage_names_follow_the_registry_and_the_models():
     assert stage_names(scene) == (
         "load",
         "front_end",
-        "compile",
+        "setup",
         "taxels",
         "readout",
         "metrics",
@@ -269,26 +269,26 @@ def test_the_stopwatch_books_kernel_compiles_as_shared_and_steps_by_their_charge
     from pipeline.run.records import Charge
 
     clock = iter([10.0, 10.5, 10.5, 10.5])  # 0.5 s of compiling inside "readout", none in "load"
-    monkeypatch.setattr(jit, "compile_seconds", lambda: next(clock))
+    monkeypatch.setattr(jit, "one_off_seconds", lambda: next(clock))
     watch = Stopwatch(None)
     with watch.stage("readout"):
         time.sleep(0.6)
     with watch.stage("load"):
         pass
     assert watch.seconds["readout"] == pytest.approx(watch.paid[Charge.OWN]["readout"])
-    assert watch.paid[Charge.SHARED]["compile"] == 0.5
+    assert watch.paid[Charge.SHARED]["setup"] == 0.5
     assert watch.paid[Charge.SHARED]["load"] == watch.seconds["load"]  # a shared step
     assert "load" not in watch.paid[Charge.OWN]
     wall = watch.paid_total()
-    assert wall["readout"] + wall["compile"] == pytest.approx(watch.seconds["readout"] + 0.5)
+    assert wall["readout"] + wall["setup"] == pytest.approx(watch.seconds["readout"] + 0.5)
 
 
 def test_shared_steps_are_declared_on_the_levels():
     from pipeline.run.records import Charge
     from pipeline.run.stages import shared_steps, step_charge
 
-    assert shared_steps() == {"load", "front_end", "compile"}
-    assert step_charge("readout") is Charge.OWN and step_charge("compile") is Charge.SHARED
+    assert shared_steps() == {"load", "front_end", "setup"}
+    assert step_charge("readout") is Charge.OWN and step_charge("setup") is Charge.SHARED
     bad = Level("odd", (Read("dataset"),), (), None, ("load2",), shared=("load3",))
     with pytest.raises(ValueError, match="shared steps"):
         _checked(bad)
@@ -304,12 +304,12 @@ def test_paid_seconds_and_their_point_round_trip_and_older_entries_have_none():
     )
 
     metrics = SpikeMetrics(1.0, 0.0, 0.0, 2.0, 3.0, 4.0)
-    paid = {Charge.OWN: {"train_ffnn": 1.5}, Charge.SHARED: {"load": 0.25, "compile": 0.75}}
+    paid = {Charge.OWN: {"train_ffnn": 1.5}, Charge.SHARED: {"load": 0.25, "setup": 0.75}}
     entry = ResultEntry({"ffnn": [0.5, 0.5]}, {"train_ffnn": 1.5, "load": 0.25}, metrics, paid=paid)
     values, attrs = encode_result_entry(entry)
     assert attrs["paid_seconds"] == {
         "own": {"train_ffnn": 1.5},
-        "shared": {"load": 0.25, "compile": 0.75},
+        "shared": {"load": 0.25, "setup": 0.75},
     }
     assert decode_result_entry(values, attrs).paid == paid
     del attrs["paid_seconds"]  # as written before paid seconds were kept
