@@ -13,7 +13,7 @@ over the median of the later points' (target <= 1.2); and the first point's ``se
 with a warm cache over that with an empty one (``NUMBA_CACHE_DIR`` a new folder: every kernel
 compiled), medians of the same processes, the compile seconds a sweep after the first saves.
 
-``python -m benchmarks.compile [--repeat N]`` runs this suite alone and prints its rows.
+``python -m benchmarks.kernels [--repeat N]`` runs this suite alone and prints its rows.
 """
 
 from __future__ import annotations
