@@ -63,6 +63,7 @@ cube's ``seconds`` follow from the registry.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import time
@@ -348,12 +349,19 @@ def warm_kernels(readout: ReadoutSpec) -> None:
     effects, the spike metrics) once per process on a tiny signal, through the same functions
     and so with the same argument types as a point's encoding: loading or compiling them is
     paid here, once per process and kind of readout (encoder and named effects), and not inside
-    the first point's ``readout`` and ``metrics`` steps."""
+    the first point's ``readout`` and ``metrics`` steps. A warm-up that fails is given up
+    (and not tried again): the point's own encoding reports any real problem."""
     kind = ("spikes", readout.encoder, tuple(sorted(str(effect) for effect in readout.effects)))
     jit.once(kind, functools.partial(_encode_tiny, readout))
 
 
-def _encode_tiny(readout: ReadoutSpec) -> SpikeMetrics:
+def _encode_tiny(readout: ReadoutSpec) -> None:
+    # Only a speed-up: whatever a tiny signal makes of this readout must not fail a point.
+    with contextlib.suppress(Exception):
+        _encode_tiny_signal(readout)
+
+
+def _encode_tiny_signal(readout: ReadoutSpec) -> SpikeMetrics:
     t_s = np.arange(_WARM_SAMPLES) / _WARM_FS_HZ
     signal = 0.4 * readout.full_scale_v * np.sin(2 * np.pi * _WARM_HZ * t_s)
     taxels = taxel_signals(signal, _WARM_FS_HZ, np.zeros(1))

@@ -314,3 +314,20 @@ def test_paid_seconds_and_their_point_round_trip_and_older_entries_have_none():
     assert decode_result_entry(values, attrs).paid == paid
     del attrs["paid_seconds"]  # as written before paid seconds were kept
     assert decode_result_entry(values, attrs).paid is None
+
+
+@pytest.mark.parametrize(
+    "readout",
+    [
+        PAPER.readout,
+        PAPER.replace(**{"readout.encoder": "decaying"}).readout,
+        NOISY.readout,
+        SATURATING.readout,
+    ],
+    ids=["ideal", "decaying", "noisy", "saturating"],
+)
+def test_the_kernels_warm_up_on_a_tiny_signal_through_the_encoders_own_path(readout):
+    from pipeline.run.stages import _encode_tiny_signal
+
+    # The warm-up gives up silently on failure: it must not fail where it is meant to work.
+    assert _encode_tiny_signal(readout).event_rate_hz > 0
