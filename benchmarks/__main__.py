@@ -15,6 +15,8 @@ from tqdm import tqdm
 from benchmarks import (
     coding,
     encoder,
+    kernels,
+    paid,
     planning,
     scale,
     search,
@@ -31,8 +33,8 @@ def main() -> None:
     # re-run of the paper grid (whose root, runs/bench/paper, the first run computes) and the
     # search against its exhaustive grid (runs/bench/search, computed by the first run).
     quick = "--quick" in sys.argv
-    slow = [scale, sweep, sweep_scale, warm_rerun, search]
-    suites = [encoder, coding, training, planning] + ([] if quick else slow)
+    slow = [scale, sweep, sweep_scale, warm_rerun, search, paid]
+    suites = [encoder, coding, kernels, training, planning] + ([] if quick else slow)
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
         rows += suite.run()

@@ -8,12 +8,13 @@ touches per class the accuracies are so noisy that every sampler, random search 
 found about 0.9 of the exhaustive hypervolume at 25 %: there was no structure to find.)
 
 The grid is swept once into a store (``runs/bench/search``, kept between runs; ``--root`` names
-another), and its cost is counted as a search's is (:func:`flows.search.spent_seconds`: stage
-seconds as measured, each point and each spike train once). Then each sampler (TPE, the
-default; NSGA-II; random search) searches the space with a budget of 10 % and 25 % of those
-stage seconds, for 10 seeds, with :func:`flows.search.run_optimize` on that store (batches of 2
-trials, as 2 workers would take): nothing is computed, and the stage seconds a trial would have
-cost are counted from the store.
+another), and its cost is counted as a search's is (:func:`flows.search.spent_seconds`: the stage
+seconds the workers paid, each point once, so a shared spike train, load or set-up once; a store
+swept before paid seconds were kept counts work seconds, each spike train once). Then each
+sampler (TPE, the default; NSGA-II; random search) searches the space with a budget of 10 % and
+25 % of those stage seconds, for 10 seeds, with :func:`flows.search.run_optimize` on that store
+(batches of 2 trials, as 2 workers would take): nothing is computed, and the stage seconds a
+trial would have cost are counted from the store.
 
 Hypervolume: of the trials' (accuracy, data rate) costs ``(-accuracy, log10(1 + data_rate_bps))``,
 each scaled to [0, 1] over the exhaustive grid, against the reference point (1.1, 1.1)

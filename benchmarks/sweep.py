@@ -201,14 +201,17 @@ def temporary_server_env(env: dict[str, str], state: Path) -> dict[str, str]:
 
 
 def stage_seconds(root: Path) -> float:
-    """Sum of every computed stage's seconds: spike stages once per spike entry, coding and
-    training once per result (coding a rate matrix, which the store does not keep, is timed
-    by each result that needed it)."""
+    """Sum of the seconds the workers paid for every computed point (each second charged to one
+    point: a shared load or set-up once). For results stored before paid seconds were kept: spike
+    stages once per spike entry, coding and training once per result (coding a rate matrix,
+    which the store does not keep, is timed by each result that needed it)."""
     store = SweepStore.open(root)
-    spikes = store.read_many(SPIKES.record, store.complete_keys(SPIKES.name), discard_corrupt=False)
     results = store.read_many(
         RESULTS.record, store.complete_keys(RESULTS.name), discard_corrupt=False
     )
+    if results and all(entry.paid is not None for entry in results.values()):
+        return sum(v for e in results.values() for steps in e.paid.values() for v in steps.values())
+    spikes = store.read_many(SPIKES.record, store.complete_keys(SPIKES.name), discard_corrupt=False)
     total = sum(sum(entry.seconds.values()) for entry in spikes.values())
     for entry in results.values():
         total += sum(v for k, v in entry.seconds.items() if k == "coding" or k.startswith("train_"))

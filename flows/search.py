@@ -25,10 +25,10 @@ asked. TPE is the default because it was measured best (``benchmarks/search.py``
 seeds on a 192-point space): 0.84 and 0.98 of the exhaustive hypervolume at 10 % and 25 % of the
 grid's cost, against 0.81 and 0.92 for NSGA-II (whose first generation is random at these
 budgets) and 0.81 and 0.91 for random search. Cost accounting: a
-budget in seconds (``budget_s``) is spent in stage seconds as measured when each point was
-computed, each distinct point once and each spike train once
-(:func:`pipeline.report.trials.search_seconds`): a trial that shares the spike train of an
-earlier one costs only its coding and training.
+budget in seconds (``budget_s``) is spent in the stage seconds the workers paid computing each
+distinct point, once (:func:`pipeline.report.trials.search_seconds`): a spike train, a load or a
+kernel compile that trials share was paid by one of them and counts once, so a trial that
+shares the spike train of an earlier one costs only its coding and training.
 """
 
 from __future__ import annotations
@@ -313,8 +313,8 @@ def trials_cube(
 
 
 def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Dataset) -> float:
-    """The stage seconds of trials at ``params`` whose cube is ``cube``, each point and spike
-    train once (:func:`pipeline.report.trials.search_seconds`)."""
+    """The stage seconds paid for trials at ``params`` whose cube is ``cube``, each point once
+    (:func:`pipeline.report.trials.search_seconds`)."""
     spike_keys = [SPIKES.key(p.scene) for p in space.trial_grid(params).points()]
     models = [str(m) for m in cube["model"].values]
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models))

@@ -16,6 +16,14 @@ raises :class:`PointsFailed` naming the points that failed. A write that fails f
 space or permission (:class:`storage.errors.StoreWriteError`) ends the task at once: the coordinator
 stops the sweep and says so once, so the worker does not log it with its traceback.
 
+What a task times: every level it runs for a point, on a :class:`pipeline.run.stages.Stopwatch`;
+each entry keeps the work seconds of its point's steps and the seconds the point paid, by charge
+(:class:`_Point`): a level whose output the point found (kept by the worker, in the store, made
+for another point) costs it nothing, and the task's own set-up (importing torch, the first time
+in the process) is charged to the first point it computes, as shared ``setup``. So the paid
+seconds of a sweep's points sum to its workers' busy time but for the tasks' store reads and
+writes.
+
 Torch runs one intra-op thread per worker: Dask already runs one task per worker thread, and
 oversubscribing two cores made training 37x slower. The C allocator keeps training's tensors on
 the heap (:func:`flows.environment.tune_allocator`), whatever the nanny set.
@@ -36,6 +44,7 @@ import numpy as np
 from flows.environment import tune_allocator
 from pipeline.design.scene import Scene
 from pipeline.run import stages
+from pipeline.run.records import Charge, Paid, StepSeconds
 from pipeline.run.stages import Level, Stopwatch
 from storage import StoreWriteError, SweepStore
 
@@ -109,15 +118,17 @@ def ensure_entries(
     PointsFailed
         Some scenes failed (after the others' entries were stored).
     """
-    import torch
+    start = time.perf_counter()
+    import torch  # a worker pays its import once, in its first task
 
     torch.set_num_threads(1)
     tune_allocator()
     _quiet_write_failures()
+    setup_s = time.perf_counter() - start
     wanted = stages.level_named(level)
     if not wanted.stored:
         raise ValueError(f"stage {level!r} is not kept in the store")
-    task = _Task(SweepStore.open(root))
+    task = _Task(SweepStore.open(root), setup_s)
     keys, failures = [], {}
     for scene, scene_keys in points:
         key = scene_keys[wanted.name]
@@ -159,8 +170,9 @@ class _Task:
     other tasks (shared spike trains) are written before it starts.
     """
 
-    def __init__(self, store: SweepStore):
+    def __init__(self, store: SweepStore, setup_s: float = 0.0):
         self.store = store
+        self.setup_s = setup_s
         self._stored: dict[str, frozenset[str]] = {}
         self._pending: dict[str, dict[str, Any]] = {}
         self._pending_bytes = 0
@@ -192,6 +204,12 @@ class _Task:
         self._pending.setdefault(level.name, {})[key] = entry
         self._pending_bytes += _entry_bytes(level, entry)
         self._remember(level.name, key, entry)
+
+    def take_setup(self) -> float:
+        """The task's one-off setup seconds (importing torch), to charge to the first point it
+        computes; 0 after that."""
+        setup_s, self.setup_s = self.setup_s, 0.0
+        return setup_s
 
     def flush_if_due(self) -> None:
         """Flush when the pending entries are :data:`FLUSH_S` old or hold :data:`FLUSH_BYTES`."""
@@ -227,12 +245,19 @@ def _entry_bytes(level: Level, entry: Any) -> int:
 
 
 class _Point:
-    """The levels of one scene as one task needs them: each read, recalled or computed once."""
+    """The levels of one scene as one task needs them: each read, recalled or computed once.
+
+    ``paid`` gathers the seconds this point's computation paid, by charge and step: every level
+    it ran (an output it found, kept by the worker or stored, costs it nothing), and the paid
+    seconds of a stored spike train made for it by another task (its ``paid_for``), so that
+    each second a worker spent is charged to one point.
+    """
 
     def __init__(self, task: _Task, scene: Scene, keys: Mapping[str, str]):
         self.task = task
         self.scene = scene
         self.keys = keys
+        self.paid: Paid = {charge: {} for charge in Charge}
         self._made: dict[str, tuple[Any, dict[str, float]]] = {}
 
     def made(self, level: Level) -> tuple[Any, dict[str, float]]:
@@ -245,10 +270,13 @@ class _Point:
         if not level.stored:
             return self._in_memory(level)
         key = self.keys[level.name]
+        point = self.keys[stages.RESULTS.name]
         entry = self.task.entry(level, key)
         if entry is None:
+            self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
             watch = Stopwatch(None)
             output = level.run(self.scene, self._inputs(level), watch)
+            self._pay(watch.paid)
             seconds = {
                 step: value
                 for before in _accounted(level)
@@ -257,10 +285,12 @@ class _Point:
             upstream = {each.name: each for each in level.upstream()}
             entry = level.record.make(
                 output,
-                {**seconds, **watch.seconds},
+                StepSeconds({**seconds, **watch.seconds}, _copy(self.paid), point),
                 lambda name: self.made(upstream[name])[0],
             )
             self.task.add(level, key, entry)
+        elif getattr(entry, "paid_for", None) == point and getattr(entry, "paid", None):
+            self._pay(entry.paid)  # a train another task made for this point
         return entry, entry.seconds
 
     def _in_memory(self, level: Level) -> tuple[Any, dict[str, float]]:
@@ -270,8 +300,10 @@ class _Point:
             if key in kept:
                 kept.move_to_end(key)
                 return kept[key]
+        self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
         watch = Stopwatch(None)
         made = (level.run(self.scene, self._inputs(level), watch), dict(watch.seconds))
+        self._pay(watch.paid)
         with _kept_lock:
             kept[key] = made
             while len(kept) > _KEPT_PER_LEVEL:
@@ -280,6 +312,17 @@ class _Point:
 
     def _inputs(self, level: Level) -> dict[str, Any]:
         return {before.name: self.made(before)[0] for before in level.after}
+
+    def _pay(self, paid: Paid) -> None:
+        for charge, steps in paid.items():
+            mine = self.paid[charge]
+            for step, value in steps.items():
+                if value:
+                    mine[step] = mine.get(step, 0.0) + value
+
+
+def _copy(paid: Paid) -> Paid:
+    return {charge: dict(steps) for charge, steps in paid.items()}
 
 
 def _accounted(level: Level) -> tuple[Level, ...]:

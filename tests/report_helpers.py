@@ -17,7 +17,7 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import build_cube
-from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge, OutOfFold, RecordingsInfo, ResultEntry
 
 N_RECORDINGS = 120
 N_FOLDS = 4
@@ -100,6 +100,7 @@ def make_cubes(
     models: tuple[str, ...] = ("ffnn", "cnn"),
     repeats: int = 1,
     rates: Callable[[Scene], tuple[float, float]] | None = None,
+    paid: bool = True,
 ) -> dict:
     """``{name: cube}`` of a grid on the smoke scene: the FFNN gets ``accuracy(scene)`` and the
     CNN :data:`CNN_BONUS` more, as exact out-of-fold predictions (see the module docstring).
@@ -109,7 +110,8 @@ def make_cubes(
     data_rate_bps)`` instead, when given). Every point states ``recordings`` (12 classes at
     2 kHz by default) and the windows it used (8 for ``auto``, else ``coding.n_windows``).
     ``predictions=False`` makes cubes of a run that predates per-recording
-    results (fold accuracies only, no intervals)."""
+    results (fold accuracies only, no intervals); ``paid=False`` of one that predates paid
+    seconds (else the first point paid the one load of the recordings, shared by the others)."""
     base = Scene.load("smoke").to_dict()
     base["training"] |= {"models": list(models), "repeats": repeats}
     grid = Grid.from_dict({"name": "t", "base": base, "sweeps": sweeps or PAPER_LIKE_SWEEPS})
@@ -125,14 +127,19 @@ def make_cubes(
         )
         bonus = {"ffnn": 0.0, "cnn": CNN_BONUS}
         oof = out_of_fold({m: a + bonus[m] for m in models}, n_classes, repeats)
+        seconds = {
+            "load": 0.1,
+            "readout": 0.01 * scene.array.n_taxels,
+            "coding": 0.02,
+            **{"train_ffnn": 0.5, "train_cnn": 2.0 + 0.1 * scene.array.n_taxels},
+        }
+        own = {step: value for step, value in seconds.items() if step != "load"}
+        # One worker: the first point paid the load, the others found the recordings loaded.
+        shared = {"load": 0.1} if not records else {}
         records[key] = ResultEntry(
             fold_accuracy=fold_accuracy(oof),
-            seconds={
-                "load": 0.1,
-                "readout": 0.01 * scene.array.n_taxels,
-                "coding": 0.02,
-                **{"train_ffnn": 0.5, "train_cnn": 2.0 + 0.1 * scene.array.n_taxels},
-            },
+            seconds=seconds,
+            paid={Charge.OWN: own, Charge.SHARED: shared} if paid else None,
             metrics=SpikeMetrics(
                 ssnr_db=-20 * np.log10(noise) if noise else np.inf,
                 ste_s2=noise**2,

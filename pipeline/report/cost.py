@@ -1,5 +1,12 @@
 """What accuracy costs in time: the Pareto front rule, observation time, the sweep's own cost.
 
+The sweep's own cost (:func:`sweep_cost`) sums the seconds its workers *paid*, over its distinct
+points, by stage and charge (the cube's ``seconds``, :mod:`pipeline.results.cube`): a load, a
+front-end fit or a kernel compile that a worker shares among its points is counted once, at the
+point that paid it (``shared``), so that the total is the workers' busy time. Points stored
+before paid seconds were kept count their work seconds instead (a shared load at every such
+point), and the report says how many there are.
+
 A point lies on the *Pareto front* of accuracy against a cost when every cheaper point is strictly
 less accurate: the cheapest design for each accuracy level (:func:`pareto_front`; the fronts
 themselves are in :mod:`pipeline.report.fronts`).
@@ -19,9 +26,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.report.cubes import point_keys
+from pipeline.report.cubes import point_keys, sweep_dims
 from pipeline.report.curves import Curve
 from pipeline.report.text import pct
+from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
+from pipeline.run.records import Charge
+from pipeline.run.stages import step_charge
 
 OBSERVATION_FRACTIONS = (0.8, 0.9, 1.0)
 
@@ -39,17 +49,47 @@ class SweepRun:
 
 
 @dataclass(frozen=True)
-class SweepCost:
-    """The sweep's own cost: stage seconds summed over its distinct points, and its runs."""
+class StageCost:
+    """Seconds the workers paid for one stage, summed over the distinct points, by charge."""
 
-    n_points: int
-    stage_seconds: tuple[tuple[str, float], ...]
-    runs: tuple[SweepRun, ...]
+    stage: str
+    own_s: float
+    shared_s: float
 
     @property
     def total_s(self) -> float:
-        """Stage seconds summed over every stage (s)."""
-        return float(sum(s for _, s in self.stage_seconds))
+        """Both charges (s)."""
+        return self.own_s + self.shared_s
+
+
+@dataclass(frozen=True)
+class SweepCost:
+    """The sweep's own cost: paid seconds summed over its distinct points, and its runs.
+
+    ``n_unpaid`` of the ``n_points`` were stored before paid seconds were kept: their work
+    seconds are counted instead (under the charge of each stage,
+    :func:`pipeline.run.stages.step_charge`).
+    """
+
+    n_points: int
+    stages: tuple[StageCost, ...]
+    runs: tuple[SweepRun, ...]
+    n_unpaid: int = 0
+
+    @property
+    def stage_seconds(self) -> tuple[tuple[str, float], ...]:
+        """(stage, seconds of both charges) of every stage that cost any."""
+        return tuple((s.stage, s.total_s) for s in self.stages)
+
+    @property
+    def total_s(self) -> float:
+        """Paid seconds summed over every stage and charge (s)."""
+        return float(sum(s.total_s for s in self.stages))
+
+    @property
+    def shared_s(self) -> float:
+        """Of :attr:`total_s`, the seconds of shared work (s)."""
+        return float(sum(s.shared_s for s in self.stages))
 
 
 @dataclass(frozen=True)
@@ -91,23 +131,57 @@ def pareto_front(seconds: np.ndarray, accuracy: np.ndarray) -> np.ndarray:
 
 
 def sweep_cost(cubes: Mapping[str, xr.Dataset], runs: Iterable[SweepRun]) -> SweepCost:
-    """Stage seconds summed over the distinct points of all cubes, and the logged runs."""
-    per_point: dict[str, dict[str, float]] = {}
+    """Paid seconds summed over the distinct points of all cubes by stage and charge, and the
+    logged runs (see the module docstring)."""
+    per_point: dict[str, dict[tuple[str, Charge], float]] = {}
+    unpaid: set[str] = set()
     for cube in cubes.values():
-        if "seconds" not in cube:
+        paid, work = paid_seconds(cube), work_seconds(cube)
+        if paid is None and work is None:
             continue
-        seconds = cube["seconds"]
-        flat = seconds.values.reshape(-1, seconds.sizes["stage"])
-        for key, row in zip(point_keys(cube), flat, strict=True):
-            per_point.setdefault(
-                key, {str(s): float(v) for s, v in zip(cube["stage"].values, row, strict=True)}
+        stages = [str(s) for s in cube["stage"].values]
+        dims = sweep_dims(cube)
+        charges = list(Charge) if paid is None else [Charge(c) for c in cube[CHARGE_DIM].values]
+        # (points, stage, charge) paid seconds and (points, stage) work seconds, in point order.
+        paid_rows = (
+            None
+            if paid is None
+            else paid.transpose(*dims, "stage", CHARGE_DIM).values.reshape(
+                -1, len(stages), len(charges)
             )
-    totals: dict[str, float] = {}
-    for stages in per_point.values():
-        for stage, value in stages.items():
-            if math.isfinite(value):
-                totals[stage] = totals.get(stage, 0.0) + value
-    return SweepCost(len(per_point), tuple(totals.items()), tuple(runs))
+        )
+        work_rows = (
+            None if work is None else work.transpose(*dims, "stage").values.reshape(-1, len(stages))
+        )
+        for i, key in enumerate(point_keys(cube)):
+            if key in per_point:
+                continue
+            row = None if paid_rows is None else paid_rows[i]
+            if row is not None and np.isfinite(row).all():
+                per_point[key] = {
+                    (stage, charge): float(row[s, c])
+                    for s, stage in enumerate(stages)
+                    for c, charge in enumerate(charges)
+                }
+            elif work_rows is not None:
+                unpaid.add(key)
+                values = work_rows[i]
+                per_point[key] = {
+                    (stage, step_charge(stage)): float(values[s])
+                    for s, stage in enumerate(stages)
+                    if math.isfinite(values[s])
+                }
+    totals: dict[str, dict[Charge, float]] = {}
+    for seconds in per_point.values():
+        for (stage, charge), value in seconds.items():
+            by_charge = totals.setdefault(stage, dict.fromkeys(Charge, 0.0))
+            by_charge[charge] += value
+    rows = tuple(
+        StageCost(stage, by_charge[Charge.OWN], by_charge[Charge.SHARED])
+        for stage, by_charge in totals.items()
+        if by_charge[Charge.OWN] or by_charge[Charge.SHARED]
+    )
+    return SweepCost(len(per_point), rows, tuple(runs), len(unpaid))
 
 
 def time_to_accuracy(

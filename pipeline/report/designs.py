@@ -11,8 +11,11 @@ Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
 * address-event data rate ``data_rate_bps`` (bit/s) and event rate ``event_rate_hz`` (Hz), from
   the cube;
 * equivalent bits ``log2(V_fs / theta)``;
-* compute seconds: its spike and coding stages plus ``train_m``, as measured when each stage was
-  computed (a stage reused from the cache counts at its original cost);
+* compute seconds: the work seconds (the cube's ``work_seconds``) of its spike and coding stages
+  plus ``train_m``, as measured when each stage ran (a stage reused from the cache or shared with
+  other points counts at its original cost); the shared stages (loading the recordings, fitting
+  the front end, loading or compiling kernels: :func:`pipeline.run.stages.shared_steps`) are not
+  the design's and are left out;
 * readout power (W): static bias of the ``n = rows * cols`` taxels plus the dynamic power of
   its events and bits (:func:`pipeline.results.hardware.event_power_w`, constants of an
   :class:`~pipeline.results.hardware.EnergyModel`), the two parts kept apart
@@ -44,6 +47,7 @@ from pipeline.report.cubes import (
 )
 from pipeline.report.panels import COLS, N_WINDOWS, ROWS, WINDOW_S
 from pipeline.report.text import label
+from pipeline.results.cube import work_seconds
 from pipeline.results.hardware import (
     EnergyModel,
     ReadoutPower,
@@ -53,6 +57,7 @@ from pipeline.results.hardware import (
     frame_dynamic_power_w,
     frame_static_power_w,
 )
+from pipeline.run.stages import shared_steps
 
 
 @dataclass(frozen=True)
@@ -125,7 +130,11 @@ class Cost(enum.Enum):
     DATA_RATE = ("front_data_rate", "address-event data rate (bit/s)", "data rate")
     EVENT_RATE = ("front_event_rate", "event rate of the array (events/s)", "event rate")
     BITS = ("front_equivalent_bits", "equivalent bits log2(V_fs / theta) (bit)", "equivalent bits")
-    COMPUTE = ("cost_pareto", "compute time per point: all stages (s)", "compute time")
+    COMPUTE = (
+        "cost_pareto",
+        "compute time per point: work of its own stages, shared stages left out (s)",
+        "compute time",
+    )
     POWER = ("front_power", "estimated readout power (W)", "readout power")
 
     @property
@@ -202,13 +211,14 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
     for name, cube in cubes.items():
         dims = sweep_dims(cube)
         settings = _settings(cube)
-        stages = [str(s) for s in cube["stage"].values] if "seconds" in cube else []
+        work = work_seconds(cube)
+        stages = [str(s) for s in cube["stage"].values] if work is not None else []
         models = [str(m) for m in cube["model"].values]
         mean = _flat(cube["accuracy_mean"], dims)
         low, high = _flat(cube["accuracy_low"], dims), _flat(cube["accuracy_high"], dims)
         folds = cube["accuracy"].transpose(*dims, "model", ...).values
         folds = folds.reshape(mean.shape[0], len(models), -1)
-        seconds = _flat(cube["seconds"], dims) if stages else None
+        seconds = _flat(work, dims) if work is not None else None
         scalars = {
             v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
             for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
@@ -294,5 +304,8 @@ def _int(values: np.ndarray | None, p: int) -> int | None:
 
 
 def _model_seconds(row: np.ndarray, stages: list[str], model: str) -> float:
-    keep = [not s.startswith("train_") or s == f"train_{model}" for s in stages]
+    shared = shared_steps()
+    keep = [
+        s not in shared and (not s.startswith("train_") or s == f"train_{model}") for s in stages
+    ]
     return float(np.nansum(row[keep]))

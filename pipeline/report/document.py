@@ -270,6 +270,15 @@ def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
             yield Paragraph("The figure is at the top of the report, with the answer.")
         elif front.cost.stem in drawn:
             yield Figure(front.cost.stem, _caption(title, report))
+        if front.cost is Cost.COMPUTE:
+            yield Paragraph(
+                "Compute time of a design: the work seconds of its own stages (spike train, "
+                "coding, training of the model), as measured when each ran (the cubes' "
+                "`work_seconds`): a spike train that several designs share counts in each, and "
+                "the work a worker shares among its points (loading the recordings, fitting the "
+                "front end, loading or compiling kernels) in none. What the sweep paid is below, "
+                "under the sweep's own cost."
+            )
         rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
         rows += [_front_row(front, p) for p in front.marked]
         yield Table(_FRONT_COLUMNS, tuple(rows))
@@ -332,15 +341,31 @@ def _time_blocks(report: Report) -> Iterator[Block]:
         )
     cost = report.sweep_cost
     yield Heading(3, "The sweep's own cost")
+    older = (
+        f" {cost.n_unpaid} of them were computed before paid seconds were kept: their stages "
+        "count as measured at each point, so their shared load and front-end fit count at "
+        "every one of them."
+        if cost.n_unpaid
+        else ""
+    )
     yield Paragraph(
-        f"{cost.n_points} distinct points took {cost.total_s:.1f} s of stage compute in all (as "
-        "measured when each stage was computed, summed over workers)."
+        f"{cost.n_points} distinct points took {cost.total_s:.1f} s of stage compute in all, "
+        f"{cost.shared_s:.1f} s of it shared: the seconds the workers paid, summed over workers, "
+        "each counted once. Shared work (loading the recordings, fitting the front end, loading "
+        "or compiling the kernels) is paid by the first point of a worker that needs it and "
+        "reused by the others; a spike train that several points share is paid by one of them."
+        + older
     )
     yield Table(
-        ("stage", "seconds", "share"),
+        ("stage", "own (s)", "shared (s)", "share"),
         tuple(
-            (stage, f"{s:.1f}", f"{s / cost.total_s:.0%}" if cost.total_s else "-")
-            for stage, s in cost.stage_seconds
+            (
+                s.stage,
+                f"{s.own_s:.1f}",
+                f"{s.shared_s:.1f}",
+                f"{s.total_s / cost.total_s:.0%}" if cost.total_s else "-",
+            )
+            for s in cost.stages
         ),
     )
     if cost.runs:

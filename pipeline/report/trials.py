@@ -28,6 +28,7 @@ import xarray as xr
 
 from pipeline.design.space import TRIAL_DIM, Metric, Objective, objective_values
 from pipeline.report.evidence import ALPHA, gather_evidence
+from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
 
 OBJECTIVE_ATTRS = {"units": "1", "long_name": "objective"}
 VALUE_ATTRS = {"units": "1", "long_name": "value of the objective (its own units)"}
@@ -121,13 +122,20 @@ def trial_cube(cube: xr.Dataset, numbers: Sequence[int], space_name: str) -> xr.
 def search_seconds(
     cube: xr.Dataset, spike_keys: Sequence[str], spike_stages: Sequence[str]
 ) -> float:
-    """The stage seconds a search's trials cost: each distinct point once, and the
+    """The stage seconds a search's trials cost: the seconds paid computing each distinct point,
+    once (the cube's paid ``seconds``, both charges: a spike train, a load or a kernel compile
+    that trials share was paid by one point and counts once), as paid when each point was
+    computed, whether this search or an earlier run computed it.
+
+    A point stored before paid seconds were kept counts its work seconds, with the
     ``spike_stages`` of each spike train (``spike_keys``, per trial) once, so that a trial
-    sharing the train of an earlier one costs only its coding and training. Seconds are those
-    measured when each point was computed, whether this search or an earlier run computed it."""
-    seconds = cube["seconds"].transpose(TRIAL_DIM, "stage").values
+    sharing the train of an earlier one costs only its coding and training.
+    """
     stages = [str(s) for s in cube["stage"].values]
     spike = np.array([s in spike_stages for s in stages])
+    paid, work = paid_seconds(cube), work_seconds(cube)
+    paid_rows = None if paid is None else paid.transpose(TRIAL_DIM, "stage", CHARGE_DIM).values
+    work_rows = None if work is None else work.transpose(TRIAL_DIM, "stage").values
     seen_points: set[str] = set()
     seen_trains: set[str] = set()
     total = 0.0
@@ -135,7 +143,14 @@ def search_seconds(
         if key in seen_points:
             continue
         seen_points.add(key)
+        if paid_rows is not None and np.isfinite(paid_rows[i]).all():
+            total += float(paid_rows[i].sum())
+            if paid_rows[i][spike].sum() > 0:
+                seen_trains.add(spike_keys[i])
+            continue
+        if work_rows is None:
+            continue
         keep = ~spike if spike_keys[i] in seen_trains else np.ones_like(spike)
         seen_trains.add(spike_keys[i])
-        total += float(np.nansum(seconds[i][keep]))
+        total += float(np.nansum(work_rows[i][keep]))
     return total

@@ -34,8 +34,21 @@ Data variables
     address-event bits per second
 ``equivalent_bits`` (axes...)
     ``log2(full_scale_v / threshold_v)``
-``seconds`` (axes..., stage)
-    wall seconds each stage took when it was computed
+``seconds`` (axes..., stage, charge)
+    wall seconds a worker paid computing the point, by stage and by ``charge``: ``own`` (work
+    for the point itself) or ``shared`` (work its worker's later points reused without paying
+    again: the recordings' load, the front-end fit, and under stage ``setup`` a worker's
+    one-off work: importing numba, torch and scikit-learn, loading or compiling the numba
+    kernels). Each second a worker spent is charged to exactly one point (the one whose
+    computation paid it), so that summed over a sweep's distinct points they give the workers'
+    busy time but for the tasks' store reads and writes; a stage whose output the point found
+    made (a kept recording set, a stored spike train) is 0. NaN for points stored before paid
+    seconds were kept.
+``work_seconds`` (axes..., stage)
+    wall seconds of the stage's work for the point, as measured when it ran, wherever and for
+    whichever point (a spike train or a load that several points share counts in each of them;
+    one-off work left out): what the design costs to compute, as the compute-time front plots
+    it
 ``n_windows_used`` (axes...)
     int64 rate-coding windows the point used (``coding.n_windows`` resolved; -1 where its result
     does not say)
@@ -43,12 +56,15 @@ Data variables
 A sweep with ``correlate = true`` also holds ``correlation_r``, ``correlation_p`` (model,
 metric, coefficient) and ``correlation_n`` (model, metric): Pearson and Spearman correlations of
 SSNR and STE with ``accuracy_mean`` across the sweep's points (infinite metrics left out).
-Accuracy of a model or fold a point did not train is NaN; so are the seconds of a stage a point
-did not measure; ``predicted``, ``correct`` and ``test_fold`` are -1 where a point has no
+Accuracy of a model or fold a point did not train is NaN; so are the work seconds of a stage a
+point did not measure; ``predicted``, ``correct`` and ``test_fold`` are -1 where a point has no
 prediction (a model, repeat or recording it did not run; no out-of-fold variables at all when no
 point kept its predictions). The ``recording`` dimension is the union of the points' recordings
-(coordinate: names; ``label`` along it: class index). Every variable but ``seconds`` is a
-deterministic function of the grid and its seeds; ``seconds`` are measurements.
+(coordinate: names; ``label`` along it: class index). Every variable but ``seconds`` and
+``work_seconds`` is a deterministic function of the grid and its seeds; those two are
+measurements (:data:`MEASURED`). A cube written before paid seconds were kept has ``seconds``
+(axes..., stage) holding work seconds and no ``work_seconds``: :func:`paid_seconds` and
+:func:`work_seconds` read either layout.
 
 Coordinates
 
@@ -98,7 +114,7 @@ from pipeline.chain.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_
 from pipeline.design import fields
 from pipeline.design.grid import Grid, GridPoint, Sweep
 from pipeline.design.scene import Model, Scene, canonical_parts
-from pipeline.run.records import OutOfFold, RecordingsInfo
+from pipeline.run.records import Charge, OutOfFold, Paid, RecordingsInfo
 from pipeline.run.stages import RESULTS, interval_generator, steps_of
 
 METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
@@ -115,7 +131,18 @@ CUBE_VARIABLES: dict[str, dict[str, str]] = {
     "repeat": {"units": "1", "long_name": "cross-validation repeat"},
     "recording": {"units": "1", "long_name": "recording"},
     "label": {"units": "1", "long_name": "class index of the recording"},
-    "seconds": {"units": "s", "long_name": "wall time of the stage, as measured when computed"},
+    "seconds": {
+        "units": "s",
+        "long_name": "wall time a worker paid computing the point, by stage and charge",
+    },
+    "work_seconds": {
+        "units": "s",
+        "long_name": "wall time of the stage's work for the point, as measured when it ran",
+    },
+    "charge": {
+        "units": "1",
+        "long_name": "whom paid seconds were for: the point (own) or its worker's later points",
+    },
     "correlation_r": {"units": "1", "long_name": "correlation of the metric with mean accuracy"},
     "correlation_p": {"units": "1", "long_name": "two-sided p-value of the correlation"},
     "correlation_n": {"units": "1", "long_name": "sweep points in the correlation"},
@@ -130,6 +157,12 @@ CUBE_VARIABLES: dict[str, dict[str, str]] = {
 #: name -> the value where a point's result does not state it. Units and long names are those
 #: of the results record's declaration (:data:`pipeline.run.stages.RESULTS`).
 RESULT_VALUES: dict[str, int] = {"n_windows_used": -1}
+#: The dimension of ``seconds`` that says whom they were paid for
+#: (:class:`~pipeline.run.records.Charge`).
+CHARGE_DIM = "charge"
+#: The cube's measured variables (wall times): every other one is a deterministic function of
+#: the grid and its seeds.
+MEASURED = ("seconds", "work_seconds")
 # One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and
 # plain strings keep cubes comparable with xarray.testing.assert_identical. Read once, at import:
 # the process runs one set of libraries.
@@ -158,7 +191,13 @@ class PointResult(Protocol):
 
     @property
     def seconds(self) -> Mapping[str, float]:
-        """Wall seconds of every step of the point, by step name."""
+        """Wall seconds of every step's work for the point, by step name."""
+        ...
+
+    @property
+    def paid(self) -> Paid | None:
+        """Wall seconds a worker paid computing the point, by charge and step name; None where
+        its result does not say."""
         ...
 
     @property
@@ -228,14 +267,18 @@ def build_cube(
     by_point = np.full((size, len(METRICS)), np.nan)
     by_point[flat] = [operator.attrgetter(*METRICS)(result.metrics) for result in results]
     metrics = {name: by_point[:, i].reshape(shape) for i, name in enumerate(METRICS)}
-    seconds = np.full((size, len(stages)), np.nan)
-    seconds[flat] = [[result.seconds.get(stage, np.nan) for stage in stages] for result in results]
-    seconds = seconds.reshape(*shape, len(stages))
+    work = np.full((size, len(stages)), np.nan)
+    work[flat] = [[result.seconds.get(stage, np.nan) for stage in stages] for result in results]
+    work = work.reshape(*shape, len(stages))
+    paid = np.full((size, len(stages), len(Charge)), np.nan)
+    paid[flat] = [_paid_row(result.paid, stages) for result in results]
+    paid = paid.reshape(*shape, len(stages), len(Charge))
     dims = sweep.dims
     data_vars: dict[str, Any] = {
         "accuracy": ((*dims, "model", "repeat", "fold"), accuracy),
         **{name: (dims, values) for name, values in metrics.items()},
-        "seconds": ((*dims, "stage"), seconds),
+        "seconds": ((*dims, "stage", CHARGE_DIM), paid),
+        "work_seconds": ((*dims, "stage"), work),
     }
     for name, unknown in RESULT_VALUES.items():
         values = np.full(size, unknown, dtype=np.int64)
@@ -247,6 +290,7 @@ def build_cube(
         "repeat": ("repeat", np.arange(n_repeats)),
         "fold": ("fold", np.arange(n_folds)),
         "stage": ("stage", stages),
+        CHARGE_DIM: (CHARGE_DIM, [str(charge) for charge in Charge]),
     }
     oofs = [result.out_of_fold for result in results]
     out_of_fold = _out_of_fold_variables(oofs, flat, models, n_repeats, dims, shape)
@@ -281,6 +325,33 @@ def build_cube(
     cube.attrs.update(_provenance(grid, sweep))
     cube.attrs.update(_recordings_attrs([result.recordings for result in results]))
     return cube
+
+
+def _paid_row(paid: Paid | None, stages: Sequence[str]) -> np.ndarray:
+    """float64 (stage, charge): a point's paid seconds, 0 for a stage it paid nothing for, NaN
+    throughout when its result does not say."""
+    if paid is None:
+        return np.full((len(stages), len(Charge)), np.nan)
+    return np.array(
+        [[paid.get(charge, {}).get(stage, 0.0) for charge in Charge] for stage in stages]
+    )
+
+
+def paid_seconds(cube: xr.Dataset) -> xr.DataArray | None:
+    """The cube's paid seconds (axes..., stage, charge); None when it has none: no ``seconds``,
+    or the layout written before they were kept (whose ``seconds`` are work seconds)."""
+    if "seconds" not in cube or CHARGE_DIM not in cube["seconds"].dims:
+        return None
+    return cube["seconds"]
+
+
+def work_seconds(cube: xr.Dataset) -> xr.DataArray | None:
+    """The cube's work seconds (axes..., stage), of either layout; None when it has none."""
+    if "work_seconds" in cube:
+        return cube["work_seconds"]
+    if "seconds" in cube and CHARGE_DIM not in cube["seconds"].dims:
+        return cube["seconds"]
+    return None
 
 
 def _fold_accuracy(

@@ -27,12 +27,19 @@ repeat, recording), ``test_fold`` int64 (repeat, recording), ``labels`` int64 (r
 the strings ``recording``; and ``metrics`` as for spikes. Attributes ``dataset_name``,
 ``class_names`` and ``sampling_rate_hz`` where the writer stated them.
 
-Every entry's attributes hold ``seconds`` (step name -> wall seconds, finite floats).
+Every entry's attributes hold ``seconds`` (step name -> wall seconds of the step's work for the
+entry's point, as measured when each step ran, one-off work (imports, kernel loads) left out;
+finite floats)
+and, in entries written since they were kept apart, ``paid_seconds`` (charge, ``own`` or
+``shared``, -> step name -> wall seconds): what the worker spent computing the entry, each second
+charged to one point only (:class:`Charge`); a spike entry also holds ``paid_for``, the result key
+of the point its paid seconds are charged to.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -44,11 +51,14 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded, SpikeTrains, train_starts
 
 __all__ = [
+    "Charge",
     "OutOfFold",
+    "Paid",
     "Record",
     "RecordingsInfo",
     "ResultEntry",
     "SpikeEntry",
+    "StepSeconds",
     "Variable",
 ]
 
@@ -56,6 +66,48 @@ __all__ = [
 #: :attr:`Record.decode` takes them.
 Values = dict[str, np.ndarray]
 Attrs = dict[str, Any]
+
+
+class Charge(enum.StrEnum):
+    """Whom the seconds a worker paid were for (the ``charge`` dimension of a cube's ``seconds``).
+
+    ``own``: work for the point itself (its spike train, frames, training). ``shared``: work
+    that later points of the same worker reuse without paying it again: loading the recordings,
+    fitting the front end (the steps :attr:`pipeline.run.stages.Level.shared` declares) and a
+    worker's one-off work, importing numba, torch and scikit-learn and loading or compiling the
+    numba kernels (step :data:`pipeline.run.stages.SETUP_STEP`, wherever it happens). Either is
+    charged to the point whose computation paid it, and to no other: a point that found the
+    work done pays nothing for it.
+    """
+
+    OWN = "own"
+    SHARED = "shared"
+
+
+#: Paid wall seconds by charge, then step name.
+Paid = dict[Charge, dict[str, float]]
+
+
+@dataclass(frozen=True)
+class StepSeconds:
+    """The seconds a new entry accounts for, as :attr:`Record.make` gets them.
+
+    Attributes
+    ----------
+    work : dict[str, float]
+        Wall seconds of each step's work for the point, as measured when the step ran (one-off
+        work, imports and kernel loads, left out): of its own level's steps and of the levels
+        upstream that the entry accounts for.
+    paid : Paid
+        Wall seconds the worker spent computing the entry for the point, by charge and step:
+        what the point's own computation ran (nothing for an output it found made).
+    point : str
+        The result key of the point the paid seconds are charged to.
+    """
+
+    work: dict[str, float]
+    paid: Paid
+    point: str
 
 
 @dataclass(frozen=True)
@@ -102,8 +154,8 @@ class Record:
         Every variable an entry may hold.
     make : callable
         ``make(output, seconds, made) -> entry``: the level's output as its entry, given the
-        seconds the entry accounts for and ``made(level_name)``, the output (or entry) of an
-        upstream level of the same scene.
+        :class:`StepSeconds` the entry accounts for and ``made(level_name)``, the output (or
+        entry) of an upstream level of the same scene.
     encode : callable
         ``encode(entry) -> (values, attrs)``: named arrays (the declared variables; optional
         ones may be left out) and JSON attributes; raises ValueError for inconsistent entries.
@@ -115,7 +167,7 @@ class Record:
     name: str
     entry_type: type
     variables: tuple[Variable, ...]
-    make: Callable[[Any, dict[str, float], Callable[[str], Any]], Any]
+    make: Callable[[Any, StepSeconds, Callable[[str], Any]], Any]
     encode: Callable[[Any], tuple[Values, Attrs]]
     decode: Callable[[Mapping[str, np.ndarray], Mapping[str, Any]], Any]
 
@@ -201,12 +253,20 @@ class SpikeEntry:
     metrics : SpikeMetrics
         Scene-level metrics; any field may be +-inf or NaN and round trips bit for bit.
     seconds : dict[str, float]
-        Wall seconds per step (finite), e.g. ``{"taxels": 1.0, "readout": 2.5}``.
+        Wall seconds of each step's work (finite), e.g. ``{"taxels": 1.0, "readout": 2.5}``.
+    paid : Paid or None
+        Wall seconds the worker spent computing the entry, by charge and step (finite); None in
+        entries written before they were kept.
+    paid_for : str or None
+        The result key of the point ``paid`` is charged to (the point whose computation made
+        the train); None with ``paid``.
     """
 
     encoded: Encoded
     metrics: SpikeMetrics
     seconds: dict[str, float]
+    paid: Paid | None = None
+    paid_for: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -234,6 +294,11 @@ class ResultEntry:
     n_windows_used : int or None
         The number of rate-coding windows the point used (``coding.n_windows = "auto"``
         resolved for its recordings); None in entries written before results stated it.
+    paid : Paid or None
+        Wall seconds a worker spent computing for this point, by charge and step (finite): the
+        steps its own computation ran, plus the paid seconds of a spike entry charged to it
+        (``paid_for``); a step whose output it found made is not there. None in entries
+        written before they were kept.
     """
 
     fold_accuracy: dict[str, np.ndarray]
@@ -242,6 +307,7 @@ class ResultEntry:
     recordings: RecordingsInfo | None = None
     out_of_fold: OutOfFold | None = None
     n_windows_used: int | None = None
+    paid: Paid | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -284,7 +350,12 @@ def encode_spike_entry(entry: SpikeEntry) -> tuple[Values, Attrs]:
             raise ValueError("REAL and TRUE trains differ in duration_s")
     values["duration_s"] = duration
     values["metrics"] = _metric_values(entry.metrics)
-    return values, {"ideal": ideal, "seconds": seconds_attr(entry.seconds)}
+    attrs = {"ideal": ideal, "seconds": seconds_attr(entry.seconds)}
+    if entry.paid is not None:
+        if entry.paid_for is None:
+            raise ValueError("paid: the point it is charged to (paid_for) is missing")
+        attrs |= {"paid_seconds": paid_attr(entry.paid), "paid_for": str(entry.paid_for)}
+    return values, attrs
 
 
 def decode_spike_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> SpikeEntry:
@@ -294,7 +365,12 @@ def decode_spike_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any
     if not isinstance(ideal, bool):
         raise TypeError("attribute 'ideal' is not a bool")
     real = true if ideal else _read_trains(values, "real", duration)
-    return SpikeEntry(Encoded(true, real), _read_metrics(values), read_seconds(attrs))
+    paid_for = attrs.get("paid_for")
+    if paid_for is not None and not isinstance(paid_for, str):
+        raise TypeError("attribute 'paid_for' is not a str")
+    return SpikeEntry(
+        Encoded(true, real), _read_metrics(values), read_seconds(attrs), read_paid(attrs), paid_for
+    )
 
 
 def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
@@ -317,6 +393,8 @@ def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
     if entry.n_windows_used is not None:
         values["n_windows_used"] = np.asarray(entry.n_windows_used)
     attrs = {"seconds": seconds_attr(entry.seconds), **_recordings_attrs(entry.recordings)}
+    if entry.paid is not None:
+        attrs["paid_seconds"] = paid_attr(entry.paid)
     return values, attrs
 
 
@@ -333,6 +411,7 @@ def decode_result_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, An
         _read_recordings(attrs),
         _read_out_of_fold(values, models),
         None if n_windows is None else int(n_windows),
+        read_paid(attrs),
     )
 
 
@@ -381,6 +460,21 @@ def read_seconds(attrs: Mapping[str, Any]) -> dict[str, float]:
     if not isinstance(seconds, dict):
         raise TypeError("attribute 'seconds' is not a mapping")
     return {str(stage): float(value) for stage, value in seconds.items()}
+
+
+def paid_attr(paid: Paid) -> dict[str, dict[str, float]]:
+    """Paid seconds as an entry attribute: every charge, each refused unless finite."""
+    return {str(charge): seconds_attr(paid.get(charge, {})) for charge in Charge}
+
+
+def read_paid(attrs: Mapping[str, Any]) -> Paid | None:
+    """The paid seconds of an entry; None for one written before they were kept."""
+    paid = attrs.get("paid_seconds")
+    if paid is None:
+        return None
+    if not isinstance(paid, dict) or set(paid) - {str(c) for c in Charge}:
+        raise TypeError("attribute 'paid_seconds' is not a mapping of charges")
+    return {charge: read_seconds({"seconds": paid.get(str(charge), {})}) for charge in Charge}
 
 
 def _metric_values(metrics: SpikeMetrics) -> np.ndarray:

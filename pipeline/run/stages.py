@@ -11,8 +11,9 @@ level           reads (scene parts)                        after (levels)       
 ==============  =========================================  =====================  =================
 ``recordings``  ``dataset``                                --                     ``load``
 ``front_end``   ``readout.full_scale_v``                   recordings             ``front_end``
-``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``taxels``,
-                when a named effect draws random numbers)                         ``readout``,
+``spikes``      ``array``, ``readout``, ``seed`` (only     recordings, front_end  ``setup``,
+                when a named effect draws random numbers)                         ``taxels``,
+                                                                                  ``readout``,
                                                                                   ``metrics``
 ``rates``       ``coding``                                 spikes, recordings     ``coding``
 ``results``     ``training``                               rates                  ``train_<model>``
@@ -41,6 +42,15 @@ A stored level's entry holds the seconds of its own steps, of every stored level
 (their entries' seconds) and of the in-memory levels upstream of it that no such stored level
 covers: a result entry holds every step of its point, which is all a cube reads.
 
+Seconds come in two kinds (:class:`Stopwatch`). *Work* seconds are what each step's work took,
+whichever point it was done for (the entries' ``seconds``). *Paid* seconds are what a worker
+spent computing for one point, each second charged to exactly one point
+(:class:`~pipeline.run.records.Charge`): ``own`` for the point's own work, ``shared`` for work
+the worker's later points reuse: the steps a level declares :attr:`Level.shared` (``load``,
+``front_end``) and the one-off :data:`SETUP_STEP` (importing numba, torch and scikit-learn;
+loading or compiling the numba kernels, wherever it happens), so that summed over a sweep's
+distinct points they count each second once.
+
 Adding a stage: write its compute function (keyword-only arguments as above; it times each of
 its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
 levels it needs. To keep its output in the sweep store, give it a
@@ -53,6 +63,7 @@ cube's ``seconds`` follow from the registry.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import time
@@ -63,6 +74,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pipeline.chain import jit
 from pipeline.chain.coding import frames, resolve_n_windows
 from pipeline.chain.frontend import FrontEnd, fit_front_end
 from pipeline.chain.metrics import (
@@ -91,11 +103,13 @@ from pipeline.design.scene import (
 from pipeline.recordings.sources import Recordings, load_recordings
 from pipeline.run.records import (
     METRICS_VARIABLE,
+    Charge,
     OutOfFold,
     Record,
     RecordingsInfo,
     ResultEntry,
     SpikeEntry,
+    StepSeconds,
     Variable,
     decode_result_entry,
     decode_spike_entry,
@@ -116,7 +130,9 @@ __all__ = [
     "RATES",
     "RECORDINGS",
     "RESULTS",
+    "SETUP_STEP",
     "SPIKES",
+    "Charge",
     "Level",
     "Rates",
     "Read",
@@ -125,18 +141,36 @@ __all__ = [
     "cache_key",
     "interval_generator",
     "level_named",
+    "shared_steps",
     "stage_fields",
+    "step_charge",
     "steps_of",
     "steps_through",
     "stored_levels",
+    "warm_kernels",
 ]
 
 
+#: A worker process's one-off work, charged :attr:`Charge.SHARED` to the point that paid it:
+#: importing numba, torch and scikit-learn, and loading (or, the first time, compiling) the numba
+#: kernels: the spikes level's warm-up (:func:`warm_kernels`), and every such second inside any
+#: other step (:func:`pipeline.chain.jit.one_off_seconds`).
+SETUP_STEP = "setup"
+
+
 class Stopwatch:
-    """Accumulates wall seconds per step and reports each step the first time it starts."""
+    """Accumulates wall seconds per step and reports each step the first time it starts.
+
+    ``seconds`` is each step's work, its wall seconds less the one-off time within it (importing
+    a library, loading or compiling kernels: :func:`pipeline.chain.jit.one_off_seconds`);
+    ``paid`` is the same time by :class:`Charge`, each step's work under its declared charge
+    (:func:`step_charge`) and the one-off time under ``shared`` / :data:`SETUP_STEP`, so that
+    ``paid`` sums to the wall time of the steps.
+    """
 
     def __init__(self, on_stage: Callable[[str], None] | None):
         self.seconds: dict[str, float] = {}
+        self.paid: dict[Charge, dict[str, float]] = {charge: {} for charge in Charge}
         self.on_stage = on_stage
 
     @contextmanager
@@ -145,11 +179,30 @@ class Stopwatch:
         (a step timed twice is summed); ``on_stage(name)`` is called when the step first starts."""
         if self.on_stage is not None and name not in self.seconds:
             self.on_stage(name)
+        one_off_before = jit.one_off_seconds()
         start = time.perf_counter()
         try:
             yield
         finally:
-            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - start
+            wall = time.perf_counter() - start
+            one_off = min(max(jit.one_off_seconds() - one_off_before, 0.0), wall)
+            work = wall - one_off
+            self.seconds[name] = self.seconds.get(name, 0.0) + work
+            _add(self.paid[step_charge(name)], name, work)
+            if one_off > 0.0:
+                _add(self.paid[Charge.SHARED], SETUP_STEP, one_off)
+
+    def paid_total(self) -> dict[str, float]:
+        """Paid seconds per step, both charges summed (the steps' wall time)."""
+        total: dict[str, float] = {}
+        for charge in Charge:
+            for step, value in self.paid[charge].items():
+                _add(total, step, value)
+        return total
+
+
+def _add(seconds: dict[str, float], step: str, value: float) -> None:
+    seconds[step] = seconds.get(step, 0.0) + value
 
 
 # ---------------------------------------------------------------------------------------------
@@ -278,10 +331,49 @@ def encode_spikes(
     seed: int | None,
     watch: Stopwatch,
 ) -> Spikes:
-    """Encode every taxel of every recording, then measure the trains (step ``metrics``)."""
+    """Warm the kernels up (step ``setup``), encode every taxel of every recording, then measure
+    the trains (step ``metrics``)."""
+    with watch.stage(SETUP_STEP):
+        warm_kernels(readout)
     encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
     with watch.stage("metrics"):
         return Spikes(encoded, spike_metrics(encoded, readout))
+
+
+# A tiny signal (samples, Hz, cycles per second) to warm the kernels up on: a few crossings.
+_WARM_SAMPLES, _WARM_FS_HZ, _WARM_HZ = 64, 1000.0, 25.0
+
+
+def warm_kernels(readout: ReadoutSpec) -> None:
+    """Run the kernels that a readout like ``readout`` calls (its encoder, the kernels of its
+    effects, the spike metrics) once per process on a tiny signal, through the same functions
+    and so with the same argument types as a point's encoding: loading or compiling them is
+    paid here, once per process and kind of readout (encoder and named effects), and not inside
+    the first point's ``readout`` and ``metrics`` steps. A warm-up that fails is given up
+    (and not tried again): the point's own encoding reports any real problem."""
+    kind = ("spikes", readout.encoder, tuple(sorted(str(effect) for effect in readout.effects)))
+    jit.once(kind, functools.partial(_encode_tiny, readout))
+
+
+def _encode_tiny(readout: ReadoutSpec) -> None:
+    # Only a speed-up: whatever a tiny signal makes of this readout must not fail a point.
+    with contextlib.suppress(Exception):
+        _encode_tiny_signal(readout)
+
+
+def _encode_tiny_signal(readout: ReadoutSpec) -> SpikeMetrics:
+    t_s = np.arange(_WARM_SAMPLES) / _WARM_FS_HZ
+    signal = 0.4 * readout.full_scale_v * np.sin(2 * np.pi * _WARM_HZ * t_s)
+    taxels = taxel_signals(signal, _WARM_FS_HZ, np.zeros(1))
+    duration = np.array([(taxels.n_samples - 1) / _WARM_FS_HZ])
+    true = SpikeTrains.concatenate(
+        [true_train(row, _WARM_FS_HZ, readout) for row in taxels.signals], 1, duration
+    )
+    real = true
+    if not readout.is_ideal:
+        train = real_train(taxels.taxel(0), _WARM_FS_HZ, readout, seed=0, taxel=0, recording=0)
+        real = SpikeTrains.concatenate([train], 1, duration)
+    return spike_metrics(Encoded(true, real), readout)
 
 
 def rate_frames(real: SpikeTrains, coding: CodingSpec) -> tuple[np.ndarray, np.ndarray]:
@@ -304,11 +396,11 @@ def classify(
     *, rates: Rates, training: TrainingSpec, watch: Stopwatch
 ) -> dict[Model, CrossValidation]:
     """Cross-validate every model ``training`` names on the same frames (steps ``train_<m>``)."""
-    from pipeline.chain.training import cross_validate
-
     accuracy = {}
     for model in training.models:
         with watch.stage(f"train_{model.value}"):
+            with jit.one_off():  # torch and scikit-learn: once per process
+                from pipeline.chain.training import cross_validate
             accuracy[model] = cross_validate(
                 rates.counts, rates.labels, model, training, class_names=rates.class_names
             )
@@ -375,6 +467,10 @@ class Level:
     record : ~pipeline.run.records.Record or None
         What the sweep store keeps of its output (a cache level); None: workers keep its output
         in memory.
+    shared : tuple of str
+        Its steps whose work serves every later point of a worker that needs the same output
+        (a load, a front-end fit, a warm-up): their seconds are charged :attr:`Charge.SHARED` to
+        the point that paid them (:func:`step_charge`); the others' :attr:`Charge.OWN`.
     """
 
     name: str
@@ -383,6 +479,7 @@ class Level:
     compute: Callable[..., Any]
     steps: tuple[str, ...]
     record: Record | None = None
+    shared: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         return f"Level({self.name!r})"
@@ -481,15 +578,13 @@ class Level:
 # How the stored levels' outputs become entries (see pipeline.run.records for their codecs)
 
 
-def _spike_entry(
-    output: Spikes, seconds: dict[str, float], made: Callable[[str], Any]
-) -> SpikeEntry:
-    return SpikeEntry(output.encoded, output.metrics, seconds)
+def _spike_entry(output: Spikes, seconds: StepSeconds, made: Callable[[str], Any]) -> SpikeEntry:
+    return SpikeEntry(output.encoded, output.metrics, seconds.work, seconds.paid, seconds.point)
 
 
 def _result_entry(
     accuracy: dict[Model, CrossValidation],
-    seconds: dict[str, float],
+    seconds: StepSeconds,
     made: Callable[[str], Any],
 ) -> ResultEntry:
     """A point's result: all a cube reads of it, so it also carries its spike metrics, what its
@@ -497,7 +592,7 @@ def _result_entry(
     recordings = made(RECORDINGS.name)
     return ResultEntry(
         fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
-        seconds=seconds,
+        seconds=seconds.work,
         metrics=made(SPIKES.name).metrics,
         recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
         out_of_fold=OutOfFold(
@@ -507,6 +602,7 @@ def _result_entry(
             test_fold=next(iter(accuracy.values())).test_fold,
         ),
         n_windows_used=int(made(RATES.name).counts.shape[-1]),
+        paid=seconds.paid,
     )
 
 
@@ -517,6 +613,7 @@ RECORDINGS = Level(
     after=(),
     compute=load,
     steps=("load",),
+    shared=("load",),
 )
 #: Fits one dataset-wide front-end scaling to ``readout.full_scale_v``; kept in memory.
 FRONT_END = Level(
@@ -525,6 +622,7 @@ FRONT_END = Level(
     after=(RECORDINGS,),
     compute=fit,
     steps=("front_end",),
+    shared=("front_end",),
 )
 #: Encodes every taxel of every recording (TRUE and REAL trains) and measures the trains; the
 #: sweep store keeps its output.
@@ -533,7 +631,8 @@ SPIKES = Level(
     reads=(Read("array"), Read("readout"), Read("seed", when=_draws_random_numbers)),
     after=(RECORDINGS, FRONT_END),
     compute=encode_spikes,
-    steps=("taxels", "readout", "metrics"),
+    steps=(SETUP_STEP, "taxels", "readout", "metrics"),
+    shared=(SETUP_STEP,),
     record=Record(
         name="spikes",
         entry_type=SpikeEntry,
@@ -616,6 +715,9 @@ def _checked(*levels: Level) -> tuple[Level, ...]:
         arguments = [b.name for b in level.after] + [r.argument for r in level.reads]
         if len(set(arguments)) != len(arguments) or "watch" in arguments:
             problems.append(f"its compute arguments clash: {arguments}")
+        if not set(level.shared) <= set(level.steps):
+            undeclared = sorted(set(level.shared) - set(level.steps))
+            problems.append(f"shared steps {undeclared} are not among its steps")
         if steps & set(level.steps):
             problems.append(f"steps {sorted(steps & set(level.steps))} are timed by another level")
         if problems:
@@ -647,6 +749,16 @@ def steps_of(models: Sequence[str]) -> tuple[str, ...]:
     """Every step of :data:`LEVELS`, in order, for scenes training ``models`` (names, in the
     order given): the ``stage`` coordinate of a cube."""
     return tuple(step for level in LEVELS for step in level.steps_for(models))
+
+
+def shared_steps() -> frozenset[str]:
+    """The steps whose work every later point of a worker reuses (:attr:`Level.shared`)."""
+    return frozenset(step for level in LEVELS for step in level.shared)
+
+
+def step_charge(step: str) -> Charge:
+    """The charge of a step's work: :attr:`Charge.SHARED` for :func:`shared_steps`, else own."""
+    return Charge.SHARED if step in shared_steps() else Charge.OWN
 
 
 def stage_fields(scene: Scene, stage: str) -> tuple[str, ...]:

@@ -11,6 +11,7 @@ from pathlib import Path
 import xarray as xr
 
 from pipeline.chain.metrics import SpikeMetrics
+from pipeline.results.cube import MEASURED
 from storage import open_results
 
 BIN = Path(sys.executable).parent
@@ -137,9 +138,11 @@ def live_tree(root: Path) -> set[Path]:
 
 
 def assert_same_cubes(root_a: Path, root_b: Path) -> None:
-    """The cubes of two roots are identical but for the measured wall times (``seconds``)."""
+    """The cubes of two roots are identical but for the measured wall times (``seconds``,
+    ``work_seconds``: :data:`pipeline.results.cube.MEASURED`)."""
     a, b = open_results(root_a), open_results(root_b)
     assert a and set(a) == set(b)
     for name in a:
         # Everything but the measured seconds is a function of the grid and its seeds.
-        xr.testing.assert_identical(a[name].drop_vars("seconds"), b[name].drop_vars("seconds"))
+        assert set(MEASURED) <= set(a[name].data_vars) and set(MEASURED) <= set(b[name].data_vars)
+        xr.testing.assert_identical(a[name].drop_vars(MEASURED), b[name].drop_vars(MEASURED))

@@ -11,6 +11,7 @@ import xarray as xr
 
 from flows.assembly import summarize
 from flows.cli import main
+from flows.cluster import available_cores
 from pipeline.run.stages import SPIKES
 from storage import SweepStore, open_results
 from storage.batches import BATCH_PREFIX, read_batch_keys
@@ -40,6 +41,22 @@ def test_cold_run_summary(smoke_sweep):
     assert "/runs/flow-run/" in summary["flow_run_url"]
     assert summary["dashboard"].startswith("http://127.0.0.1:")
     assert summary["points"] == 7  # 8 grid points, the operating point shared by two sweeps
+    # Each worker loaded the one dataset once: one paid load per worker at most, however many
+    # points it ran, and the paid seconds of the distinct points add up to no more than the
+    # workers' time.
+    paid = {}
+    for cube in cubes.values():
+        for key, seconds in zip(
+            cube["result_key"].values.ravel(),
+            cube["seconds"]
+            .transpose(*cube["result_key"].dims, "stage", "charge")
+            .values.reshape(-1, cube.sizes["stage"], cube.sizes["charge"]),
+            strict=True,
+        ):
+            paid[str(key)] = seconds
+    loads = [p[list(cube["stage"].values).index("load")].sum() for p in paid.values()]
+    assert 1 <= sum(load > 0 for load in loads) <= available_cores()
+    assert sum(p.sum() for p in paid.values()) <= summary["seconds"] * available_cores()
     assert summary["cache_hits"] == 0 and summary["computed"] == 7
     assert set(summary["cubes"]) == SMOKE_SWEEPS
     assert summary["root"] == str(root.resolve())
@@ -77,8 +94,12 @@ def test_cubes_are_labelled(smoke_sweep):
     assert np.all((low <= threshold["accuracy_mean"].values) & (threshold["accuracy_mean"] <= high))
     for name in ("ssnr_db", "ste_s2", "event_rate_hz", "data_rate_bps", "equivalent_bits"):
         assert threshold[name].dims == ("threshold_v",) and "units" in threshold[name].attrs
-    assert threshold["seconds"].dims == ("threshold_v", "stage")
+    # Paid seconds by charge, stated by every point of a fresh sweep; the work seconds of
+    # every stage measured.
+    assert threshold["seconds"].dims == ("threshold_v", "stage", "charge")
     assert np.all(threshold["seconds"].values >= 0)
+    assert threshold["work_seconds"].dims == ("threshold_v", "stage")
+    assert np.all(threshold["work_seconds"].values >= 0)
     assert threshold.attrs["grid"] == "smoke" and threshold.attrs["sweep"] == "threshold"
     assert "package_version" in threshold.attrs and threshold["array.rows"].item() == 2
     # What the recordings were, from the points' entries (and the store, for older entries).

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 
 def test_planning_a_sweep_imports_no_numba_and_a_kernel_call_does():
@@ -48,3 +49,71 @@ def test_a_kernel_calling_a_kernel_runs_compiled_from_any_reference():
         np.zeros(2, dtype=np.int64),
     )
     assert out.tolist() == [[1, 0], [0, 0]]
+
+
+# A second process finds the kernels in the disk cache: numba's own dispatcher statistics say
+# whether each signature was loaded (a cache hit) or compiled (a miss); no timing.
+_WARM_AND_COUNT = (
+    "import json\n"
+    "import numba\n"
+    "from pipeline.chain import metrics, readout\n"
+    "from pipeline.design.scene import Scene\n"
+    "from pipeline.run.stages import warm_kernels\n"
+    "scene = Scene.builtin('smoke')\n"
+    "warm_kernels(scene.readout)\n"
+    "warm_kernels(scene.replace(**{'readout.effects': {'comparator_noise': {'sigma_v': 0.01}}})"
+    ".readout)\n"
+    "hits = misses = 0\n"
+    "for module in (readout, metrics):\n"
+    "    for kernel in vars(module).values():\n"
+    "        if isinstance(kernel, numba.core.registry.CPUDispatcher):\n"
+    "            hits += sum(kernel.stats.cache_hits.values())\n"
+    "            misses += sum(kernel.stats.cache_misses.values())\n"
+    "print(json.dumps({'hits': hits, 'misses': misses}))\n"
+)
+
+
+def _warm_in_a_new_process(cache_dir):
+    import json
+    import os
+
+    env = os.environ | {"NUMBA_CACHE_DIR": str(cache_dir)}
+    done = subprocess.run(
+        [sys.executable, "-c", _WARM_AND_COUNT], capture_output=True, text=True, env=env
+    )
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_a_second_process_finds_the_kernels_cached(tmp_path):
+    cache = tmp_path / "numba"
+    first = _warm_in_a_new_process(cache)
+    assert first["misses"] > 0 and first["hits"] == 0  # an empty cache: compiled
+    assert list(cache.rglob("*.nbi")) and list(cache.rglob("*.nbc"))  # index and code files
+    second = _warm_in_a_new_process(cache)
+    # Every kernel called from Python loaded, none compiled (kernels that only other kernels
+    # call are compiled into them, and cached with them).
+    assert second["misses"] == 0 and 0 < second["hits"] <= first["misses"]
+
+
+def test_the_kernels_are_warmed_once_per_process_and_kind():
+    from pipeline.chain import jit
+
+    calls = []
+    jit.once(("test", 1), lambda: calls.append(1))
+    jit.once(("test", 1), lambda: calls.append(2))
+    jit.once(("test", 2), lambda: calls.append(3))
+    assert calls == [1, 3]
+
+
+def test_a_failed_warm_up_is_tried_again():
+    from pipeline.chain import jit
+
+    def fail():
+        raise RuntimeError("no")
+
+    with pytest.raises(RuntimeError):
+        jit.once(("test", "fails"), fail)
+    calls = []
+    jit.once(("test", "fails"), lambda: calls.append(1))
+    assert calls == [1]

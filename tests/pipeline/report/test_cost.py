@@ -23,13 +23,38 @@ def test_designs_are_distinct_and_priced_per_model():
     assert set(base.sweeps) == {"threshold", "window"}
     assert base.label == "readout.threshold_v = 0.09 V, coding.window_s = 0.1 s"
     one = next(d for d in report.designs if d.label == "array.rows = 1, array.cols = 1")
-    # load + readout (per taxel) + coding + train_ffnn; train_cnn is not the FFNN's cost.
-    assert cost(one, "ffnn", Cost.COMPUTE, EnergyModel()) == 0.1 + 0.01 * 1 + 0.02 + 0.5
+    # readout (per taxel) + coding + train_ffnn: neither train_cnn, which is not the FFNN's
+    # cost, nor the load, which the worker shares among its points.
+    assert cost(one, "ffnn", Cost.COMPUTE, EnergyModel()) == 0.01 * 1 + 0.02 + 0.5
     compute = next(f for f in report.fronts if f.cost is Cost.COMPUTE)
     assert compute.front("ffnn")[0].design is one
     total = report.sweep_cost
-    assert total.n_points == len(report.designs)
-    assert dict(total.stage_seconds)["load"] == pytest.approx(0.1 * total.n_points)
+    assert total.n_points == len(report.designs) and total.n_unpaid == 0
+    # The load, shared by every point, was paid once: it counts once.
+    (load,) = [s for s in total.stages if s.stage == "load"]
+    assert (load.own_s, load.shared_s) == (0.0, pytest.approx(0.1))
+    assert total.shared_s == pytest.approx(0.1)
+
+
+def test_the_sweeps_cost_of_older_cubes_counts_their_work_seconds():
+    """Cubes of results that predate paid seconds: each point's load counts, as measured."""
+    total = build_report(make_cubes(paid=False)).sweep_cost
+    assert total.n_unpaid == total.n_points > 1
+    (load,) = [s for s in total.stages if s.stage == "load"]
+    assert load.shared_s == pytest.approx(0.1 * total.n_points)
+
+
+def test_the_sweeps_cost_reads_the_layout_before_paid_seconds():
+    """A stored cube of the older layout: ``seconds`` (axes..., stage) of work seconds."""
+    cubes = make_cubes()
+    paid_total = build_report(cubes).sweep_cost
+    old = {
+        name: cube.drop_vars(["seconds", "charge"]).rename({"work_seconds": "seconds"})
+        for name, cube in cubes.items()
+    }
+    total = build_report(old).sweep_cost
+    assert total.n_unpaid == total.n_points == paid_total.n_points
+    assert total.total_s == pytest.approx(paid_total.total_s + 0.1 * (total.n_points - 1))
 
 
 @given(st.lists(st.tuples(st.integers(0, 20), st.integers(0, 20)), min_size=1, max_size=30))

@@ -48,7 +48,28 @@ def test_hypervolume_counts_the_dominated_unit_cells(rows):
     assert hypervolume(costs, reference) == pytest.approx(cells)
 
 
-def test_search_seconds_count_each_point_and_each_spike_train_once():
+def test_search_seconds_count_the_paid_seconds_of_each_point_once():
+    stages = ["load", "setup", "readout", "coding", "train_ffnn"]
+    # (trial, stage, charge): own, shared.
+    paid = np.zeros((4, 5, 2))
+    paid[0] = [[0, 2.0], [0, 0.5], [1.0, 0], [0.1, 0], [3.0, 0]]  # paid the load, the compile
+    paid[1] = paid[0]  # the same point again: free
+    paid[2] = [[0, 0], [0, 0], [0, 0], [0.2, 0], [4.0, 0]]  # reused the train and the load
+    paid[3] = [[0, 0], [0, 0], [1.5, 0], [0.1, 0], [3.0, 0]]  # its own train
+    cube = xr.Dataset(
+        {"seconds": (("trial", "stage", "charge"), paid)},
+        coords={
+            "stage": stages,
+            "charge": ["own", "shared"],
+            "result_key": ("trial", ["p", "p", "q", "r"]),
+        },
+    )
+    total = search_seconds(cube, ["a", "a", "a", "b"], ("setup", "readout"))
+    assert total == pytest.approx(6.6 + 4.2 + 4.6)
+
+
+def test_search_seconds_of_older_points_count_each_point_and_each_spike_train_once():
+    """Points stored before paid seconds were kept: work seconds, each train once."""
     stages = ["taxels", "readout", "metrics", "coding", "train_ffnn"]
     seconds = np.array(
         [

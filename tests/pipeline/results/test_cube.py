@@ -24,7 +24,7 @@ from pipeline.results.cube import (
     field_coordinate,
     metric_attrs,
 )
-from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge, OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.stages import RESULTS, interval_generator
 from tests import golden_cubes as golden
 
@@ -115,7 +115,7 @@ def test_the_grids_golden_comparison_sees_a_change(change):
     if change == "value":
         cube["accuracy_low"].values[0, 0] = 0.5
     elif change == "attr":
-        cube["seconds"].attrs["units"] = "ms"
+        cube["work_seconds"].attrs["units"] = "ms"
     else:
         cube["extra"] = cube["ssnr_db"]
     with pytest.raises(AssertionError):
@@ -171,8 +171,14 @@ def test_product_cube_layout_and_units():
     assert cube["accuracy"].attrs["units"] == "1"
     assert cube["ssnr_db"].attrs["units"] == "dB"
     assert np.all(np.isinf(cube["ssnr_db"].values))
-    assert cube["seconds"].sel(stage="train_ffnn").values.tolist() == [[1.0] * 3] * 2
-    assert np.all(np.isnan(cube["seconds"].sel(stage="coding").values))  # not measured
+    assert cube["work_seconds"].dims == ("threshold_v", "window_s", "stage")
+    assert cube["work_seconds"].sel(stage="train_ffnn").values.tolist() == [[1.0] * 3] * 2
+    assert np.all(np.isnan(cube["work_seconds"].sel(stage="coding").values))  # not measured
+    # Paid seconds by charge: NaN throughout, as these results state none.
+    assert cube["seconds"].dims == ("threshold_v", "window_s", "stage", "charge")
+    assert cube["charge"].values.tolist() == ["own", "shared"]
+    assert np.all(np.isnan(cube["seconds"].values))
+    assert cube["seconds"].attrs["units"] == cube["work_seconds"].attrs["units"] == "s"
     # A swept field is its axis's coordinate, not a second one under its dotted name.
     assert "readout.threshold_v" not in cube.coords and "coding.window_s" not in cube.coords
     assert field_coordinate(cube, "coding.window_s") == "window_s"
@@ -524,7 +530,13 @@ def mixed_entry(point) -> ResultEntry:
         }
         test_fold = generator.integers(0, 4, (repeats, len(order)))
         oof = OutOfFold(tuple(names), labels, predicted, test_fold)
-    return ResultEntry(folds, seconds, metrics(ssnr_db=10.0 * t, ste_s2=0.1 * i), None, oof)
+    # Paid seconds: stated by the points of one threshold only (the others' results are older).
+    paid = None
+    if i == 0:
+        paid = {Charge.OWN: {"coding": 0.25 + t}, Charge.SHARED: {"load": 0.5 * r, "setup": 2.0}}
+    return ResultEntry(
+        folds, seconds, metrics(ssnr_db=10.0 * t, ste_s2=0.1 * i), None, oof, paid=paid
+    )
 
 
 def test_the_cube_is_what_a_point_by_point_assembly_gives():
@@ -551,7 +563,14 @@ def test_the_cube_is_what_a_point_by_point_assembly_gives():
         assert here["result_key"].item() == point.key
         assert here["ssnr_db"].item() == entry.metrics.ssnr_db
         expected_seconds = [entry.seconds.get(stage, np.nan) for stage in stages]
-        np.testing.assert_array_equal(here["seconds"].values, expected_seconds)
+        np.testing.assert_array_equal(here["work_seconds"].values, expected_seconds)
+        expected_paid = [
+            [np.nan if entry.paid is None else entry.paid[c].get(stage, 0.0) for c in Charge]
+            for stage in stages
+        ]
+        np.testing.assert_array_equal(
+            here["seconds"].transpose("stage", "charge").values, expected_paid
+        )
         oof = entry.out_of_fold
         test_fold = np.full((2, 9), -1)
         if oof is not None:
