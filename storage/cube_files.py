@@ -191,23 +191,26 @@ def current_note(folder: Path, name: str, source: str) -> dict[str, Any] | None:
     written (its manifest); else None (no such cube, another source, no manifest, or a file
     missing, added or changed). Reads the files' bytes, never decodes the cube."""
     path = cube_path(folder, name)
-    return note_of(lambda: (path / METADATA).read_bytes(), source, lambda: _manifest(path))
+    return note_of(
+        lambda: (path / METADATA).read_bytes(), source, lambda files: files == _manifest(path)
+    )
 
 
 def note_of(
-    metadata: Callable[[], bytes], source: str, manifest: Callable[[], dict[str, str]]
+    metadata: Callable[[], bytes], source: str, intact: Callable[[dict[str, str]], bool]
 ) -> dict[str, Any] | None:
-    """:func:`current_note` of a cube given its group metadata's bytes and the manifest of its
-    other files, each read only when needed (any OSError or bad JSON: None)."""
+    """:func:`current_note` of a cube given its group metadata's bytes and ``intact(manifest)``,
+    which tells whether the cube's other files are as its recorded manifest (the sha256 of each
+    by name) says, each called only when needed (any OSError or bad JSON: None)."""
     try:
         attributes = json.loads(metadata())["attributes"]
         if attributes[CUBE_SOURCE] != source:
             return None
         files, note = attributes[CUBE_FILES], attributes[CUBE_NOTE]
-        intact = isinstance(note, dict) and files == manifest()
+        ok = isinstance(note, dict) and isinstance(files, dict) and intact(files)
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    return note if intact else None
+    return note if ok else None
 
 
 def _manifest(path: Path) -> dict[str, str]:
