@@ -282,6 +282,8 @@ _S3_CODE = re.compile(r"<Code>\s*([A-Za-z]+)\s*</Code>")
 # What an HTTP client says when nobody answers (refused, unresolvable, timed out).
 _NO_ANSWER = ("error sending request", "timed out", "connection refused", "dns error")
 _KEYS = ("AWS_ACCESS_KEY_ID", "AWS_SECRET_ACCESS_KEY")
+# Where a client without keys looks for an instance role's (the metadata service's paths).
+_INSTANCE_CREDENTIALS = ("/latest/api/token", "/latest/meta-data", "169.254.169.254", "credential")
 
 
 def s3_problem(error: BaseException, url: str) -> str | None:
@@ -323,7 +325,7 @@ def s3_problem(error: BaseException, url: str) -> str | None:
             "credentials need permission to list, read and write it"
         )
     missing = [k for k in _KEYS if not os.environ.get(k)]
-    if missing and ("169.254.169.254" in text or "credential" in lowered):
+    if missing and any(words in lowered for words in _INSTANCE_CREDENTIALS):
         return (
             f"{where}: no credentials for {service}: {' and '.join(missing)} "
             f"{'is' if len(missing) == 1 else 'are'} not set (and no instance role answered)"
