@@ -43,7 +43,9 @@ CUBE_NOTE = "eskin_note"
 CUBE_FILES = "eskin_files"
 _RESERVED = (CUBE_DIGESTS, CUBE_SOURCE, CUBE_NOTE, CUBE_FILES)
 METADATA = "zarr.json"
-_CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
+# A sweep's name, or a search's and what its cube holds (``design.trials``): no name is "." or
+# "..", none starts with the "." of a partial cube.
+_CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}(\.[A-Za-z0-9_-]{1,64})?")
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
 _OPEN_ZARR = {"consolidated": False, "zarr_format": 3}
 
@@ -73,7 +75,7 @@ def write_cube(
     Raises
     ------
     ValueError
-        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses a reserved attribute
+        ``name`` cannot name a cube (:func:`valid_name`), or ``cube`` uses a reserved attribute
         (``eskin_sha256``, ``eskin_source``, ``eskin_note``, ``eskin_files``).
     """
     path = cube_path(folder, name)
@@ -244,14 +246,18 @@ def cube_path(folder: Path, name: str) -> Path:
 
 
 def valid_name(name: Any) -> bool:
-    """True if ``name`` can name a cube (``[A-Za-z0-9_-]{1,64}``)."""
+    """True if ``name`` can name a cube: ``[A-Za-z0-9_-]{1,64}``, optionally followed by ``.``
+    and another such part (a search's cubes, :func:`storage.search_log.search_cube_name`)."""
     return isinstance(name, str) and _CUBE_NAME.fullmatch(name) is not None
 
 
 def checked_name(name: Any) -> str:
     """``name`` if it can name a cube; else ValueError."""
     if not valid_name(name):
-        raise ValueError(f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}")
+        raise ValueError(
+            f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}, optionally "
+            "followed by . and another such part"
+        )
     return name
 
 
