@@ -20,6 +20,7 @@ prints its row.
 from __future__ import annotations
 
 import argparse
+import logging
 import statistics
 import tempfile
 import uuid
@@ -44,6 +45,7 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT) -> list[dict]:
     import boto3
     from moto.server import ThreadedMotoServer
 
+    logging.getLogger("werkzeug").setLevel(logging.WARNING)  # its request log, on stderr
     server = ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
     server.start()
     try:

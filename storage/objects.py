@@ -132,11 +132,8 @@ class Objects(abc.ABC):
         """Write ``files`` (relative key -> bytes) under ``prefix``, concurrently, and the file
         ``last`` after all the others have been written; return each file's ETag, by name."""
         rest = [name for name in files if name != last]
-        etags = dict(
-            zip(
-                rest, _concurrently(lambda n: self.put(f"{prefix}{n}", files[n]), rest), strict=True
-            )
-        )
+        written = _concurrently(lambda name: self.put(f"{prefix}{name}", files[name]), rest)
+        etags = dict(zip(rest, written, strict=True))
         etags[last] = self.put(f"{prefix}{last}", files[last])
         return etags
 

@@ -62,6 +62,14 @@ def test_two_searches_in_one_root_keep_their_cubes_and_are_both_in_the_report(se
     assert page.read_text().count("<svg") == len(
         list((tmp_path / "report" / "figures").glob("*.svg"))
     )
+    searches_part = markdown.split("## Searches")[1].split("\n## ")[0]
+    for name, cubes in searches.items():
+        front = cubes["front"]
+        on = int(front["on_front"].sum())
+        told = f"{cubes['trials'].sizes['trial']} trials told; {on} on the front, "
+        assert f"### Search {name}\n\n{told}{len(front['trial']) - on} beside it" in searches_part
+        for trial in front["trial"].values:
+            assert f"| {trial} | " in searches_part.split(f"### Search {name}")[1]
 
 
 def test_a_root_written_before_searches_were_named_reads_as_if_they_had_been(searches, tmp_path):
