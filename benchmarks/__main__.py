@@ -16,6 +16,7 @@ from benchmarks import (
     coding,
     encoder,
     kernels,
+    object_root,
     paid,
     planning,
     scale,
@@ -30,10 +31,12 @@ from benchmarks import (
 def main() -> None:
     # --quick skips the scale runs, the paper-grid sweeps (~25 minutes), the sweep machinery
     # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes), the warm
-    # re-run of the paper grid (whose root, runs/bench/paper, the first run computes) and the
-    # search against its exhaustive grid (runs/bench/search, computed by the first run).
+    # re-run of the paper grid (whose root, runs/bench/paper, the first run computes), the
+    # warm re-run on an s3:// root against a folder root (smoke grid, both computed first, a
+    # few minutes) and the search against its exhaustive grid (runs/bench/search, computed by
+    # the first run).
     quick = "--quick" in sys.argv
-    slow = [scale, sweep, sweep_scale, warm_rerun, search, paid]
+    slow = [scale, sweep, sweep_scale, warm_rerun, object_root, search, paid]
     suites = [encoder, coding, kernels, training, planning] + ([] if quick else slow)
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):

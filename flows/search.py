@@ -15,8 +15,9 @@ and scheduled as any sweep (:func:`flows.planning.plan_sweep`,
 point already in the store, from any sweep or search, costs nothing. Once its points are done,
 the trial cube of every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`,
 along ``trial``; each result read from the store once) and the batch's objective values are read
-from it and told. The cubes ``trials`` and ``front`` (:func:`pipeline.report.trials.front_cube`)
-are written when the search ends or is stopped.
+from it and told. The search's cubes ``<space>.trials`` and ``<space>.front``
+(:func:`pipeline.report.trials.front_cube`; named by :func:`storage.search_log.search_cube_name`,
+so a root keeps every search made in it) are written when the search ends or is stopped.
 
 Sampler: the space's (:class:`pipeline.design.space.Sampler`), by default multi-objective TPE
 (``TPESampler(multivariate=True, constant_liar=True)``; the constant liar keeps the trials of one
@@ -62,7 +63,7 @@ from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 from storage.objects import is_object_url, run_root
-from storage.search_log import SearchJournal
+from storage.search_log import SearchJournal, search_cube_name
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
@@ -250,8 +251,12 @@ class Search:
         if self.cube is None:
             return
         store = SweepStore.open(self.root)
-        store.write_cube(TRIALS, self.cube)
-        store.write_cube(FRONT, front_cube(self.cube, self.space.objectives))
+        store.write_cube(self.cube_name(TRIALS), self.cube)
+        store.write_cube(self.cube_name(FRONT), front_cube(self.cube, self.space.objectives))
+
+    def cube_name(self, kind: str) -> str:
+        """The name of this search's cube ``kind`` (``trials`` or ``front``) in its root."""
+        return search_cube_name(self.space.name, kind)
 
     def seconds_spent(self) -> float:
         """Stage seconds of the finished trials (:func:`spent_seconds`)."""
@@ -492,7 +497,8 @@ def search_summary(
     """What ``eskin optimize --json`` prints: ``root``, ``space``, ``trials`` (finished, all
     runs), ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
     batches), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
-    :meth:`Search.seconds_spent`), ``cubes`` and ``front`` (:meth:`Search.front_rows`)."""
+    :meth:`Search.seconds_spent`), ``cubes`` (where the search's ``trials`` and ``front`` cubes
+    are) and ``front`` (:meth:`Search.front_rows`)."""
     return {
         "root": search.root,
         "space": search.space.name,
@@ -502,6 +508,9 @@ def search_summary(
         "computed": computed,
         "seconds": seconds,
         "search_seconds": search.seconds_spent(),
-        "cubes": {name: SweepStore(search.root).cube_location(name) for name in (TRIALS, FRONT)},
+        "cubes": {
+            kind: SweepStore(search.root).cube_location(search.cube_name(kind))
+            for kind in (TRIALS, FRONT)
+        },
         "front": search.front_rows(),
     }

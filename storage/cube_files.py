@@ -43,7 +43,9 @@ CUBE_NOTE = "eskin_note"
 CUBE_FILES = "eskin_files"
 _RESERVED = (CUBE_DIGESTS, CUBE_SOURCE, CUBE_NOTE, CUBE_FILES)
 METADATA = "zarr.json"
-_CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
+# A sweep's name, or a search's and what its cube holds (``design.trials``): no name is "." or
+# "..", none starts with the "." of a partial cube.
+_CUBE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}(\.[A-Za-z0-9_-]{1,64})?")
 _TO_ZARR = {"consolidated": False, "zarr_format": 3, "write_empty_chunks": True}
 _OPEN_ZARR = {"consolidated": False, "zarr_format": 3}
 
@@ -73,7 +75,7 @@ def write_cube(
     Raises
     ------
     ValueError
-        ``name`` is not ``[A-Za-z0-9_-]{1,64}``, or ``cube`` uses a reserved attribute
+        ``name`` cannot name a cube (:func:`valid_name`), or ``cube`` uses a reserved attribute
         (``eskin_sha256``, ``eskin_source``, ``eskin_note``, ``eskin_files``).
     """
     path = cube_path(folder, name)
@@ -191,23 +193,26 @@ def current_note(folder: Path, name: str, source: str) -> dict[str, Any] | None:
     written (its manifest); else None (no such cube, another source, no manifest, or a file
     missing, added or changed). Reads the files' bytes, never decodes the cube."""
     path = cube_path(folder, name)
-    return note_of(lambda: (path / METADATA).read_bytes(), source, lambda: _manifest(path))
+    return note_of(
+        lambda: (path / METADATA).read_bytes(), source, lambda files: files == _manifest(path)
+    )
 
 
 def note_of(
-    metadata: Callable[[], bytes], source: str, manifest: Callable[[], dict[str, str]]
+    metadata: Callable[[], bytes], source: str, intact: Callable[[dict[str, str]], bool]
 ) -> dict[str, Any] | None:
-    """:func:`current_note` of a cube given its group metadata's bytes and the manifest of its
-    other files, each read only when needed (any OSError or bad JSON: None)."""
+    """:func:`current_note` of a cube given its group metadata's bytes and ``intact(manifest)``,
+    which tells whether the cube's other files are as its recorded manifest (the sha256 of each
+    by name) says, each called only when needed (any OSError or bad JSON: None)."""
     try:
         attributes = json.loads(metadata())["attributes"]
         if attributes[CUBE_SOURCE] != source:
             return None
         files, note = attributes[CUBE_FILES], attributes[CUBE_NOTE]
-        intact = isinstance(note, dict) and files == manifest()
+        ok = isinstance(note, dict) and isinstance(files, dict) and intact(files)
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    return note if intact else None
+    return note if ok else None
 
 
 def _manifest(path: Path) -> dict[str, str]:
@@ -241,14 +246,18 @@ def cube_path(folder: Path, name: str) -> Path:
 
 
 def valid_name(name: Any) -> bool:
-    """True if ``name`` can name a cube (``[A-Za-z0-9_-]{1,64}``)."""
+    """True if ``name`` can name a cube: ``[A-Za-z0-9_-]{1,64}``, optionally followed by ``.``
+    and another such part (a search's cubes, :func:`storage.search_log.search_cube_name`)."""
     return isinstance(name, str) and _CUBE_NAME.fullmatch(name) is not None
 
 
 def checked_name(name: Any) -> str:
     """``name`` if it can name a cube; else ValueError."""
     if not valid_name(name):
-        raise ValueError(f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}")
+        raise ValueError(
+            f"invalid cube name {name!r}: expected [A-Za-z0-9_-]{{1,64}}, optionally "
+            "followed by . and another such part"
+        )
     return name
 
 

@@ -6,7 +6,7 @@ Object layout (keys relative to the root URL)::
     store.lock                                the lease (:mod:`storage.lease`)
     store.zarr/zarr.json                      group, attrs {"eskin_sweep_store": 2}
     store.zarr/<kind>/batch-<hex>/...         a batch; complete once its zarr.json exists
-    store.zarr/cubes/<name>/current           the cube's version, e.g. "v-<hex>"
+    store.zarr/cubes/<name>/current           the cube's version and its objects' ETags
     store.zarr/cubes/<name>/v-<hex>/...       one written version of the cube
     sweep-runs/<time ns>-<hex>.json           the run log, one object per sweep
 
@@ -19,12 +19,19 @@ Object layout (keys relative to the root URL)::
   younger one). Discarding a batch
   deletes its ``zarr.json`` first (it disappears at once), then the rest.
 * **A cube is swapped by a pointer.** A cube is written whole under a new version prefix, then
-  the small object ``current`` is replaced with one PUT naming it; a reader reads ``current``
-  and then that version. Versions no longer current are deleted once older than
-  :data:`GRACE_S`, so that a reader that read the pointer just before the swap still finds its
-  version.
+  the small object ``current`` is replaced with one PUT naming it, as JSON ``{"version":
+  "v-<hex>", "etags": {file: ETag}}`` (a store written before ETags were kept holds the bare
+  version); a reader reads ``current`` and then that version. Versions no longer current are
+  deleted once older than :data:`GRACE_S`, so that a reader that read the pointer just before
+  the swap still finds its version.
 * **Checksums as on a folder root**: a CRC-32C per chunk, a sha256 per variable, and a cube's
   manifest, source and note in its group metadata (:mod:`storage.cube_files`).
+* **Few round trips.** Each request to an object store waits a round trip, so nothing is read
+  object by object: whether a cube is intact and current (planning asks it of every cube) is
+  one listing of its version compared with the ETags its pointer recorded as it was written
+  (an object replaced, added or removed since changes the listing), plus its group metadata;
+  only a pointer without ETags has every object read, concurrently, for the manifest. The run
+  log, too, is read concurrently.
 """
 
 from __future__ import annotations
@@ -76,9 +83,11 @@ class ObjectRoot:
         Raises
         ------
         StoreError
-            The root holds other objects but no store, or a foreign or unreadable store.
+            The root cannot be used (:meth:`storage.objects.Objects.check`), or holds other
+            objects but no store, or a foreign or unreadable store.
         """
         where = self.objects.where(STORE_NAME)
+        self.objects.check()
         try:
             data, _ = self.objects.get(self._key(cube_files.METADATA))
         except FileNotFoundError:
@@ -188,7 +197,7 @@ class ObjectRoot:
         return removed
 
     def _clean_versions(self, name: str, infos: list[Any], now: float, grace_s: float) -> int:
-        current = self._current(name)
+        current, _ = self._current(name)
         versions: dict[str, float] = {}
         for info in infos:
             version = info.key.split("/")[3]
@@ -231,10 +240,11 @@ class ObjectRoot:
 
         cube_files.write_group(store, cube, encoding, source, note, manifest)
         version = f"{VERSION_PREFIX}{uuid.uuid4().hex}"
-        self.objects.publish(
+        etags = self.objects.publish(
             self._key(CUBES, name, version) + "/", _bytes(files), last=cube_files.METADATA
         )
-        self.objects.put(self._key(CUBES, name, POINTER), version.encode())
+        pointer = {"version": version, "etags": dict(sorted(etags.items()))}
+        self.objects.put(self._key(CUBES, name, POINTER), json.dumps(pointer).encode())
         infos = self.objects.list(self._key(CUBES, name) + "/")
         self._clean_versions(name, infos, time.time(), GRACE_S)
 
@@ -251,7 +261,7 @@ class ObjectRoot:
         """The current version of cube ``name``, checked as it is read
         (:meth:`storage.store.SweepStore.read_cube`); StoreError if there is none."""
         cube_files.checked_name(name)
-        version = self._current(name)
+        version, _ = self._current(name)
         if version is None:
             raise StoreError(f"no cube {name!r} in {self.objects.url}")
         store = self.objects.zarr_store(self._key(CUBES, name, version), read_only=True)
@@ -261,28 +271,43 @@ class ObjectRoot:
         """The note of cube ``name``'s current version if it is intact and was written with
         ``source``, else None (:meth:`storage.store.SweepStore.current_note`)."""
         cube_files.checked_name(name)
-        version = self._current(name)
+        version, etags = self._current(name)
         if version is None:
             return None
         prefix = self._key(CUBES, name, version) + "/"
+        listed = {info.key.removeprefix(prefix): info.etag for info in self.objects.list(prefix)}
 
-        def manifest() -> dict[str, str]:
-            keys = [info.key for info in self.objects.list(prefix)]
-            return cube_files.manifest_of(
-                {key.removeprefix(prefix): self.objects.get(key)[0] for key in keys}
+        def intact(manifest: dict[str, str]) -> bool:
+            if etags:  # every object is the one its writer PUT, none added or removed
+                return listed == etags
+            read = self.objects.get_many(prefix + key for key in listed)
+            return manifest == cube_files.manifest_of(
+                {key.removeprefix(prefix): data for key, data in read.items()}
             )
 
         return cube_files.note_of(
-            lambda: self.objects.get(prefix + cube_files.METADATA)[0], source, manifest
+            lambda: self.objects.get(prefix + cube_files.METADATA)[0], source, intact
         )
 
-    def _current(self, name: str) -> str | None:
+    def _current(self, name: str) -> tuple[str | None, dict[str, str] | None]:
+        """The current version of cube ``name`` (None if none) and the ETags of its objects as
+        they were written (None if its pointer did not keep them)."""
         try:
             data, _ = self.objects.get(self._key(CUBES, name, POINTER))
         except FileNotFoundError:
-            return None
-        version = data.decode(errors="replace").strip()
-        return version if _VERSION.fullmatch(version) else None
+            return None, None
+        text = data.decode(errors="replace").strip()
+        if _VERSION.fullmatch(text):
+            return text, None  # a pointer written before ETags were kept
+        try:
+            pointer = json.loads(text)
+            version, etags = pointer["version"], pointer["etags"]
+        except (ValueError, KeyError, TypeError):
+            return None, None
+        if not (isinstance(version, str) and _VERSION.fullmatch(version)):
+            return None, None
+        valid = isinstance(etags, dict) and all(isinstance(v, str) and v for v in etags.values())
+        return version, dict(etags) if valid else None
 
     # -----------------------------------------------------------------------------------------
     # The run log
@@ -296,7 +321,8 @@ class ObjectRoot:
     def run_lines(self) -> list[bytes]:
         """Every record of the run log, in the order written."""
         keys = sorted(info.key for info in self.objects.list(RUN_LOG))
-        return [self.objects.get(key)[0] for key in keys]
+        read = self.objects.get_many(keys)
+        return [read[key] for key in keys]
 
 
 def _bytes(files: Mapping[str, Any]) -> dict[str, bytes]:

@@ -8,6 +8,11 @@ replayed into another space. Each line is written with one ``write`` on a file o
 ``O_APPEND`` and flushed to disk (``fsync``); a line that does not parse (a write torn by a kill)
 is skipped when reading. The search replays it to resume: told trials go back into the sampler
 as they were, asked ones that were never told are asked again with the same values.
+
+A search keeps its cubes under its own name, ``<space>.trials`` and ``<space>.front``
+(:func:`search_cube_name`), so a root keeps every search made in it. A root written before
+searches were named holds one search's as ``trials`` and ``front``, the space named in their
+attribute ``space``: :func:`named_search_cubes` gives them their search's names on reading.
 """
 
 from __future__ import annotations
@@ -19,7 +24,39 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from storage.store import StoreError
+from storage import cube_files
+from storage.errors import StoreError
+
+#: What a search's cubes hold: every trial told, and the front of them.
+SEARCH_CUBES = ("trials", "front")
+#: The attribute of a search's cubes naming the space searched (as
+#: :func:`pipeline.report.trials.trial_cube` writes it; storage reads it only to name the cubes
+#: of a root written before searches were named).
+SPACE_ATTR = "space"
+
+
+def search_cube_name(space: str, kind: str) -> str:
+    """The name of the cube ``kind`` (one of :data:`SEARCH_CUBES`) of the search of ``space``:
+    ``<space>.<kind>``, which no sweep's cube can be named (a sweep's name holds no dot)."""
+    if kind not in SEARCH_CUBES:
+        raise ValueError(f"unknown cube of a search {kind!r}: expected one of {SEARCH_CUBES}")
+    return f"{space}.{kind}"
+
+
+def named_search_cubes(cubes: Mapping[str, Any]) -> dict[str, Any]:
+    """``cubes`` (name -> cube, as stored) with a search's cubes of a root written before
+    searches were named (``trials`` and ``front``, attribute :data:`SPACE_ATTR` naming the
+    space) under their search's names (:func:`search_cube_name`), sorted by name; where that
+    search's cubes were written under those names since, the old ones are left out."""
+    named: dict[str, Any] = {}
+    old: dict[str, Any] = {}
+    for name, cube in cubes.items():
+        space = cube.attrs.get(SPACE_ATTR) if name in SEARCH_CUBES else None
+        if isinstance(space, str) and cube_files.valid_name(f"{space}.{name}") and "." not in space:
+            old[search_cube_name(space, name)] = cube
+        else:
+            named[name] = cube
+    return dict(sorted({**old, **named}.items()))
 
 
 @dataclass

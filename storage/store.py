@@ -7,7 +7,8 @@ On-disk layout (every node is a Zarr v3 group or array, written and read through
       store.zarr/                       group, attrs {"eskin_sweep_store": 2} (the layout)
         <kind>/batch-<hex>/             a batch of entries of one kind (a stored level's name,
                                         e.g. spikes, results; keys: pipeline.run.stages.cache_key)
-        cubes/<name>/                   one result cube (name: [A-Za-z0-9_-]{1,64})
+        cubes/<name>/                   one result cube (name: [A-Za-z0-9_-]{1,64}: a sweep's;
+                                        <search>.trials, <search>.front: a search's)
         <kind>/.partial-batch-<hex>/    a batch being written (or abandoned); never read
       store.zarr-layout-1-<time>/       a store of an older layout, set aside (never read)
 
@@ -112,6 +113,7 @@ from storage.lease import hold_lease
 from storage.locking import hold_lock
 from storage.object_root import ObjectRoot
 from storage.objects import is_object_url, objects_for, run_root
+from storage.search_log import named_search_cubes
 
 __all__ = [
     "CorruptEntryError",
@@ -571,7 +573,9 @@ class SweepStore:
 
 def open_results(root: str | Path, *, lazy: bool = False) -> dict[str, xr.Dataset]:
     """Every result cube of the run root ``root`` (a folder or ``s3://bucket/prefix``), by
-    sweep name.
+    name, sorted: a sweep's by its name (``threshold``), a search's by its space's name and
+    what it holds (``design.trials``, ``design.front``; :mod:`storage.search_log`, which also
+    names those of a root written before searches were named).
 
     Parameters
     ----------
@@ -588,7 +592,9 @@ def open_results(root: str | Path, *, lazy: bool = False) -> dict[str, xr.Datase
         A cube fails its checksum or cannot be read.
     """
     store = SweepStore.open(root)
-    return {name: store.read_cube(name, lazy=lazy) for name in store.cube_names()}
+    return named_search_cubes(
+        {name: store.read_cube(name, lazy=lazy) for name in store.cube_names()}
+    )
 
 
 def _kind_name(kind: Kind) -> str:

@@ -1,6 +1,7 @@
 """A loopback S3-compatible server for tests: moto's standalone server, started and stopped by
 the tests, with a fresh bucket per test."""
 
+import logging
 import uuid
 from collections.abc import Iterator
 
@@ -12,6 +13,8 @@ def s3_server() -> Iterator[str]:
     """The endpoint URL of a moto server on 127.0.0.1 (a free port), stopped afterwards."""
     from moto.server import ThreadedMotoServer
 
+    # Its request log would land on the stderr of the commands the tests run in process.
+    logging.getLogger("werkzeug").setLevel(logging.WARNING)
     server = ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
     server.start()
     host, port = server.get_host_and_port()

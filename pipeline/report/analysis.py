@@ -37,6 +37,7 @@ from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
+from pipeline.report.trials import SearchFront, search_fronts
 from pipeline.results.hardware import EnergyModel
 
 
@@ -48,7 +49,7 @@ class Report:
     panel without data, why it is "not in this run". ``sweep_plots`` and ``heatmaps`` picture the
     other sweeps; ``undrawn`` says which cubes get no picture and why. ``designs`` are the run's
     distinct points; ``untested`` counts those without per-recording results (no interval, no
-    paired test).
+    paired test). ``searches`` are the run's searches, each by its front.
     """
 
     grids: tuple[str, ...]
@@ -72,6 +73,7 @@ class Report:
     sweep_cost: SweepCost
     time_to_accuracy: tuple[TimeToAccuracy, ...]
     missing: Mapping[Panel, str]
+    searches: tuple[SearchFront, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -180,6 +182,7 @@ def build_report(
         sweep_cost=sweep_cost(cubes, runs),
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
+        searches=search_fronts(cubes),
     )
 
 

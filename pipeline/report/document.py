@@ -7,7 +7,8 @@ the method and every comparison with the best (:mod:`pipeline.report.answer`); t
 claims judged by tests (:mod:`pipeline.report.claims`), Table I with the paper's rows
 (:mod:`pipeline.report.tables`), the figures (the paper's, then a curve for every other 1-D
 sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipeline.report.fronts`;
-the power front is drawn once, at the top), and what accuracy costs in time.
+the power front is drawn once, at the top), every search's front
+(:func:`pipeline.report.trials.search_fronts`), and what accuracy costs in time.
 
 Files of a report (``<root>/report`` by default), as :func:`report_files` returns them::
 
@@ -106,6 +107,7 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
     blocks += _table_blocks(report)
     blocks += _figure_blocks(report, drawn)
     blocks += _front_blocks(report, drawn)
+    blocks += _search_blocks(report)
     blocks += _time_blocks(report)
     return blocks
 
@@ -321,6 +323,36 @@ def _cost_text(which: Cost, value: float) -> str:
         case Cost.COMPUTE:
             return f"{value:.3g} s"
     return si(value, "W")
+
+
+def _search_blocks(report: Report) -> Iterator[Block]:
+    if not report.searches:
+        return
+    yield Heading(2, "Searches")
+    yield Paragraph(
+        "The front of each search of this run (eskin optimize): its trials no other trial "
+        "dominates in every objective and, beside them, those a paired test cannot tell from "
+        "the front trial dominating them."
+    )
+    for search in report.searches:
+        yield Heading(3, f"Search {search.name}")
+        told = "" if search.n_trials is None else f"{search.n_trials} trials told; "
+        on = sum(on_front for _, on_front, _ in search.rows)
+        yield Paragraph(
+            f"{told}{on} on the front, {len(search.rows) - on} beside it "
+            f"(cubes {search.name}.trials and {search.name}.front)."
+        )
+        yield Table(
+            ("trial", "on the front?", *search.objectives),
+            tuple(
+                (
+                    str(trial),
+                    "yes" if on_front else "no, not significantly worse",
+                    *(f"{v:.4g}" for v in values),
+                )
+                for trial, on_front, values in search.rows
+            ),
+        )
 
 
 def _time_blocks(report: Report) -> Iterator[Block]:

@@ -65,8 +65,10 @@ class Heatmap:
 
 
 def safe_stem(name: str) -> str:
-    """A sweep name as a file stem: anything but letters, digits, ``_``, ``-`` becomes ``_``."""
-    return re.sub(r"[^A-Za-z0-9_-]", "_", name)
+    """A cube's name as a file stem: anything but letters, digits, ``_``, ``-`` and ``.`` becomes
+    ``_``; the ``.`` of a search's cube (``design.front``) stays, so that it never shares a stem
+    with a sweep (``design_front``)."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 
 
 def axis_label(cube: xr.Dataset, name: str) -> str:

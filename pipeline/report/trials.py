@@ -17,11 +17,13 @@ computed exactly by slicing along the last objective (fronts of a search hold te
 The front cube (:func:`front_cube`) is the trial cube restricted to the front and the trials
 indistinguishable from it, with ``objective_value`` (trial, objective), ``on_front`` (trial, bool)
 and ``dominated_by`` (trial: the trial number of the front trial compared with, -1 on the front).
+The report shows every search of a run by its front cube (:func:`search_fronts`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -154,3 +156,43 @@ def search_seconds(
         seen_trains.add(spike_keys[i])
         total += float(np.nansum(work_rows[i][keep]))
     return total
+
+
+@dataclass(frozen=True)
+class SearchFront:
+    """One search of a run as the report shows it: the space's ``name``, the trials told
+    (``n_trials``; None if its trial cube is not in the run), the ``objectives`` by name and its
+    front cube's trials as ``(trial, on the front, objective values in that order)``."""
+
+    name: str
+    n_trials: int | None
+    objectives: tuple[str, ...]
+    rows: tuple[tuple[int, bool, tuple[float, ...]], ...]
+
+
+def search_fronts(cubes: Mapping[str, xr.Dataset]) -> tuple[SearchFront, ...]:
+    """Every search among a run's cubes (``{name: cube}``), by its front cube (one holding
+    ``on_front`` and ``objective_value``), in the mapping's order; a search's name is its
+    cubes' attribute ``space``."""
+    found = []
+    for name, cube in cubes.items():
+        if "on_front" not in cube or "objective_value" not in cube:
+            continue
+        space = str(cube.attrs.get("space", name))
+        trials = [
+            other.sizes[TRIAL_DIM]
+            for other in cubes.values()
+            if TRIAL_DIM in other.dims
+            and "on_front" not in other
+            and other.attrs.get("space") == space
+        ]
+        values = cube["objective_value"].transpose(TRIAL_DIM, "objective").values
+        rows = tuple(
+            (int(trial), bool(on), tuple(float(v) for v in row))
+            for trial, on, row in zip(
+                cube[TRIAL_DIM].values, cube["on_front"].values, values, strict=True
+            )
+        )
+        objectives = tuple(str(o) for o in cube["objective"].values)
+        found.append(SearchFront(space, trials[0] if len(trials) == 1 else None, objectives, rows))
+    return tuple(found)

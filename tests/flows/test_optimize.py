@@ -76,7 +76,11 @@ def test_a_budget_of_12_then_16_computes_only_the_4_new_trials(space, tmp_path):
     assert {"root", "trials", "computed", "cache_hits", "seconds", "front"} <= set(first)
     assert first["trials"] == 12 and first["new_trials"] == 12
     cubes = open_results(root)
-    trials, front = cubes["trials"], cubes["front"]
+    assert list(cubes) == ["tiny.front", "tiny.trials"]
+    assert first["cubes"] == {
+        kind: str(root / "store.zarr" / "cubes" / f"tiny.{kind}") for kind in ("trials", "front")
+    }
+    trials, front = cubes["tiny.trials"], cubes["tiny.front"]
     assert trials.sizes["trial"] == 12 and list(trials["trial"].values) == list(range(12))
     assert trials["threshold_v"].attrs["field"] == "readout.threshold_v"
     assert trials["threshold_v"].dims == trials["window_s"].dims == ("trial",)
@@ -101,7 +105,7 @@ def test_a_budget_of_12_then_16_computes_only_the_4_new_trials(space, tmp_path):
     # The report's answer section works on the search's designs.
     report = (Path(second["report"]).parent / "report.md").read_text()
     assert "## The answer" in report and "distinct designs" in report
-    trials = open_results(root)["trials"]
+    trials = open_results(root)["tiny.trials"]
     assert trials.sizes["trial"] == 16
     new = set(trials["result_key"].values) - distinct
     assert second["computed"] == len(new) and second["cache_hits"] == 4 - len(new)
@@ -140,7 +144,7 @@ def test_a_killed_search_resumes_without_recomputing_stored_points(space, tmp_pa
     assert summary["trials"] == 6 and summary["new_trials"] == 6 - len(told)
     after = results(root)
     assert {k: after[k] for k in stored} == stored, "a stored point was recomputed"
-    trials = open_results(root)["trials"]
+    trials = open_results(root)["tiny.trials"]
     keys = list(trials["result_key"].values)
     assert summary["computed"] == len(set(keys) - set(stored))
     # Trials asked before the kill keep their values: the untold ones were asked again.

@@ -40,7 +40,7 @@ def test_a_point_the_store_lost_is_computed_again(client, tmp_path):
     space = Space.from_dict(tomllib.loads(SPACE))
     root = tmp_path / "run"
     run_optimize(space, root, budget=2, client=client)
-    trials = open_results(root)["trials"]
+    trials = open_results(root)["tiny.trials"]
     store = SweepStore.open(root)
     lost = str(trials["result_key"].values[0])
     assert store.discard("results", lost)  # as a batch found corrupt is discarded
@@ -53,6 +53,6 @@ def test_a_point_the_store_lost_is_computed_again(client, tmp_path):
     assert (again["trials"], again["new_trials"], again["computed"]) == (2, 0, 1)
     assert lost in store.complete_keys("results")
     assert (
-        open_results(root)["trials"]["result_key"].values.tolist()
+        open_results(root)["tiny.trials"]["result_key"].values.tolist()
         == trials["result_key"].values.tolist()
     )

@@ -3,11 +3,13 @@
 Every case runs ``eskin sweep`` (in process, and a few as a real subprocess) and must give a
 non-zero exit, exactly one line on stderr naming the culprit (a file, a field, an argument),
 nothing on stdout, and nothing written under the root (a root that did not exist is not
-created). The ``eskin describe`` cases hold it to the same: nothing written anywhere, an export
-folder that did not exist is not created.
+created). The object roots (``s3://``) that cannot be used are refused likewise against a
+loopback S3 server, their bucket left empty. The ``eskin describe`` cases hold it to the same:
+nothing written anywhere, an export folder that did not exist is not created.
 """
 
 import os
+import socket
 import stat
 from collections.abc import Callable
 from pathlib import Path
@@ -19,6 +21,7 @@ import zarr
 import storage.layout as store_layout
 from flows.cli import main
 from tests.flows.helpers import eskin, hermetic_env
+from tests.object_store import bucket, s3_env, s3_server  # noqa: F401  (fixtures)
 
 # -- building blocks ----------------------------------------------------------------------------
 
@@ -365,7 +368,8 @@ def assert_refused(capsys, argv: list[str], root: Path, expected: str) -> str:
 
 
 def test_the_catalogue_is_large():
-    assert len(CASES) + len(ROOT_CASES) >= 25
+    assert len(CASES) + len(ROOT_CASES) + len(OBJECT_ROOT_CASES) >= 25
+    assert len({case[0] for case in OBJECT_ROOT_CASES}) == len(OBJECT_ROOT_CASES)
     assert len({case[0] for case in CASES}) == len(CASES)
     assert len({case[0] for case in DESCRIBE_CASES}) == len(DESCRIBE_CASES)
 
@@ -435,6 +439,122 @@ def test_bad_roots_are_refused(capsys, tmp_path, monkeypatch, make, expected):
         if make is read_only:
             root.chmod(stat.S_IRWXU)
     assert str(root) in line
+
+
+# -- object roots ----------------------------------------------------------------------------------
+
+
+def dead_endpoint() -> str:
+    """``http://127.0.0.1:<port>`` where nothing listens (a port just given up)."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    return f"http://127.0.0.1:{port}"
+
+
+def plain_http(url: str, monkeypatch) -> str:
+    monkeypatch.delenv("AWS_ALLOW_HTTP")
+    return f"{url}/run"
+
+
+def no_credentials(url: str, monkeypatch) -> str:
+    monkeypatch.delenv("AWS_ACCESS_KEY_ID")
+    monkeypatch.delenv("AWS_SECRET_ACCESS_KEY")
+    # Where a client without keys asks for an instance role's: nothing answers here either.
+    monkeypatch.setenv("AWS_METADATA_ENDPOINT", dead_endpoint())
+    return f"{url}/run"
+
+
+def refused_credentials(url: str, monkeypatch) -> str:
+    import moto.settings
+
+    # The server now checks every request's signature: these keys are in no account of it.
+    monkeypatch.setattr(moto.settings, "INITIAL_NO_AUTH_ACTION_COUNT", 0)
+    return f"{url}/run"
+
+
+def no_bucket(url: str, monkeypatch) -> str:
+    return f"{url}-missing/run"
+
+
+def endpoint_down(url: str, monkeypatch) -> str:
+    monkeypatch.setenv("AWS_ENDPOINT_URL", dead_endpoint())
+    return f"{url}/run"
+
+
+OBJECT_ROOT_CASES = [
+    ("s3-plain-http", plain_http, "is plain http, which needs AWS_ALLOW_HTTP=true: set it"),
+    (
+        "s3-no-credentials",
+        no_credentials,
+        "no credentials for the object store at http://127.0.0.1:{port}: AWS_ACCESS_KEY_ID and "
+        "AWS_SECRET_ACCESS_KEY are not set",
+    ),
+    (
+        "s3-refused-credentials",
+        refused_credentials,
+        "the object store at http://127.0.0.1:{port} refused the credentials "
+        "(InvalidAccessKeyId): check AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY",
+    ),
+    ("s3-no-bucket", no_bucket, "at http://127.0.0.1:{port} has no bucket '{bucket}-missing'"),
+    ("s3-endpoint-down", endpoint_down, "does not answer (error sending request): check AWS_END"),
+]
+
+
+def bucket_objects(url: str, server: str) -> list[str]:
+    import boto3
+    import moto.settings
+
+    moto.settings.INITIAL_NO_AUTH_ACTION_COUNT = float("inf")  # the test's monkeypatch restores
+    client = boto3.client("s3", endpoint_url=server, **boto3_keys(server))
+    found = client.list_objects_v2(Bucket=url.removeprefix("s3://"))
+    return [o["Key"] for o in found.get("Contents", [])]
+
+
+def boto3_keys(server: str) -> dict[str, str]:
+    env = s3_env(server)
+    return {
+        "aws_access_key_id": env["AWS_ACCESS_KEY_ID"],
+        "aws_secret_access_key": env["AWS_SECRET_ACCESS_KEY"],
+        "region_name": env["AWS_REGION"],
+    }
+
+
+@pytest.mark.parametrize(
+    ("make", "expected"),
+    [c[1:] for c in OBJECT_ROOT_CASES],
+    ids=[c[0] for c in OBJECT_ROOT_CASES],
+)
+def test_object_roots_that_cannot_be_used_are_refused_in_one_line(
+    capsys,
+    monkeypatch,
+    bucket,  # noqa: F811
+    s3_server,  # noqa: F811
+    make,
+    expected,
+):
+    root = make(bucket, monkeypatch)
+    port = s3_server.rsplit(":", 1)[1]
+    code = run_cli(["sweep", "--grid", "smoke", "--root", root])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"eskin: error: run root {root}: "), lines[0]
+    assert expected.format(port=port, bucket=bucket.removeprefix("s3://")) in lines[0]
+    assert bucket_objects(bucket, s3_server) == []
+
+
+def test_a_plain_http_endpoint_through_the_installed_command(tmp_path, bucket, s3_server):  # noqa: F811
+    env = hermetic_env(tmp_path, **s3_env(s3_server))
+    del env["AWS_ALLOW_HTTP"]
+    proc = eskin("sweep", "--grid", "smoke", "--root", f"{bucket}/run", env=env, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.splitlines() == [
+        f"eskin: error: run root {bucket}/run: the endpoint {s3_server} is plain http, which "
+        "needs AWS_ALLOW_HTTP=true: set it, or give an https endpoint"
+    ]
+    assert bucket_objects(bucket, s3_server) == []
 
 
 # -- the real exit path ----------------------------------------------------------------------------
