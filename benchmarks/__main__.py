@@ -1,7 +1,9 @@
 """``python -m benchmarks``: run every benchmark and print one table of medians and ratios.
 
 A row may carry a ``table`` (markdown text) of the figures behind it: it is printed after the
-summary table.
+summary table. ``--tiny`` runs every suite at its tiny size (``run(tiny=True)``: the same steps
+on small data, once each), as the test suite does: it checks that each runs, in about a minute,
+and its figures mean nothing.
 """
 
 from __future__ import annotations
@@ -27,20 +29,24 @@ from benchmarks import (
     warm_rerun,
 )
 
+#: The suites of ``--quick``, then the slow ones.
+QUICK = (encoder, coding, kernels, training, planning)
+SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
+
 
 def main() -> None:
     # --quick skips the scale runs, the paper-grid sweeps (~25 minutes), the sweep machinery
     # up to 100,000 points (sweep_scale; ESKIN_BENCH_SCALE_SIZES picks fewer sizes), the warm
     # re-run of the paper grid (whose root, runs/bench/paper, the first run computes), the
     # warm re-run on an s3:// root against a folder root (smoke grid, both computed first, a
-    # few minutes) and the search against its exhaustive grid (runs/bench/search, computed by
-    # the first run).
-    quick = "--quick" in sys.argv
-    slow = [scale, sweep, sweep_scale, warm_rerun, object_root, search, paid]
-    suites = [encoder, coding, kernels, training, planning] + ([] if quick else slow)
+    # few minutes), the search against its exhaustive grid (runs/bench/search, computed by the
+    # first run) and paid seconds against the workers' busy time. --tiny runs every suite at
+    # its tiny size (seconds; the test suite does so).
+    quick, tiny = "--quick" in sys.argv, "--tiny" in sys.argv
+    suites = list(QUICK) + ([] if quick else list(SLOW))
     rows = []
     for suite in tqdm(suites, desc="benchmarks", unit="suite", file=sys.stderr):
-        rows += suite.run()
+        rows += suite.run(tiny=True) if tiny else suite.run()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     )

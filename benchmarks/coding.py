@@ -13,9 +13,10 @@ from pipeline.recordings.sources import load_recordings
 from pipeline.run.simulate import encode
 
 
-def paper_trains() -> tuple[SpikeTrains, float, int]:
-    """The REAL trains of the paper scene on the built-in data, its window length and count."""
-    scene = Scene.paper()
+def paper_trains(recordings_per_class: int = 10) -> tuple[SpikeTrains, float, int]:
+    """The REAL trains of the paper scene on the built-in data (``recordings_per_class`` of
+    each class), its window length and count."""
+    scene = Scene.paper().replace(**{"dataset.recordings_per_class": recordings_per_class})
     recordings = load_recordings(scene.dataset)
     trains = encode(recordings, fit_front_end(recordings, scene.readout.full_scale_v), scene).real
     return trains, scene.coding.window_s, resolve_n_windows(scene.coding, trains.duration_s)
@@ -36,8 +37,10 @@ def histogram_frames(trains: SpikeTrains, window_s: float, n_windows: int) -> np
     return counts
 
 
-def run(repeat: int = 7) -> list[dict]:
-    trains, window_s, n_windows = paper_trains()
+def run(repeat: int = 7, tiny: bool = False) -> list[dict]:
+    """The row; ``tiny``: one recording per class, one timing of each."""
+    trains, window_s, n_windows = paper_trains(1 if tiny else 10)
+    repeat = 1 if tiny else repeat
     ours = frames(trains, window_s, n_windows)[0][:, 0]
     if not np.array_equal(ours, histogram_frames(trains, window_s, n_windows)):
         raise RuntimeError("rate coding and the np.histogram baseline count differently")

@@ -8,8 +8,8 @@ on the real 12 x 10 set and the range it is judged by), then the built-in data's
 ``--seeds`` seeds. A value outside the reference range is marked ``*``. These are the numbers quoted
 in the module docstring of :mod:`pipeline.recordings.synthetic`.
 
-Options: ``--vibtac12 PATH`` (default ``../shared/datasets/vibtac12`` next to the repository; left
-out when absent), ``--seed N`` (of the built-in data, default 0), ``--seeds N`` (seeds ``0 ..
+Options: ``--vibtac12 PATH`` (a VibTac-12 copy to set beside the built-in data; left out when not
+given or absent), ``--seed N`` (of the built-in data, default 0), ``--seeds N`` (seeds ``0 ..
 N-1`` for the range, default 8; 0 leaves the range out).
 """
 
@@ -29,8 +29,6 @@ from pipeline.recordings.touch_statistics import (
     TouchStatistics,
     touch_statistics,
 )
-
-DEFAULT_VIBTAC12 = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "vibtac12"
 
 #: Statistics whose value is a range over the classes (the rest are one number per dataset).
 PER_CLASS = {"centroid_hz": "class_centroid_hz", "bandwidth_hz": "class_bandwidth_hz"}
@@ -94,12 +92,12 @@ def table(columns: dict[str, TouchStatistics], per_seed: list[TouchStatistics]) 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.data_statistics")
-    parser.add_argument("--vibtac12", type=Path, default=DEFAULT_VIBTAC12)
+    parser.add_argument("--vibtac12", type=Path)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--seeds", type=int, default=8)
     args = parser.parse_args(argv)
     columns = {}
-    if args.vibtac12.is_dir():
+    if args.vibtac12 is not None and args.vibtac12.is_dir():
         spec = DatasetSpec(
             kind="vibtac12", path=str(args.vibtac12), axis="z", segments=10, sampling_rate_hz=200.0
         )

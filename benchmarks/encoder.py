@@ -20,16 +20,21 @@ from pipeline.recordings.synthetic import synthetic_recordings
 FS_HZ = 2000.0
 
 
-def built_in_signal() -> np.ndarray:
-    """All built-in recordings, front-end scaled and concatenated: float64 (1.2 M samples)."""
+def built_in_signal(recordings_per_class: int = 10) -> np.ndarray:
+    """The built-in recordings, front-end scaled and concatenated: float64 (1.2 M samples with
+    the default 10 recordings per class)."""
     scene = Scene.paper()
-    recordings = synthetic_recordings(seed=scene.dataset.seed)
+    recordings = synthetic_recordings(
+        seed=scene.dataset.seed, recordings_per_class=recordings_per_class
+    )
     front_end = fit_front_end(recordings, scene.readout.full_scale_v)
     return np.concatenate([front_end.apply(s) for s in recordings.signals])
 
 
-def run(repeat: int = 7) -> list[dict]:
-    signal = built_in_signal()
+def run(repeat: int = 7, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: one recording per class (120,000 samples), one timing of each."""
+    signal = built_in_signal(1 if tiny else 10)
+    repeat = 1 if tiny else repeat
     n = len(signal)
     paper = Scene.paper()
     threshold = paper.readout.threshold_v
@@ -48,7 +53,9 @@ def run(repeat: int = 7) -> list[dict]:
     destination[:] = 1.0  # touch the pages so the copy measures bandwidth, not page faults
     encoder_s, copy_s = median_seconds(ideal, lambda: np.copyto(destination, signal), repeat=repeat)
     ten_s, loop_s = median_seconds(
-        ideal_10x, lambda: reference_level_crossings(signal, FS_HZ, threshold), repeat=3
+        ideal_10x,
+        lambda: reference_level_crossings(signal, FS_HZ, threshold),
+        repeat=min(repeat, 3),
     )
     ideal_s, real_s = median_seconds(
         ideal,

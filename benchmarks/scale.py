@@ -5,6 +5,9 @@ Every measurement runs ``python -m benchmarks.scale POINT`` in a fresh process w
 thread and the allocator tuned (as on a Dask worker), so peak resident memory (``ru_maxrss``)
 belongs to that point alone
 and no run inherits another's heap. Runs of the two sides alternate; medians are quoted.
+
+``run(tiny=True)`` compares the same way points of :data:`TINY_POINTS` (1x1 against 2x2 taxels,
+4 against 8 short recordings per class, 1 epoch), once each.
 """
 
 from __future__ import annotations
@@ -15,14 +18,37 @@ import statistics
 import subprocess
 import sys
 import time
+from typing import Any
 
-POINTS = {
-    # name: (rows, cols, recordings per class, models)
-    "3x3": (3, 3, 10, ("ffnn",)),
-    "32x32": (32, 32, 10, ("ffnn",)),
-    "paper": (3, 3, 10, ("ffnn", "cnn")),
-    "paper-10x-data": (3, 3, 100, ("ffnn", "cnn")),
+#: Each point: the fields it sets on the ``paper`` scene.
+POINTS: dict[str, dict[str, Any]] = {
+    "3x3": {"array.rows": 3, "array.cols": 3, "training.models": ["ffnn"]},
+    "32x32": {"array.rows": 32, "array.cols": 32, "training.models": ["ffnn"]},
+    "paper": {"array.rows": 3, "array.cols": 3},
+    "paper-10x-data": {"array.rows": 3, "array.cols": 3, "dataset.recordings_per_class": 100},
 }
+#: The (small, large) pairs of points compared: taxels, then recordings.
+PAIRS = (("3x3", "32x32"), ("paper", "paper-10x-data"))
+_TINY = {"dataset.duration_s": 1.5, "training.epochs": 1, "training.folds": 4}
+TINY_POINTS: dict[str, dict[str, Any]] = {
+    "tiny-1x1": {
+        **_TINY,
+        "array.rows": 1,
+        "array.cols": 1,
+        "dataset.recordings_per_class": 4,
+        "training.models": ["ffnn"],
+    },
+    "tiny-2x2": {
+        **_TINY,
+        "array.rows": 2,
+        "array.cols": 2,
+        "dataset.recordings_per_class": 4,
+        "training.models": ["ffnn"],
+    },
+    "tiny-data": {**_TINY, "array.rows": 1, "array.cols": 1, "dataset.recordings_per_class": 4},
+    "tiny-2x-data": {**_TINY, "array.rows": 1, "array.cols": 1, "dataset.recordings_per_class": 8},
+}
+TINY_PAIRS = (("tiny-1x1", "tiny-2x2"), ("tiny-data", "tiny-2x-data"))
 
 
 def measure(name: str) -> dict:
@@ -35,18 +61,13 @@ def measure(name: str) -> dict:
 
     torch.set_num_threads(1)
     tune_allocator()
-    rows, cols, per_class, models = POINTS[name]
-    scene = Scene.paper().replace(
-        **{
-            "array.rows": rows,
-            "array.cols": cols,
-            "dataset.recordings_per_class": per_class,
-            "training.models": list(models),
-        }
-    )
+    scene = Scene.paper().replace(**{**POINTS, **TINY_POINTS}[name])
     start = time.perf_counter()
     result = run_scene(scene)
     return {
+        "taxels": scene.array.rows * scene.array.cols,
+        "recordings": scene.dataset.recordings_per_class,
+        "models": [m.value.upper() for m in scene.training.models],
         "wall_s": time.perf_counter() - start,
         "timings_s": result.timings_s,
         "peak_rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
@@ -71,14 +92,18 @@ def median(runs: list[dict], key: str) -> float:
     return statistics.median(r[key] for r in runs)
 
 
-def run(repeat: int = 3) -> list[dict]:
-    small, large = alternate("3x3", "32x32", repeat)
+def run(repeat: int = 3, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: the points of :data:`TINY_PAIRS`, once each (module docstring)."""
+    (few, many), (base_name, big_name) = TINY_PAIRS if tiny else PAIRS
+    repeat = 1 if tiny else repeat
+    small, large = alternate(few, many, repeat)
     small_s, large_s = median(small, "wall_s"), median(large, "wall_s")
+    n_small, n_large = small[0]["taxels"], large[0]["taxels"]
     stages = max(large[0]["timings_s"], key=large[0]["timings_s"].get)
-    base, big = alternate("paper", "paper-10x-data", repeat)
+    base, big = alternate(base_name, big_name, repeat)
     return [
         {
-            "benchmark": "32x32 scene point (built-in data, FFNN) / 60 s",
+            "benchmark": f"{many} scene point (built-in data, FFNN) / 60 s",
             "ratio": large_s / 60,
             "target": "<= 1",
             "detail": f"{large_s:.1f} s; slowest stage {stages} "
@@ -86,18 +111,20 @@ def run(repeat: int = 3) -> list[dict]:
             f"peak {median(large, 'peak_rss') / 2**20:.0f} MiB",
         },
         {
-            "benchmark": "seconds per taxel: 32x32 / 3x3",
-            "ratio": (large_s / 1024) / (small_s / 9),
+            "benchmark": f"seconds per taxel: {many} / {few}",
+            "ratio": (large_s / n_large) / (small_s / n_small),
             "target": "<= 1.3",
-            "detail": f"3x3 {small_s:.1f} s ({small_s / 9 * 1e3:.0f} ms/taxel), "
-            f"32x32 {large_s / 1024 * 1e3:.0f} ms/taxel",
+            "detail": f"{few} {small_s:.1f} s ({small_s / n_small * 1e3:.0f} ms/taxel), "
+            f"{many} {large_s / n_large * 1e3:.0f} ms/taxel",
         },
         {
-            "benchmark": "peak memory of a paper point: 10x dataset / built-in",
+            "benchmark": f"peak memory of a {base_name} point: {big_name} / {base_name}",
             "ratio": median(big, "peak_rss") / median(base, "peak_rss"),
             "target": "~1 (chunked over recordings)",
-            "detail": f"{median(base, 'peak_rss') / 2**20:.0f} MiB (120 recordings) vs "
-            f"{median(big, 'peak_rss') / 2**20:.0f} MiB (1200), FFNN + CNN",
+            "detail": f"{median(base, 'peak_rss') / 2**20:.0f} MiB "
+            f"({base[0]['recordings']} recordings per class) vs "
+            f"{median(big, 'peak_rss') / 2**20:.0f} MiB ({big[0]['recordings']}), "
+            + " + ".join(base[0]["models"]),
         },
     ]
 

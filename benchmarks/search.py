@@ -22,6 +22,9 @@ each scaled to [0, 1] over the exhaustive grid, against the reference point (1.1
 over the exhaustive one (target >= 0.95 at 25 %), and the default sampler's over random search's
 at each budget (target > 1); the table behind them has every sampler.
 
+``run(tiny=True)`` does the same for :data:`TINY_SPACE` (8 points of 4 short touches per class,
+one epoch) in a temporary root, with one seed.
+
 ``python -m benchmarks.search [--root DIR] [--seeds N]`` runs this suite alone and prints its
 table.
 """
@@ -33,6 +36,7 @@ import dataclasses
 import itertools
 import statistics
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +70,20 @@ SPACE = {
     },
     "objectives": {"accuracy.ffnn": "max", "data_rate_bps": "min"},
 }
+#: The space of ``run(tiny=True)``: 2 thresholds x 2 windows x 2 taxel rows, seconds to grid.
+TINY_SPACE = {
+    **SPACE,
+    "base": {
+        **SPACE["base"],
+        "dataset": {"kind": "synthetic", "recordings_per_class": 4, "duration_s": 1.5},
+        "training": {"models": ["ffnn"], "epochs": 1, "folds": 4},
+    },
+    "space": {
+        "readout.threshold_v": {"choices": [0.045, 0.13]},
+        "coding.window_s": {"choices": [0.1, 0.2]},
+        "array.rows": {"low": 1, "high": 2},
+    },
+}
 
 
 def grid_params(space: Space) -> list[dict[str, Any]]:
@@ -81,8 +99,8 @@ def scaled_costs(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.nd
     return (costs - low) / np.where(high > low, high - low, 1.0)
 
 
-def measure(root: Path, seeds: int = SEEDS) -> dict[str, Any]:
-    space = Space.from_dict(SPACE)
+def measure(root: Path, seeds: int = SEEDS, spec: dict[str, Any] = SPACE) -> dict[str, Any]:
+    space = Space.from_dict(spec)
     grid = space.exhaustive_grid(10)
     run_sweep(grid, root, workers=WORKERS)
     params = grid_params(space)
@@ -160,7 +178,11 @@ def default_root() -> Path:
     return REPO / "runs" / "bench" / "search"
 
 
-def run(root: Path | None = None, seeds: int = SEEDS) -> list[dict[str, Any]]:
+def run(root: Path | None = None, seeds: int = SEEDS, tiny: bool = False) -> list[dict[str, Any]]:
+    """The rows; ``tiny``: :data:`TINY_SPACE` in a temporary root, one seed."""
+    if tiny:
+        with tempfile.TemporaryDirectory(prefix="eskin-bench-search-") as folder:
+            return rows(measure(Path(folder), 1, TINY_SPACE))
     return rows(measure(root or default_root(), seeds))
 
 

@@ -15,6 +15,8 @@ process, sampled every 0.2 s.
 ``python -m benchmarks.sweep [--grid smoke]`` runs this suite alone and prints its rows;
 ``ESKIN_BENCH_SWEEP_GRID=smoke`` picks the grid within ``python -m benchmarks`` too. The
 ``paper`` grid's two cold runs take several minutes on 2 cores; the ``smoke`` grid's, seconds.
+``run(tiny=True)`` runs every step on :data:`TINY_GRID` (two points of ``smoke`` trained for one
+epoch), with one warm round and no uncounted one.
 """
 
 from __future__ import annotations
@@ -52,6 +54,16 @@ SERVER_IDLE_S = 600
 STOP_GRACE_S = 30.0
 SAMPLE_S = 0.2
 REPO = Path(__file__).resolve().parents[1]
+
+#: The grid of ``run(tiny=True)`` here and in the suites that share this one's steps: two points
+#: of ``smoke``, one epoch of training each.
+TINY_GRID = """\
+name = "tiny"
+base = "smoke"
+[sweeps.threshold]
+set = { "training.epochs" = 1 }
+axes = { "readout.threshold_v" = [0.05, 0.09] }
+"""
 
 #: The flow called directly, as before the local server: Prefect starts its temporary server.
 TEMPORARY_SERVER_SWEEP = (
@@ -172,6 +184,13 @@ def temporary_server_sweep(grid: str, root: Path, workers: int, env: dict[str, s
     return run_command(code, env)
 
 
+def tiny_grid(folder: Path) -> str:
+    """:data:`TINY_GRID` written into ``folder``: its path, as ``--grid`` takes it."""
+    path = folder / "tiny.toml"
+    path.write_text(TINY_GRID)
+    return str(path)
+
+
 def hermetic_env(tmp: Path) -> dict[str, str]:
     """This environment without Prefect settings or a server of the user's; offline."""
     env = {
@@ -219,25 +238,34 @@ def stage_seconds(root: Path) -> float:
 
 
 def warm_runs(
-    grid: str, root: Path, env: dict[str, str], temporary_env: dict[str, str], repeat: int
+    grid: str,
+    root: Path,
+    env: dict[str, str],
+    temporary_env: dict[str, str],
+    repeat: int,
+    warm_up: bool = True,
 ) -> tuple[list[Run], list[Run]]:
     """Re-runs of a computed root, interleaved (local, temporary, ...); the first round warms
-    both paths up (the temporary server's database is created then) and is left out."""
+    both paths up (the temporary server's database is created then) and is left out, unless
+    not ``warm_up``."""
     local: list[Run] = []
     temporary: list[Run] = []
-    for round_ in range(repeat + 1):
+    for round_ in range(repeat + warm_up):
         a = local_sweep(grid, root, WORKERS, env)
         b = temporary_server_sweep(grid, root, WORKERS, temporary_env)
-        if round_:
+        if round_ or not warm_up:
             local.append(a)
             temporary.append(b)
     return local, temporary
 
 
-def run(grid: str | None = None, repeat: int = REPEAT) -> list[dict]:
-    grid = grid or os.environ.get(GRID_ENV) or DEFAULT_GRID
+def run(grid: str | None = None, repeat: int = REPEAT, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: :data:`TINY_GRID` for ``grid``, one warm round, not warmed up."""
     with tempfile.TemporaryDirectory(prefix="eskin-bench-") as name:
         tmp = Path(name)
+        if tiny:
+            grid, repeat = tiny_grid(tmp), 1
+        grid = grid or os.environ.get(GRID_ENV) or DEFAULT_GRID
         env = hermetic_env(tmp)
         try:
             started = eskin("server", "start", "--quiet", "--json", env=env)
@@ -247,10 +275,16 @@ def run(grid: str | None = None, repeat: int = REPEAT) -> list[dict]:
             busy = stage_seconds(tmp / "two")
             one = local_sweep(grid, tmp / "one", 1, env)
             warm, temporary = warm_runs(
-                grid, tmp / "two", env, temporary_server_env(env, tmp / "temporary"), repeat
+                grid,
+                tmp / "two",
+                env,
+                temporary_server_env(env, tmp / "temporary"),
+                repeat,
+                warm_up=not tiny,
             )
         finally:
             stop_server(tmp / "server")
+    label = Path(grid).stem  # a grid file by its name
     points = two.summary()["points"]
     overhead = two.wall_s - busy / WORKERS
     warm_s = statistics.median(r.wall_s for r in warm)
@@ -270,28 +304,28 @@ def run(grid: str | None = None, repeat: int = REPEAT) -> list[dict]:
     peak = max(two.peak_worker_rss, one.peak_worker_rss)
     return [
         {
-            "benchmark": f"{grid} grid cold, {WORKERS} workers ({points} points) / "
+            "benchmark": f"{label} grid cold, {WORKERS} workers ({points} points) / "
             f"{COLD_TARGET_S:.0f} s",
             "ratio": two.wall_s / COLD_TARGET_S,
             "target": "<= 1",
             "detail": f"{two.wall_s:.0f} s, local server up",
         },
         {
-            "benchmark": f"{grid} grid cold: fixed overhead / {OVERHEAD_TARGET_S:.0f} s",
+            "benchmark": f"{label} grid cold: fixed overhead / {OVERHEAD_TARGET_S:.0f} s",
             "ratio": overhead / OVERHEAD_TARGET_S,
             "target": "<= 1",
             "detail": f"{overhead:.1f} s = {two.wall_s:.1f} s wall - {busy:.1f} stage-seconds / "
             f"{WORKERS} workers, local server up",
         },
         {
-            "benchmark": f"{grid} grid warm re-run, {WORKERS} workers / {WARM_TARGET_S:.0f} s",
+            "benchmark": f"{label} grid warm re-run, {WORKERS} workers / {WARM_TARGET_S:.0f} s",
             "ratio": warm_s / WARM_TARGET_S,
             "target": "<= 1",
             "detail": f"medians of {repeat}, interleaved: local server {warm_s:.1f} s vs "
             f"{versus}; {hits} cache hits",
         },
         {
-            "benchmark": f"{grid} grid cold: 1 worker / {WORKERS} workers",
+            "benchmark": f"{label} grid cold: 1 worker / {WORKERS} workers",
             "ratio": one.wall_s / two.wall_s,
             "target": f">= {SPEEDUP_TARGET}",
             "detail": f"1 worker {one.wall_s:.0f} s",

@@ -34,7 +34,7 @@ per point at 10,000 points.
 alone and prints the markdown table; ``ESKIN_BENCH_SCALE_SIZES=1000,10000`` picks the sizes
 within ``python -m benchmarks`` too. Each size is removed before the next starts; a size whose
 files would not fit the free space or inodes (judged from the size before) is refused before it
-starts.
+starts. ``run(tiny=True)`` measures :data:`TINY_SIZES` the same way.
 """
 
 from __future__ import annotations
@@ -72,6 +72,7 @@ from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Rates, Spikes, Stopwatc
 from storage import SweepStore
 
 SIZES = (1_000, 10_000, 100_000)
+TINY_SIZES = (10, 100)
 SIZES_ENV = "ESKIN_BENCH_SCALE_SIZES"
 WORKERS = 2
 OVERHEAD_TARGET_MS = 5.0
@@ -621,8 +622,11 @@ def sizes_from_env() -> tuple[int, ...]:
     return tuple(int(n) for n in text.split(",")) if text else SIZES
 
 
-def run(sizes: Sequence[int] | None = None, workers: int = WORKERS) -> list[dict]:
-    return rows(measure(sizes or sizes_from_env(), workers=workers))
+def run(
+    sizes: Sequence[int] | None = None, workers: int = WORKERS, tiny: bool = False
+) -> list[dict]:
+    """The rows; ``tiny``: :data:`TINY_SIZES` (module docstring)."""
+    return rows(measure(TINY_SIZES if tiny else sizes or sizes_from_env(), workers=workers))
 
 
 def main(argv: Sequence[str] | None = None) -> None:

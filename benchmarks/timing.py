@@ -7,9 +7,12 @@ import time
 from collections.abc import Callable
 
 
-def median_seconds(*functions: Callable[[], object], repeat: int = 5) -> list[float]:
-    """Median seconds of each function; runs are interleaved (a, b, a, b, ...) after a warm-up."""
-    for function in functions:
+def median_seconds(
+    *functions: Callable[[], object], repeat: int = 5, warm_up: bool = True
+) -> list[float]:
+    """Median seconds of each function; runs are interleaved (a, b, a, b, ...) after a warm-up
+    (an uncounted run of each; none without ``warm_up``)."""
+    for function in functions if warm_up else ():
         function()
     samples: list[list[float]] = [[] for _ in functions]
     for _ in range(repeat):

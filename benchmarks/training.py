@@ -2,7 +2,8 @@
 the paper grid (time and peak memory), and a whole run.
 
 Training is timed at one torch thread, as the Dask workers run it (``torch.set_num_threads(1)``;
-the previous setting is restored afterwards).
+the previous setting is restored afterwards). ``run(tiny=True)`` does the same with the ``smoke``
+scene and grid (4 folds, 5 epochs, 4 short recordings per class) in place of ``paper``.
 """
 
 from __future__ import annotations
@@ -34,24 +35,25 @@ def scene_frames(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return counts, recordings.labels
 
 
-def largest_paper_point() -> Scene:
-    """The paper grid's point with the most frame cells (taxels x windows; ``auto`` as 40)."""
+def largest_point(grid: str = "paper") -> Scene:
+    """The built-in grid's point with the most frame cells (taxels x windows; ``auto`` as 40)."""
 
     def cells(scene: Scene) -> int:
         n_windows = scene.coding.n_windows
         return scene.array.rows * scene.array.cols * (40 if n_windows == "auto" else n_windows)
 
-    return max(load_grid("paper").unique_points().values(), key=cells)
+    return max(load_grid(grid).unique_points().values(), key=cells)
 
 
 def _accuracy(cv: CrossValidation) -> str:
     return f"acc {cv.mean:.3f} +- {cv.std:.3f}"
 
 
-def train_largest_point() -> None:
-    """Entry point of the memory subprocess: train the largest point, print a JSON summary."""
+def train_largest_point(grid: str = "paper") -> None:
+    """Entry point of the memory subprocess: train the largest point of the built-in ``grid``,
+    print a JSON summary."""
     torch.set_num_threads(1)
-    scene = largest_paper_point()
+    scene = largest_point(grid)
     counts, labels = scene_frames(scene)
     seconds = {}
     for model in scene.training.models:
@@ -66,20 +68,23 @@ def train_largest_point() -> None:
     print(json.dumps(summary))
 
 
-def run(repeat: int = 3) -> list[dict]:
+def run(repeat: int = 3, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: the ``smoke`` scene and grid for ``paper``, one timing of each (the
+    whole run not warmed up)."""
+    name, repeat = ("smoke", 1) if tiny else ("paper", repeat)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        rows = _fold_batching_rows(repeat)
+        rows = _fold_batching_rows(Scene.builtin(name), repeat)
     finally:
         torch.set_num_threads(threads)
-    code = "from benchmarks.training import train_largest_point; train_largest_point()"
+    code = f"from benchmarks.training import train_largest_point; train_largest_point({name!r})"
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
     largest = json.loads(out.stdout)
     _, taxels, windows = largest["shape"]
     rows.append(
         {
-            "benchmark": f"largest paper point ({taxels} taxels x {windows} windows): "
+            "benchmark": f"largest {name} point ({taxels} taxels x {windows} windows): "
             "peak RSS of training / 1.5 GiB",
             "ratio": largest["peak_rss_bytes"] / WORKER_MEMORY_BYTES,
             "target": "<= 1",
@@ -88,17 +93,17 @@ def run(repeat: int = 3) -> list[dict]:
             + ", ".join(f"{k.upper()} {v:.1f} s" for k, v in largest["seconds"].items()),
         }
     )
-    eskin = [sys.executable, "-m", "flows.cli", "run", "--scene", "paper", "--json"]
+    eskin = [sys.executable, "-m", "flows.cli", "run", "--scene", name, "--json"]
     timings = {}
 
     def end_to_end():
         out = subprocess.run(eskin, check=True, capture_output=True, text=True).stdout
         timings.update(json.loads(out)["timings_s"])
 
-    (run_s,) = median_seconds(end_to_end, repeat=repeat)
+    (run_s,) = median_seconds(end_to_end, repeat=repeat, warm_up=not tiny)
     rows.append(
         {
-            "benchmark": "eskin run --scene paper, wall time incl. start-up / 60 s",
+            "benchmark": f"eskin run --scene {name}, wall time incl. start-up / 60 s",
             "ratio": run_s / 60.0,
             "target": "<= 1",
             "detail": f"{run_s:.1f} s; stages: "
@@ -108,8 +113,7 @@ def run(repeat: int = 3) -> list[dict]:
     return rows
 
 
-def _fold_batching_rows(repeat: int) -> list[dict]:
-    scene = Scene.paper()
+def _fold_batching_rows(scene: Scene, repeat: int) -> list[dict]:
     counts, labels = scene_frames(scene)
     rows = []
     for model in (Model.FFNN, Model.CNN):
@@ -125,7 +129,8 @@ def _fold_batching_rows(repeat: int) -> list[dict]:
         )
         rows.append(
             {
-                "benchmark": f"10-fold CV {model.value.upper()}, 100 epochs: batched vs sequential",
+                "benchmark": f"{scene.training.folds}-fold CV {model.value.upper()}, "
+                f"{scene.training.epochs} epochs: batched vs sequential",
                 "ratio": sequential_s / batched_s,
                 "target": ">= 4" + ("; batched <= 2 s" if model == "ffnn" else ""),
                 "detail": f"1 torch thread; batched {batched_s:.2f} s "

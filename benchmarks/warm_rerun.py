@@ -13,6 +13,9 @@ The root is cached between runs, ``runs/bench/<grid>`` by default (``--root`` or
 ``$ESKIN_BENCH_WARM_ROOT`` names another): the first run computes it (a cold ``paper`` sweep, a
 few minutes on 2 cores), later runs find it complete and only re-run it.
 
+``run(tiny=True)`` fills and re-runs :data:`benchmarks.sweep.TINY_GRID` in a temporary root,
+one round (the floor not warmed up).
+
 ``python -m benchmarks.warm_rerun [--grid paper] [--root DIR] [--repeat N]`` runs this suite
 alone and prints its row.
 """
@@ -26,7 +29,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from benchmarks.sweep import REPO, Run, eskin, hermetic_env, local_sweep, run_command
+from benchmarks.sweep import REPO, Run, eskin, hermetic_env, local_sweep, run_command, tiny_grid
 from flows.server import stop as stop_server
 
 ROOT_ENV = "ESKIN_BENCH_WARM_ROOT"
@@ -48,9 +51,14 @@ def floor(env: dict[str, str]) -> Run:
     return run
 
 
-def run(grid: str = DEFAULT_GRID, root: Path | None = None, repeat: int = REPEAT) -> list[dict]:
-    root = Path(root) if root is not None else default_root(grid)
+def run(
+    grid: str = DEFAULT_GRID, root: Path | None = None, repeat: int = REPEAT, tiny: bool = False
+) -> list[dict]:
+    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` in a temporary root, one round."""
     with tempfile.TemporaryDirectory(prefix="eskin-bench-warm-") as name:
+        if tiny:
+            grid, root, repeat = tiny_grid(Path(name)), Path(name) / "root", 1
+        root = Path(root) if root is not None else default_root(grid)
         env = hermetic_env(Path(name))
         try:
             started = eskin("server", "start", "--quiet", "--json", env=env)
@@ -58,7 +66,8 @@ def run(grid: str = DEFAULT_GRID, root: Path | None = None, repeat: int = REPEAT
                 raise RuntimeError(f"eskin server start failed, {started.failure()}")
             # Fills the root the first time; afterwards, the uncounted warm-up round.
             filled = local_sweep(grid, root, WORKERS, env).summary()
-            floor(env)
+            if not tiny:
+                floor(env)
             floors, warms = [], []
             for _ in range(repeat):
                 floors.append(floor(env))
@@ -73,7 +82,7 @@ def run(grid: str = DEFAULT_GRID, root: Path | None = None, repeat: int = REPEAT
     filling = f"; the root was filled now ({filled['computed']} points)" * bool(filled["computed"])
     return [
         {
-            "benchmark": f"{grid} grid warm re-run / import floor",
+            "benchmark": f"{Path(grid).stem} grid warm re-run / import floor",
             "ratio": warm_s / floor_s,
             "target": f"<= {TARGET_RATIO}",
             "detail": f"medians of {repeat}, interleaved: warm re-run {warm_s:.2f} s "

@@ -1,7 +1,10 @@
 """The documentation's examples are code: its TOML files load and its Python session runs."""
 
 import doctest
+import json
 import re
+import shlex
+import subprocess
 import tomllib
 from pathlib import Path
 
@@ -77,3 +80,84 @@ def test_the_python_api_session_runs_as_shown(tmp_path, monkeypatch):
     runner.run(test, out=report.append)
     assert runner.summarize(verbose=False).failed == 0, "".join(report)
     assert (tmp_path / "runs" / "api" / "report" / "report.html").is_file()
+
+
+def shell_commands(block: str) -> list[list[str]]:
+    """A shell block's commands as argument lists: continued lines joined, comments and a
+    trailing ``&`` left out."""
+    text = re.sub(r"\\\n\s*", " ", block)
+    lines = [line.split(" #")[0].strip() for line in text.splitlines()]
+    return [shlex.split(line.removesuffix("&")) for line in lines if line and line[0] != "#"]
+
+
+@pytest.mark.slow
+def test_the_tls_section_makes_credentials_that_a_cluster_and_a_sweep_accept(tmp_path):
+    """The cluster page's TLS commands, run as a reader runs them: the ``openssl`` block makes
+    the CA, certificates and keys in an empty folder; the scheduler and a worker start with
+    them on 127.0.0.1 (without their dashboards, on a free port); ``eskin sweep`` connects with
+    the client's files and computes a one-point grid. Every process is stopped by PID."""
+    from tests.flows.helpers import BIN, eskin, hermetic_env, stop, wait_for
+
+    shown = blocks(DOCS / "how-to" / "cluster.md", "sh")
+    [make] = [b for b in shown if "openssl" in b]
+    [start] = [b for b in shown if "dask scheduler --protocol tls" in b]
+    folder = tmp_path / "credentials"
+    folder.mkdir()
+    made = subprocess.run(
+        ["bash", "-euo", "pipefail", "-c", make], cwd=folder, capture_output=True, text=True
+    )
+    assert made.returncode == 0, made.stderr[-2000:]
+    for name in ("ca.pem", "cluster.pem", "cluster-key.pem", "client.pem", "client-key.pem"):
+        assert (folder / name).is_file(), name
+    assert (folder / "client-key.pem").stat().st_mode & 0o077 == 0
+
+    scheduler_cmd, worker_cmd, sweep_cmd = shell_commands(start)
+    assert [c[:2] for c in (scheduler_cmd, worker_cmd, sweep_cmd)] == [
+        [".venv/bin/dask", "scheduler"],
+        [".venv/bin/dask", "worker"],
+        [".venv/bin/eskin", "sweep"],
+    ]
+    env = hermetic_env(tmp_path)
+
+    def started(*command: str | Path) -> None:
+        processes.append(
+            subprocess.Popen(
+                command, cwd=folder, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+            )
+        )
+
+    processes: list[subprocess.Popen] = []
+    scheduler_file = tmp_path / "scheduler.json"
+    scheduler_args = " ".join(scheduler_cmd[2:]).replace("HOST", "127.0.0.1")
+    scheduler_args = scheduler_args.replace("--port 8786", "--port 0").split()
+    try:
+        scheduler_args += ["--no-dashboard", "--scheduler-file", str(scheduler_file)]
+        started(BIN / "dask", "scheduler", *scheduler_args)
+        wait_for(
+            lambda: scheduler_file.exists() and "address" in scheduler_file.read_text(),
+            120,
+            "the scheduler file",
+        )
+        address = json.loads(scheduler_file.read_text())["address"]
+        assert address.startswith("tls://127.0.0.1:")
+
+        def at(args: list[str]) -> list[str]:
+            return [address if a == "tls://HOST:8786" else a for a in args]
+
+        worker_args = [*at(worker_cmd[2:]), "--no-dashboard", "--host", "127.0.0.1"]
+        started(BIN / "dask", "worker", *worker_args)
+        grid = tmp_path / "one.toml"
+        grid.write_text(
+            'base = "smoke"\n[sweeps.one]\nset = { "training.epochs" = 1 }\n'
+            'axes = { "readout.threshold_v" = [0.09] }\n'
+        )
+        args = at(sweep_cmd[1:])  # "sweep" and its options
+        args[args.index("paper")] = str(grid)
+        files = [a for a in args if a.endswith(".pem")]
+        args = [str(folder / a) if a in files else a for a in args]
+        proc = eskin(*args, "--root", str(tmp_path / "run"), "--json", env=env, timeout=600)
+    finally:
+        stop(*reversed(processes))
+    assert files == ["ca.pem", "client.pem", "client-key.pem"]
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert json.loads(proc.stdout)["computed"] == 1

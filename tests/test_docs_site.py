@@ -168,6 +168,99 @@ def test_the_data_flow_figure_has_every_stage(site):
         assert f">{level.name}</text>" in figure, level.name
 
 
+class _Resources(html.parser.HTMLParser):
+    """What a page loads and links to, and whether it holds typeset math (an element of
+    class ``math``). ``found``: ``(tag, value, loads)`` for every ``src`` and ``href``, where
+    ``loads`` tells a resource the browser fetches with the page (a script, a style sheet, an
+    image, a preloaded font) from a link to follow."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.found: list[tuple[str, str, bool]] = []
+        self.math = False
+
+    def handle_starttag(self, tag, attrs):
+        values = dict(attrs)
+        self.math |= "math" in (values.get("class") or "").split()
+        if values.get("src"):
+            self.found.append((tag, values["src"], True))
+        if values.get("href"):
+            rel = set((values.get("rel") or "").split())
+            fetched = {"stylesheet", "preload", "modulepreload", "icon", "manifest"}
+            self.found.append((tag, values["href"], tag == "link" and bool(rel & fetched)))
+
+
+def resources(page: Path) -> _Resources:
+    parser = _Resources()
+    parser.feed(page.read_text())
+    return parser
+
+
+def pages(site: Path) -> list[Path]:
+    """The site's pages (not the theme's templates that ship in ``_static``)."""
+    found = sorted(p for p in site.rglob("*.html") if "_static" not in p.relative_to(site).parts)
+    assert len(found) > 50
+    return found
+
+
+def test_no_page_loads_a_script_style_or_font_from_the_network(site):
+    """The site works offline: every script, style sheet, image and font a page loads is a
+    file of the site, and so is every ``url()`` of its style sheets."""
+    remote = re.compile(r"^(https?:)?//", re.I)
+    loaded = [
+        f"{page.relative_to(site)}: <{tag}> {value}"
+        for page in pages(site)
+        for tag, value, loads in resources(page).found
+        if loads and remote.match(value)
+    ]
+    for sheet in site.rglob("*.css"):
+        for url in re.findall(r"url\(\s*['\"]?([^'\")]+)", sheet.read_text(errors="replace")):
+            if remote.match(url):
+                loaded.append(f"{sheet.relative_to(site)}: url({url})")
+    assert not loaded, loaded
+
+
+def test_math_is_typeset_by_the_mathjax_the_site_serves(site):
+    """Every page with math loads MathJax by a relative path to the copy in ``_static``, and
+    that copy holds what it loads next: the TeX extensions and the fonts."""
+    mathjax = site / "_static" / "mathjax"
+    with_math = []
+    for page in pages(site):
+        found = resources(page)
+        if not found.math:
+            continue
+        with_math.append(page.relative_to(site).as_posix())
+        scripts = [value for tag, value, _ in found.found if tag == "script" and "mathjax" in value]
+        assert len(scripts) == 1, (page, scripts)
+        path = (page.parent / scripts[0].split("?")[0]).resolve()
+        assert path == (mathjax / "tex-chtml.js").resolve(), (page, scripts)
+    assert {"model.html", "reference/generated/pipeline.chain.readout.html"} <= set(with_math)
+    assert (mathjax / "tex-chtml.js").stat().st_size > 500_000
+    assert (
+        mathjax / "output" / "chtml" / "fonts" / "woff-v2" / "MathJax_Main-Regular.woff"
+    ).is_file()
+    assert (mathjax / "input" / "tex" / "extensions" / "ams.js").is_file()
+    assert (mathjax / "LICENSE").is_file()
+
+
+def test_no_page_points_outside_the_project(site):
+    """Readers have this project, not the folders around it: no page names ``../shared`` or a
+    folder of the machine that built it, and every relative link and resource of a page is a
+    file of the site."""
+    outside = [str(ROOT.parent), "../shared"]
+    found = []
+    for page in pages(site):
+        text = page.read_text()
+        found += [f"{page.relative_to(site)}: {name}" for name in outside if name in text]
+        for tag, value, _ in resources(page).found:
+            if re.match(r"^([a-z][a-z0-9+.-]*:|#)", value, re.I):
+                continue  # a URL, mailto: or a place on the same page
+            target = (page.parent / value.split("#")[0].split("?")[0]).resolve()
+            if not target.is_relative_to(site.resolve()) or not target.exists():
+                found.append(f"{page.relative_to(site)}: <{tag}> {value}")
+    assert not found, found
+
+
 def test_the_readme_is_a_front_door_whose_links_all_lead_somewhere():
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) < 150

@@ -1,15 +1,16 @@
 """The paper's numbers, in one place: its operating point, its claims and its Table I.
 
-Source: ``../shared/PAPER.md`` ("The paper's claims, as numbers"), which reads them from the
-paper's text and Table I. Nothing here is this project's own result; the report cites every
-number below as the paper's. Where the paper gives only a plot, there is no number here.
+Source: the paper, "End-to-End Optimization of High-Density e-Skin Design: From Spiking Taxel
+Readout to Texture Classification": its text, its figures' claims and its Table I. Nothing here is
+this project's own result; the report cites every number below as the paper's. Where the paper
+gives only a plot, there is no number here.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-# Operating point and claims (PAPER.md, "Claims per figure").
+# Operating point and claims, by the paper's figure that makes each.
 THRESHOLD_V = 0.09  # 7a: optimum near 0.09 V for both networks
 THRESHOLD_BITS = 3.5  # 7a: "about 3.5 equivalent bits"
 WINDOW_S = 0.1  # 7b: optimum at 0.1 s for both networks
@@ -64,7 +65,7 @@ TABLE_COLUMNS = (
     "accuracy (chance)",
 )
 
-# PAPER.md, "Table I (state of the art in texture classification)", row by row; references in
+# The paper's Table I (state of the art in texture classification), row by row; references in
 # brackets are the paper's own reference numbers.
 TABLE_ROWS = (
     TableRow(
