@@ -46,9 +46,11 @@ from storage.errors import StoreError, StoreWriteError
 SCHEMES = ("s3://",)
 # Objects written or read at once (each request waits tens of ms on S3).
 PUT_THREADS = 16
-#: The first request to an object root: this many retries, within this many seconds; later
-#: requests keep obstore's patient defaults (10 retries within 3 minutes).
+#: Retries of the first request to an object root (:meth:`S3Objects.check`), within
+#: :data:`CHECK_TIMEOUT_S`; later requests keep obstore's patient defaults (10 retries within
+#: 3 minutes).
 CHECK_RETRIES = 2
+#: Seconds the retries of the first request to an object root may take.
 CHECK_TIMEOUT_S = 10.0
 
 

@@ -27,7 +27,7 @@ from typing import Any
 from storage import cube_files
 from storage.errors import StoreError
 
-#: What a search's cubes hold: every trial told, and the front of them.
+#: What a search's cubes hold, every trial told and the front of them.
 SEARCH_CUBES = ("trials", "front")
 #: The attribute of a search's cubes naming the space searched (as
 #: :func:`pipeline.report.trials.trial_cube` writes it; storage reads it only to name the cubes

@@ -236,6 +236,18 @@ def test_cubes_are_identical_to_those_of_a_folder_root(s3_store, tmp_path):
     assert s3_store.current_note("missing", "s1") is None
 
 
+def test_a_searchs_cubes_are_named_after_it_on_an_object_root_too(s3_store):
+    s3_store.write_cube("design.trials", make_cube(1.0))
+    s3_store.write_cube("design", make_cube(2.0))
+    assert s3_store.cube_names() == ["design", "design.trials"]
+    cubes = open_results(s3_store.root)
+    assert list(cubes) == ["design", "design.trials"]
+    xr.testing.assert_identical(cubes["design.trials"], make_cube(1.0))
+    for bad in ("design.", ".trials", "a.b.c", "..", "a/b"):
+        with pytest.raises(ValueError, match="invalid cube name"):
+            s3_store.write_cube(bad, make_cube())
+
+
 def test_a_cube_is_swapped_by_its_pointer_and_old_versions_go_after_a_grace(s3_store, monkeypatch):
     s3_store.write_cube("c", make_cube(1.0), source="s1", note={})
     objects = s3_store._objects.objects
