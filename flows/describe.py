@@ -25,7 +25,14 @@ import numpy as np
 
 from pipeline.design.scene import DatasetKind, DatasetSpec
 from pipeline.errors import EskinError
-from pipeline.recordings.describe import Comparison, DatasetDescription, folder_layout, typical_text
+from pipeline.recordings.describe import (
+    CLASS_MEDIANS,
+    Comparison,
+    DatasetDescription,
+    class_median_range,
+    folder_layout,
+    typical_text,
+)
 from pipeline.recordings.sources import Recordings
 
 __all__ = ["Export", "ExportError", "check_export_folder", "export_folder", "format_description"]
@@ -190,12 +197,28 @@ def format_description(description: DatasetDescription, export: Export | None = 
         f"(the paper codes {f.max_windows})",
         "",
     ]
-    class_rows = [("class", "touches", f"RMS ({f.units})", "centroid Hz", "bandwidth Hz")]
+    class_rows = [
+        (
+            "class",
+            "touches",
+            f"RMS ({f.units})",
+            "centroid Hz",
+            "bandwidth Hz",
+            "5-20 Hz share",
+            "floor ratio",
+        )
+    ]
     for c, (name, n) in enumerate(zip(f.class_names, f.recordings_per_class, strict=True)):
         measured = (
-            (stats.class_rms[c], stats.class_centroid_hz[c], stats.class_bandwidth_hz[c])
+            (
+                stats.class_rms[c],
+                stats.class_centroid_hz[c],
+                stats.class_bandwidth_hz[c],
+                stats.class_modulation_share[c],
+                stats.class_floor_ratio[c],
+            )
             if stats is not None
-            else (math.nan,) * 3
+            else (math.nan,) * 5
         )
         class_rows.append((name, str(n), *(_number(v, 3) for v in measured)))
     lines += _table(class_rows)
@@ -255,6 +278,8 @@ def _value(comparison: Comparison, description: DatasetDescription) -> str:
     if comparison.name == "contact_transient" and stats is not None and text != "n/a":
         p10, p90 = stats.contact_transient_p10, stats.contact_transient_p90
         text += f" ({_number(p10)}-{_number(p90)})"
+    if comparison.name in CLASS_MEDIANS and text != "n/a":
+        text += f" (classes {_number(class_median_range(stats, comparison.name))})"
     return text
 
 

@@ -541,7 +541,10 @@ def _canonical_plan(
 #: 2: comparator noise takes one draw per decision; ``threshold_mismatch.floor_rel`` is used.
 #: 3: results keep every recording's out-of-fold prediction; the built-in recordings' classes
 #: follow the statistics measured on real texture recordings.
-MODEL_REVISION = 4
+#: 4: the built-in recordings are touches with a time course (contact, press, sliding).
+#: 5: the built-in touches slide in stick-slip cycles and with macro texture (modulated at
+#: 5-20 Hz, never quiet).
+MODEL_REVISION = 5
 
 
 def with_dataset_path_from(data: Mapping[str, Any], folder: Path) -> Mapping[str, Any]:

@@ -57,12 +57,14 @@ from pipeline.recordings.touch_statistics import (
 )
 
 __all__ = [
+    "CLASS_MEDIANS",
     "SEGMENT_MARGIN",
     "Comparison",
     "DatasetDescription",
     "DatasetFacts",
     "FolderLayout",
     "Verdict",
+    "class_median_range",
     "describe_dataset",
     "folder_layout",
     "typical_text",
@@ -77,6 +79,9 @@ MAX_NAME_CHARS = 100
 #: The statistic a per-class spectrum reference judges: its name in ``REAL_TOUCHES`` -> the
 #: per-class array of :class:`TouchStatistics`. Every other reference names a scalar field.
 _PER_CLASS = {"centroid_hz": "class_centroid_hz", "bandwidth_hz": "class_bandwidth_hz"}
+#: Scalar statistics that are medians over touches, judged as such, and their class medians
+#: (shown beside them, as real touches' are in their reference's description).
+CLASS_MEDIANS = {"modulation_share": "class_modulation_share", "floor_ratio": "class_floor_ratio"}
 _FOLDER_TOML = "dataset.toml"
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
@@ -145,9 +150,11 @@ class DatasetDescription:
 
         Keys: ``dataset``, ``facts`` (scalars, ``durations_s`` min/median/max, ``windows``,
         ``classes``: name, recordings and, when measured, ``rms``, ``centroid_hz``,
-        ``bandwidth_hz`` per class), ``statistics`` (name -> ``value``, ``inside`` (bool or
-        ``None``), ``real``, ``low``, ``high``, ``description``; ``contact_transient`` also
-        ``p10`` and ``p90``), ``warnings`` (list of strings).
+        ``bandwidth_hz``, ``modulation_share``, ``floor_ratio`` per class), ``statistics``
+        (name -> ``value``, ``inside`` (bool or ``None``), ``real``, ``low``, ``high``,
+        ``description``; ``contact_transient`` also ``p10`` and ``p90``; the statistics of
+        :data:`CLASS_MEDIANS` also ``classes``, the lowest and highest class median),
+        ``warnings`` (list of strings).
         """
         f = self.facts
         stats = self.statistics
@@ -159,6 +166,8 @@ class DatasetDescription:
                     "rms": stats.class_rms[c],
                     "centroid_hz": stats.class_centroid_hz[c],
                     "bandwidth_hz": stats.class_bandwidth_hz[c],
+                    "modulation_share": stats.class_modulation_share[c],
+                    "floor_ratio": stats.class_floor_ratio[c],
                 }
             classes.append(entry)
         statistics = {}
@@ -177,6 +186,8 @@ class DatasetDescription:
                     "p10": stats.contact_transient_p10 if stats else math.nan,
                     "p90": stats.contact_transient_p90 if stats else math.nan,
                 }
+            if comparison.name in CLASS_MEDIANS:
+                entry["classes"] = list(class_median_range(stats, comparison.name))
             statistics[comparison.name] = entry
         out = {
             "dataset": f.name,
@@ -356,6 +367,13 @@ def _warnings(
             "do the recordings start mid-slide?"
         )
     return tuple(out)
+
+
+def class_median_range(stats: TouchStatistics | None, name: str) -> tuple[float, float]:
+    """Lowest and highest class median of a :data:`CLASS_MEDIANS` statistic (NaN: none)."""
+    values = getattr(stats, CLASS_MEDIANS[name]) if stats is not None else np.array([])
+    finite = values[np.isfinite(values)]
+    return (float(finite.min()), float(finite.max())) if finite.size else (math.nan, math.nan)
 
 
 def typical_text(reference: Reference) -> str:

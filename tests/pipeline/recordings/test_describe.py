@@ -296,3 +296,19 @@ def test_a_time_course_shared_by_every_class_is_called_so_not_segments():
     assert description.statistics.envelope_corr_within > 0.4
     (warning,) = [w for w in description.warnings if "no more alike over time" in w]
     assert warning.endswith("their time course is the same for every class")
+
+
+def test_statistics_over_touches_carry_their_class_medians():
+    description = describe_dataset(_dataset(*_touches()))
+    stats = description.statistics
+    out = description.to_json()
+    for name, field in (
+        ("modulation_share", "class_modulation_share"),
+        ("floor_ratio", "class_floor_ratio"),
+    ):
+        per_class = getattr(stats, field)
+        assert out["statistics"][name]["classes"] == [per_class.min(), per_class.max()]
+        assert [c[name] for c in out["facts"]["classes"]] == list(per_class)
+        # The median over touches lies within the range of the class medians.
+        assert per_class.min() <= out["statistics"][name]["value"] <= per_class.max()
+    assert out["statistics"]["modulation_rate_f"]["low"] == 10.0
