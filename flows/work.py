@@ -18,7 +18,7 @@ stops the sweep and says so once, so the worker does not log it with its traceba
 
 What a task times: every level it runs for a point, on a :class:`pipeline.run.stages.Stopwatch`;
 each entry keeps the work seconds of its point's steps and the seconds the point paid, by charge
-(:class:`_Point`): a level whose output the point found (kept by the worker, in the store, made
+: a level whose output the point found (kept by the worker, in the store, made
 for another point) costs it nothing, and the task's own set-up (importing torch, the first time
 in the process) is charged to the first point it computes, as shared ``setup``. So the paid
 seconds of a sweep's points sum to its workers' busy time but for the tasks' store reads and

@@ -160,7 +160,7 @@ RESULT_VALUES: dict[str, int] = {"n_windows_used": -1}
 #: The dimension of ``seconds`` that says whom they were paid for
 #: (:class:`~pipeline.run.records.Charge`).
 CHARGE_DIM = "charge"
-#: The cube's measured variables (wall times): every other one is a deterministic function of
+#: The cube's measured variables, wall times; every other one is a deterministic function of
 #: the grid and its seeds.
 MEASURED = ("seconds", "work_seconds")
 # One string attribute per library, not a nested mapping: netCDF and Zarr attributes are flat, and

@@ -53,7 +53,6 @@ from pipeline.chain.spikes import Encoded, SpikeTrains, train_starts
 __all__ = [
     "Charge",
     "OutOfFold",
-    "Paid",
     "Record",
     "RecordingsInfo",
     "ResultEntry",
@@ -84,7 +83,7 @@ class Charge(enum.StrEnum):
     SHARED = "shared"
 
 
-#: Paid wall seconds by charge, then step name.
+# Paid wall seconds by charge, then step name.
 Paid = dict[Charge, dict[str, float]]
 
 
@@ -98,7 +97,7 @@ class StepSeconds:
         Wall seconds of each step's work for the point, as measured when the step ran (one-off
         work, imports and kernel loads, left out): of its own level's steps and of the levels
         upstream that the entry accounts for.
-    paid : Paid
+    paid : dict[Charge, dict[str, float]]
         Wall seconds the worker spent computing the entry for the point, by charge and step:
         what the point's own computation ran (nothing for an output it found made).
     point : str
@@ -254,7 +253,7 @@ class SpikeEntry:
         Scene-level metrics; any field may be +-inf or NaN and round trips bit for bit.
     seconds : dict[str, float]
         Wall seconds of each step's work (finite), e.g. ``{"taxels": 1.0, "readout": 2.5}``.
-    paid : Paid or None
+    paid : dict[Charge, dict[str, float]] or None
         Wall seconds the worker spent computing the entry, by charge and step (finite); None in
         entries written before they were kept.
     paid_for : str or None
@@ -294,7 +293,7 @@ class ResultEntry:
     n_windows_used : int or None
         The number of rate-coding windows the point used (``coding.n_windows = "auto"``
         resolved for its recordings); None in entries written before results stated it.
-    paid : Paid or None
+    paid : dict[Charge, dict[str, float]] or None
         Wall seconds a worker spent computing for this point, by charge and step (finite): the
         steps its own computation ran, plus the paid seconds of a spike entry charged to it
         (``paid_for``); a step whose output it found made is not there. None in entries

@@ -5,8 +5,7 @@ times each stage (wall seconds, ``time.perf_counter``). Stages:
 
 ``load``       read or generate the recordings
 ``front_end``  fit one scaling for the whole dataset (:mod:`pipeline.chain.frontend`)
-``setup``      import numba, torch and scikit-learn and load (or, the first time, compile)
-               the numba kernels: once per process; later scenes of the process pay nothing
+``setup``      import numba, torch, scikit-learn; load (or compile) the kernels: once a process
 ``taxels``     fractional-delay taxel signals of every recording
 ``readout``    TRUE and REAL spike trains (an ideal scene encodes once and reuses the train)
 ``metrics``    SSNR, STE, event and data rates

@@ -151,7 +151,7 @@ __all__ = [
 ]
 
 
-#: A worker process's one-off work, charged :attr:`Charge.SHARED` to the point that paid it:
+#: A worker process's one-off work, charged ``shared`` to the point that paid it:
 #: importing numba, torch and scikit-learn, and loading (or, the first time, compiling) the numba
 #: kernels: the spikes level's warm-up (:func:`warm_kernels`), and every such second inside any
 #: other step (:func:`pipeline.chain.jit.one_off_seconds`).
@@ -469,8 +469,8 @@ class Level:
         in memory.
     shared : tuple of str
         Its steps whose work serves every later point of a worker that needs the same output
-        (a load, a front-end fit, a warm-up): their seconds are charged :attr:`Charge.SHARED` to
-        the point that paid them (:func:`step_charge`); the others' :attr:`Charge.OWN`.
+        (a load, a front-end fit, a warm-up): their seconds are charged ``shared`` to
+        the point that paid them (:func:`step_charge`); the others' ``own``.
     """
 
     name: str
@@ -757,7 +757,7 @@ def shared_steps() -> frozenset[str]:
 
 
 def step_charge(step: str) -> Charge:
-    """The charge of a step's work: :attr:`Charge.SHARED` for :func:`shared_steps`, else own."""
+    """The charge of a step's work: ``shared`` for :func:`shared_steps`, else own."""
     return Charge.SHARED if step in shared_steps() else Charge.OWN
 
 
