@@ -13,7 +13,8 @@ over the median of the later points' (target <= 1.2); and the first point's ``se
 with a warm cache over that with an empty one (``NUMBA_CACHE_DIR`` a new folder: every kernel
 compiled), medians of the same processes, the compile seconds a sweep after the first saves.
 
-``python -m benchmarks.kernels [--repeat N]`` runs this suite alone and prints its rows.
+``run(tiny=True)`` measures one process of each kind. ``python -m benchmarks.kernels
+[--repeat N]`` runs this suite alone and prints its rows.
 """
 
 from __future__ import annotations
@@ -112,8 +113,9 @@ def rows(result: dict) -> list[dict]:
     ]
 
 
-def run(repeat: int = REPEAT) -> list[dict]:
-    return rows(measure(repeat))
+def run(repeat: int = REPEAT, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: one process of each kind (the same steps)."""
+    return rows(measure(1 if tiny else repeat))
 
 
 def main() -> None:

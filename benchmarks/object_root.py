@@ -13,8 +13,9 @@ round each; the row quotes their medians and their ratio.
 What an object root costs beyond a folder is round trips: a loopback server answers in a few
 milliseconds, a remote one in tens, so the ratio here is the floor of what a user sees.
 
-``python -m benchmarks.object_root [--grid smoke] [--repeat N]`` runs this suite alone and
-prints its row.
+``run(tiny=True)`` does the same on :data:`benchmarks.sweep.TINY_GRID`, one counted round and
+no uncounted one. ``python -m benchmarks.object_root [--grid smoke] [--repeat N]`` runs this
+suite alone and prints its row.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import tempfile
 import uuid
 from pathlib import Path
 
-from benchmarks.sweep import eskin, hermetic_env, local_sweep
+from benchmarks.sweep import eskin, hermetic_env, local_sweep, tiny_grid
 from flows.server import stop as stop_server
 
 DEFAULT_GRID = "smoke"
@@ -41,7 +42,9 @@ S3_KEYS = {
 }
 
 
-def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT) -> list[dict]:
+def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT, tiny: bool = False) -> list[dict]:
+    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` for ``grid``, one counted round and
+    no uncounted one."""
     import boto3
     from moto.server import ThreadedMotoServer
 
@@ -62,6 +65,8 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT) -> list[dict]:
         client.create_bucket(Bucket=bucket)
         with tempfile.TemporaryDirectory(prefix="eskin-bench-s3-") as name:
             tmp = Path(name)
+            if tiny:
+                grid, repeat = tiny_grid(tmp), 1
             s3 = {**S3_KEYS, "AWS_ENDPOINT_URL": endpoint, "AWS_ALLOW_HTTP": "true"}
             # An object root keeps the tool's own state in the user's cache: here, in tmp.
             env = hermetic_env(tmp) | s3 | {"XDG_CACHE_HOME": str(tmp / "cache")}
@@ -72,7 +77,8 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT) -> list[dict]:
                     raise RuntimeError(f"eskin server start failed, {started.failure()}")
                 for root in roots.values():
                     local_sweep(grid, root, WORKERS, env)  # fills it
-                    local_sweep(grid, root, WORKERS, env)  # the uncounted warm round
+                    if not tiny:
+                        local_sweep(grid, root, WORKERS, env)  # the uncounted warm round
                 times: dict[str, list[float]] = {kind: [] for kind in roots}
                 for _ in range(repeat):
                     for kind, root in roots.items():

@@ -12,6 +12,7 @@ writing the entries.
 Row: paid seconds / busy time (1 would be all of it); the detail gives both, the shared part of
 the paid seconds and the margin ``1 - paid / busy``.
 
+``run(tiny=True)`` sweeps :data:`benchmarks.sweep.TINY_GRID` instead.
 ``python -m benchmarks.paid [--grid NAME]`` runs this suite alone and prints its row.
 """
 
@@ -88,8 +89,14 @@ def rows(result: dict) -> list[dict]:
     ]
 
 
-def run(grid: str = DEFAULT_GRID) -> list[dict]:
-    return rows(measure(grid))
+def run(grid: str = DEFAULT_GRID, tiny: bool = False) -> list[dict]:
+    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` for ``grid``."""
+    if not tiny:
+        return rows(measure(grid))
+    from benchmarks.sweep import tiny_grid
+
+    with tempfile.TemporaryDirectory(prefix="eskin-bench-paid-grid-") as folder:
+        return rows(measure(tiny_grid(Path(folder))))
 
 
 def main() -> None:
