@@ -191,11 +191,23 @@ TINY_SCALE_SIZES = (10_000, 100_000)
 
 
 def reset_peak_memory() -> None:
-    """Start this process's peak resident memory (``ru_maxrss``) afresh from what it holds now,
-    so that a later peak is that of the work since, not of the imports before (Linux:
-    ``/proc/self/clear_refs``; elsewhere the peak stays the process's)."""
+    """Start this process's peak resident memory (:func:`peak_memory_mib`) afresh from what it
+    holds now, so that a later peak is that of the work since, not of the imports before
+    (Linux: ``/proc/self/clear_refs``; elsewhere the peak stays the process's)."""
     with contextlib.suppress(OSError):
         Path("/proc/self/clear_refs").write_text("5")
+
+
+def peak_memory_mib() -> float:
+    """This process's peak resident memory (MiB) since it started or since
+    :func:`reset_peak_memory`: Linux's ``VmHWM``, where ``ru_maxrss`` would also count the
+    memory of the parent that started this process (it carries over the fork); ``ru_maxrss``
+    elsewhere."""
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def plan_in_process(n_points: int, folder: Path) -> dict[str, float]:
@@ -204,13 +216,13 @@ def plan_in_process(n_points: int, folder: Path) -> dict[str, float]:
     path = folder / f"plan{n_points}.toml"
     path.write_text(grid_text(n_points))
     reset_peak_memory()
-    before_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    before_mib = peak_memory_mib()
     wall, cpu = time.perf_counter(), time.process_time()
     planned = sweep_before_work(str(path), str(folder / f"root{n_points}"))
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     if planned != n_points:
         raise RuntimeError(f"{path} planned {planned} distinct points, not {n_points}")
-    peak_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peak_mib = peak_memory_mib()
     return {"wall_s": wall, "cpu_s": cpu, "peak_mib": peak_mib, "before_mib": before_mib}
 
 
@@ -235,7 +247,8 @@ def scale_rows(repeat: int = REPEAT, points: tuple[int, int] = SCALE_SIZES) -> l
         figures[n] = {
             "cpu_us": statistics.median(r["cpu_s"] for r in found) / n * 1e6,
             "wall_us": statistics.median(r["wall_s"] for r in found) / n * 1e6,
-            # At least ru_maxrss's resolution (1 KiB): a plan may fit in memory already held.
+            # At least the resolution of the figure (1 KiB): a plan may fit in memory already
+            # held.
             "peak_b": statistics.median(
                 max(r["peak_mib"] - r["before_mib"], 2**-10) * 2**20 for r in found
             )

@@ -16,7 +16,8 @@ process, sampled every 0.2 s.
 ``ESKIN_BENCH_SWEEP_GRID=smoke`` picks the grid within ``python -m benchmarks`` too. The
 ``paper`` grid's two cold runs take several minutes on 2 cores; the ``smoke`` grid's, seconds.
 ``run(tiny=True)`` runs every step on :data:`TINY_GRID` (two points of ``smoke`` trained for one
-epoch), with one warm round and no uncounted one.
+epoch), with one warm round and no uncounted one, on the local server ``$ESKIN_SERVER_DIR``
+names if set (the test suite's).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -206,6 +208,25 @@ def hermetic_env(tmp: Path) -> dict[str, str]:
     }
 
 
+@contextlib.contextmanager
+def local_server(tmp: Path, shared: bool = False) -> Iterator[dict[str, str]]:
+    """:func:`hermetic_env` of ``tmp`` with the local Prefect server up for the ``with`` block:
+    a server of its own (state in ``tmp/server``), stopped at the end; with ``shared``, the one
+    ``$ESKIN_SERVER_DIR`` names when set (the test suite's), started if need be and left
+    running, which spares a tiny run a server's start-up."""
+    given = os.environ.get(SERVER_DIR_ENV) if shared else None
+    server = Path(given) if given else tmp / "server"
+    env = hermetic_env(tmp) | {SERVER_DIR_ENV: str(server)}
+    try:
+        started = eskin("server", "start", "--quiet", "--json", env=env)
+        if started.status != 0:
+            raise RuntimeError(f"eskin server start failed, {started.failure()}")
+        yield env
+    finally:
+        if not given:
+            stop_server(server)
+
+
 def temporary_server_env(env: dict[str, str], state: Path) -> dict[str, str]:
     """``env`` with Prefect's, Dask's and matplotlib's state under ``state``, as the CLI sets."""
     folders = {
@@ -260,17 +281,14 @@ def warm_runs(
 
 
 def run(grid: str | None = None, repeat: int = REPEAT, tiny: bool = False) -> list[dict]:
-    """The rows; ``tiny``: :data:`TINY_GRID` for ``grid``, one warm round, not warmed up."""
+    """The rows; ``tiny``: :data:`TINY_GRID` for ``grid``, one warm round, not warmed up, on a
+    shared local server (:func:`local_server`)."""
     with tempfile.TemporaryDirectory(prefix="eskin-bench-") as name:
         tmp = Path(name)
         if tiny:
             grid, repeat = tiny_grid(tmp), 1
         grid = grid or os.environ.get(GRID_ENV) or DEFAULT_GRID
-        env = hermetic_env(tmp)
-        try:
-            started = eskin("server", "start", "--quiet", "--json", env=env)
-            if started.status != 0:
-                raise RuntimeError(f"eskin server start failed, {started.failure()}")
+        with local_server(tmp, shared=tiny) as env:
             two = local_sweep(grid, tmp / "two", WORKERS, env)
             busy = stage_seconds(tmp / "two")
             one = local_sweep(grid, tmp / "one", 1, env)
@@ -282,8 +300,6 @@ def run(grid: str | None = None, repeat: int = REPEAT, tiny: bool = False) -> li
                 repeat,
                 warm_up=not tiny,
             )
-        finally:
-            stop_server(tmp / "server")
     label = Path(grid).stem  # a grid file by its name
     points = two.summary()["points"]
     overhead = two.wall_s - busy / WORKERS

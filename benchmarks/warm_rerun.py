@@ -14,7 +14,7 @@ The root is cached between runs, ``runs/bench/<grid>`` by default (``--root`` or
 few minutes on 2 cores), later runs find it complete and only re-run it.
 
 ``run(tiny=True)`` fills and re-runs :data:`benchmarks.sweep.TINY_GRID` in a temporary root,
-one round (the floor not warmed up).
+one round (the floor not warmed up), on the local server ``$ESKIN_SERVER_DIR`` names if set.
 
 ``python -m benchmarks.warm_rerun [--grid paper] [--root DIR] [--repeat N]`` runs this suite
 alone and prints its row.
@@ -29,8 +29,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from benchmarks.sweep import REPO, Run, eskin, hermetic_env, local_sweep, run_command, tiny_grid
-from flows.server import stop as stop_server
+from benchmarks.sweep import REPO, Run, local_server, local_sweep, run_command, tiny_grid
 
 ROOT_ENV = "ESKIN_BENCH_WARM_ROOT"
 DEFAULT_GRID = "paper"
@@ -54,16 +53,13 @@ def floor(env: dict[str, str]) -> Run:
 def run(
     grid: str = DEFAULT_GRID, root: Path | None = None, repeat: int = REPEAT, tiny: bool = False
 ) -> list[dict]:
-    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` in a temporary root, one round."""
+    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` in a temporary root, one round,
+    on a shared local server (:func:`benchmarks.sweep.local_server`)."""
     with tempfile.TemporaryDirectory(prefix="eskin-bench-warm-") as name:
         if tiny:
             grid, root, repeat = tiny_grid(Path(name)), Path(name) / "root", 1
         root = Path(root) if root is not None else default_root(grid)
-        env = hermetic_env(Path(name))
-        try:
-            started = eskin("server", "start", "--quiet", "--json", env=env)
-            if started.status != 0:
-                raise RuntimeError(f"eskin server start failed, {started.failure()}")
+        with local_server(Path(name), shared=tiny) as env:
             # Fills the root the first time; afterwards, the uncounted warm-up round.
             filled = local_sweep(grid, root, WORKERS, env).summary()
             if not tiny:
@@ -72,8 +68,6 @@ def run(
             for _ in range(repeat):
                 floors.append(floor(env))
                 warms.append(local_sweep(grid, root, WORKERS, env))
-        finally:
-            stop_server(Path(name) / "server")
     summary = warms[-1].summary()
     if summary["computed"]:
         raise RuntimeError(f"a warm re-run of {root} computed {summary['computed']} points")
