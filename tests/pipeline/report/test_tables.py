@@ -11,7 +11,7 @@ from pipeline.report.tables import TABLE_COLUMNS, table_rows
 from pipeline.run.records import RecordingsInfo
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
-# The paper's Table I, as ../shared/PAPER.md gives it: reference, sensors, data rate, accuracy.
+# The paper's Table I, as the paper gives it: reference, sensors, data rate, accuracy.
 PAPER_TABLE = (
     ("the paper", "9", "51.32 Hz", "90 % (8.33 %)"),
     ("ref. [16]", "4 (multi-modal)", "96 kHz", "79 % (8.33 %)"),
