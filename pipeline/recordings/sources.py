@@ -10,8 +10,8 @@ Three sources (``pipeline.design.scene.DatasetKind``):
     Generated from a seed, see :mod:`pipeline.recordings.synthetic`.
 ``vibtac12``
     The paper's dataset (Kursun and Patooghy, 2020) in its published layout: ``X.csv``,
-    ``Y.csv``, ``Z.csv``, no header, 12 rows x 4000 columns, row ``i`` is texture ``i + 1``. Only the chosen axis is read. The
-    first 3 samples of every row are start-up padding and dropped; the remaining ``L - 3``
+    ``Y.csv``, ``Z.csv``, no header, 12 rows x 4000 columns, row ``i`` is texture ``i + 1``.
+    Only the chosen axis is read. The first 3 samples of every row are start-up padding and dropped; the remaining ``L - 3``
     samples are cut into ``segments`` equal, non-overlapping segments of
     ``(L - 3) // segments`` samples (the remainder at the end is dropped), so recording
     ``i * segments + s`` is ``row_i[3 + s * m : 3 + (s + 1) * m]``. Cutting one continuous
