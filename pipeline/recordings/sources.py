@@ -11,9 +11,9 @@ Three sources (``pipeline.design.scene.DatasetKind``):
 ``vibtac12``
     The paper's dataset (Kursun and Patooghy, 2020) in its published layout: ``X.csv``,
     ``Y.csv``, ``Z.csv``, no header, 12 rows x 4000 columns, row ``i`` is texture ``i + 1``.
-    Only the chosen axis is read. The first 3 samples of every row are start-up padding and dropped; the remaining ``L - 3``
-    samples are cut into ``segments`` equal, non-overlapping segments of
-    ``(L - 3) // segments`` samples (the remainder at the end is dropped), so recording
+    Only the chosen axis is read. The first 3 samples of every row are start-up padding and
+    dropped; the remaining ``L - 3`` samples are cut into ``segments`` equal, non-overlapping
+    segments of ``(L - 3) // segments`` samples (the remainder at the end is dropped), so recording
     ``i * segments + s`` is ``row_i[3 + s * m : 3 + (s + 1) * m]``. Cutting one continuous
     recording per texture into segments only approximates the paper's 10 recordings per class.
 ``folder``
