@@ -187,7 +187,7 @@ def test_sigterm_with_the_server_gone_unwinds_within_10_s(setting, tmp_path):
         stop(sweep)
     assert sweep.returncode == 130, err[-3000:]
     assert took < 10, f"took {took:.1f} s to unwind"
-    assert err.strip().splitlines()[-1] == "eskin: interrupted"
+    assert err.strip().splitlines()[-1].startswith("eskin: interrupted")
     assert "stopped: it was interrupted (Ctrl-C or SIGTERM)" in err
     assert "a write to the run root failed" not in err
     assert_none_left(children)
