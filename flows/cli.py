@@ -640,7 +640,7 @@ def _run_flow(
 
 def _outcome(record: Any, run: Callable[[SweepStore], Any], store: SweepStore) -> Any:
     """``run(store)``'s result: the flow's, or, when Prefect failed to record the end of a
-    flow whose body had ended, the body's own (:attr:`flows.record.Record.outcome`), its final
+    flow whose body had ended, the body's own (the record's ``outcome``), its final
     state then left to the record."""
     from prefect.states import Completed, Failed, State
 
