@@ -509,9 +509,13 @@ def _handled(args: argparse.Namespace) -> int:
     except BaseException:  # KeyboardInterrupt; Prefect's TerminationSignal for a SIGTERM
         pass
     # Interrupted: a SIGTERM that Prefect's handler saw may come out as another exception.
-    if _program:
-        _stop_started_processes()
     print("eskin: interrupted", file=sys.stderr)
+    if _program:
+        # What it started is stopped, the store holds what was written, the record is closed:
+        # nothing is left to wait for at exit (Prefect's flushes to a server that may be gone
+        # took seconds there, past the deadline's reach once the interpreter finalizes).
+        _stop_started_processes(grace_s=1.0)
+        _exit_now(EXIT_INTERRUPTED, quiet=True)
     return EXIT_INTERRUPTED
 
 
@@ -636,7 +640,7 @@ def _run_flow(
 
 def _outcome(record: Any, run: Callable[[SweepStore], Any], store: SweepStore) -> Any:
     """``run(store)``'s result: the flow's, or, when Prefect failed to record the end of a
-    flow whose body had ended, the body's own (:attr:`flows.record.Record.outcome`), its final
+    flow whose body had ended, the body's own (the record's ``outcome``), its final
     state then left to the record."""
     from prefect.states import Completed, Failed, State
 
@@ -794,11 +798,16 @@ def _exit_after(seconds: float, status: int) -> None:
     timer.start()
 
 
-def _exit_now(status: int) -> None:
-    """Kill what this command started (never the Prefect server) and exit with ``status``."""
-    if status == EXIT_INTERRUPTED:
+def _exit_now(status: int, *, quiet: bool = False) -> None:
+    """Exit with ``status`` now; an interrupted command (unless ``quiet``: it said so) first
+    kills what it started (never the Prefect server) and says why."""
+    if status == EXIT_INTERRUPTED and not quiet:
         _stop_started_processes(grace_s=0.0)
-        print("eskin: interrupted", file=sys.stderr)
+        print(
+            f"eskin: interrupted (not unwound {UNWIND_S:.0f} s after the signal: what it "
+            "started was killed)",
+            file=sys.stderr,
+        )
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()

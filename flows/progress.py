@@ -45,11 +45,13 @@ class SweepStopped(SweepFailed):
 class StopCause:
     """Why a sweep stopped, for the tasks that find their points cancelled.
 
-    Whatever stops the sweep notes the cause (:meth:`note`) before the work is cancelled or
-    the cluster closed; a task that finds its points cancelled reads it (:meth:`wait`). Points
-    cancelled when nothing noted a cause were cancelled by the cluster: it was lost.
+    Whatever stops the sweep notes the cause (:meth:`StopCause.note`) before the work is
+    cancelled or the cluster closed; a task that finds its points cancelled reads it
+    (:meth:`StopCause.wait`). Points cancelled when nothing noted a cause were cancelled by the
+    cluster: it was lost.
     """
 
+    #: The cause of points cancelled when nothing noted one.
     CLUSTER_LOST = "the Dask cluster was lost (its scheduler or workers went away)"
 
     def __init__(self) -> None:
@@ -64,7 +66,7 @@ class StopCause:
 
     def wait(self, timeout_s: float = 10.0) -> str:
         """The cause, waiting up to ``timeout_s`` for it to be noted (the work is cancelled
-        just before), else :data:`CLUSTER_LOST`."""
+        just before), else :attr:`StopCause.CLUSTER_LOST`."""
         return self._why if self._noted.wait(timeout_s) and self._why else self.CLUSTER_LOST
 
 

@@ -21,7 +21,8 @@ Prefect's HTTP client retries a failed request 5 times over about a minute in th
 made it. While a record is active the flow engine's own requests (the flow run's states) retry
 :data:`ENGINE_RETRIES` times, a few seconds, and the record's own not at all (it retries in its
 own time). When the engine cannot set the flow run's final state, the command line takes the
-run's outcome from :attr:`Record.outcome` and the record sets that state once the server answers.
+run's outcome from the record (its ``outcome``, an :class:`Outcome`) and the record sets that
+state once the server answers.
 
 A run that ends with its record incomplete says so in one line (:meth:`Record.incomplete_note`);
 its results are complete and its exit status is that of the run (0 for a sweep that finished).
