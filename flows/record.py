@@ -54,9 +54,9 @@ LOG_BATCH = 500
 FLUSH_TIMEOUT_S = 15.0
 #: The same for a run that was interrupted (Ctrl-C, SIGTERM), which must end within seconds.
 INTERRUPTED_FLUSH_S = 2.0
-#: Retries of the flow engine's own requests while a record is active: Prefect's default, 5,
+#: Retries of the flow engine's own requests while a record is active (Prefect's default, 5,
 #: takes a minute per request when the server is gone; its transport still tries to connect
-#: 4 times over about 3.5 s.
+#: 4 times over about 3.5 s).
 ENGINE_RETRIES = 0
 #: Prefect's log lines that say an event was not sent (the record counts them instead).
 _EVENT_LOSS = ("Unable to connect to", "Service 'EventsWorker' failed")
