@@ -18,12 +18,8 @@ before the end it adds one line ``eskin: note: the Prefect record of this run is
 still 0: the store, not Prefect, holds the results, and a script that goes on to the report
 must not take complete results for a failure.
 
-An interrupted run (Ctrl-C, SIGTERM) unwinds: its local Dask cluster is closed, its Prefect
-run marked crashed if the server answers. Whatever it is doing (planning, writing, waiting for
-a server or a cluster that is gone), it exits within :data:`UNWIND_S` seconds of the signal:
-then it kills whatever it started that still runs (never the shared Prefect server) and exits
-with status 130. A run that is done is given :data:`EXIT_GRACE_S` seconds to exit, so that
-Prefect's own flushes at exit never hold it.
+An interrupted run (Ctrl-C, SIGTERM) unwinds within seconds, stops what it started and exits
+with status 130 (:mod:`flows.interrupts`).
 
 JSON numbers that are infinite (an SSNR of a REAL train equal to its TRUE train) are written as the
 strings ``"inf"`` and ``"-inf"``: JSON has no infinity, and ``float("inf")`` reads them back.
@@ -32,19 +28,16 @@ strings ``"inf"`` and ``"-inf"``: JSON has no infinity, and ``float("inf")`` rea
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import math
 import os
-import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from flows import cluster
+from flows import cluster, interrupts
 from flows.report import DEFAULT_ADC_BITS, needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
@@ -54,17 +47,6 @@ if TYPE_CHECKING:
     from storage import SweepStore
 
 EXIT_USER_ERROR = 2
-EXIT_INTERRUPTED = 130
-#: Seconds from an interrupt (Ctrl-C, SIGTERM) to the hard stop of what the command started.
-UNWIND_S = 8.0
-#: Seconds a command that is done has to exit before it exits at once.
-EXIT_GRACE_S = 5.0
-
-#: Whether :func:`main` runs as the program (not called from Python): only then does it stop
-#: processes and exit hard.
-_program = False
-#: Whether an interrupt arrived (Prefect's handler may have turned it into another exception).
-_signalled = threading.Event()
 
 
 _POWER_TEXT = {
@@ -484,12 +466,11 @@ def main(argv: list[str] | None = None) -> int:
     docstring). An :class:`pipeline.errors.EskinError` prints one line ``eskin: error: ...`` on
     stderr and returns the error's exit status; an interrupt returns 130.
     """
-    global _program
-    _program = argv is None
+    interrupts.as_program(argv is None)
     args = build_parser().parse_args(argv)
     status = _handled(args)
-    if _program:
-        _exit_after(EXIT_GRACE_S, status)
+    if interrupts.is_program():
+        interrupts.exit_after(interrupts.EXIT_GRACE_S, status)
     return status
 
 
@@ -498,11 +479,11 @@ def _handled(args: argparse.Namespace) -> int:
     try:
         return args.handler(args)
     except EskinError as exc:
-        if not _signalled.is_set():
+        if not interrupts.signalled.is_set():
             print(f"eskin: error: {exc}", file=sys.stderr)
             return exc.exit_status
     except Exception:
-        if not _signalled.is_set():
+        if not interrupts.signalled.is_set():
             raise
     except (SystemExit, GeneratorExit):
         raise
@@ -510,13 +491,13 @@ def _handled(args: argparse.Namespace) -> int:
         pass
     # Interrupted: a SIGTERM that Prefect's handler saw may come out as another exception.
     print("eskin: interrupted", file=sys.stderr)
-    if _program:
+    if interrupts.is_program():
         # What it started is stopped, the store holds what was written, the record is closed:
         # nothing is left to wait for at exit (Prefect's flushes to a server that may be gone
         # took seconds there, past the deadline's reach once the interpreter finalizes).
-        _stop_started_processes(grace_s=1.0)
-        _exit_now(EXIT_INTERRUPTED, quiet=True)
-    return EXIT_INTERRUPTED
+        interrupts.stop_started_processes(grace_s=1.0)
+        interrupts.exit_now(interrupts.EXIT_INTERRUPTED, quiet=True)
+    return interrupts.EXIT_INTERRUPTED
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -614,7 +595,7 @@ def _run_flow(
     from flows.record import recording
     from flows.server import prefect_server
 
-    _handle_interrupts()
+    interrupts.handle_interrupts()
     start = time.perf_counter()
     # Refuse a second run on this root before Prefect starts; the flow's own lock nests in it.
     with store.lock():
@@ -758,106 +739,6 @@ def _server(args: argparse.Namespace) -> int:
     else:
         print(f"no Prefect server running (state in {info['state_dir']})")
     return 0
-
-
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt(signal.Signals(signum).name)
-
-
-def _handle_interrupts() -> None:
-    """SIGTERM unwinds like Ctrl-C, so the local Dask cluster is stopped (the default action
-    would kill this process alone). Run as the program, the first interrupt also starts the
-    deadline (:data:`UNWIND_S`) after which the command stops what it started and exits.
-
-    The deadline is started from Python's signal wake-up file, written for every signal that
-    has a Python handler, whichever handler runs: Prefect replaces this one with its own while a
-    flow runs.
-    """
-    signal.signal(signal.SIGTERM, _interrupt)
-    if not _program:
-        return
-    read, write = os.pipe()
-    os.set_blocking(write, False)
-    signal.set_wakeup_fd(write, warn_on_full_buffer=False)
-
-    def watch() -> None:
-        while True:
-            received = os.read(read, 64)
-            if {signal.SIGINT, signal.SIGTERM} & set(received):
-                _signalled.set()
-                _exit_after(UNWIND_S, EXIT_INTERRUPTED)
-                return
-
-    threading.Thread(target=watch, name="eskin-interrupts", daemon=True).start()
-
-
-def _exit_after(seconds: float, status: int) -> None:
-    """Exit with ``status`` in ``seconds`` unless the process has ended by then."""
-    timer = threading.Timer(seconds, _exit_now, args=(status,))
-    timer.daemon = True
-    timer.start()
-
-
-def _exit_now(status: int, *, quiet: bool = False) -> None:
-    """Exit with ``status`` now; an interrupted command (unless ``quiet``: it said so) first
-    kills what it started (never the Prefect server) and says why."""
-    if status == EXIT_INTERRUPTED and not quiet:
-        _stop_started_processes(grace_s=0.0)
-        print(
-            f"eskin: interrupted (not unwound {UNWIND_S:.0f} s after the signal: what it "
-            "started was killed)",
-            file=sys.stderr,
-        )
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            stream.flush()
-    os._exit(status)
-
-
-def _stop_started_processes(grace_s: float = 2.0) -> None:
-    """Stop every process this command started that still runs (the local Dask workers and
-    anything they started), SIGTERM then SIGKILL after ``grace_s``; the shared Prefect server,
-    which outlives sweeps, and Python's resource tracker, which ends with this process, are
-    left alone."""
-    import psutil
-
-    from flows.server import MARKER
-
-    def command(process: psutil.Process) -> str:
-        try:
-            return " ".join(process.cmdline())
-        except psutil.Error:
-            return ""
-
-    try:
-        children = psutil.Process().children(recursive=True)
-    except psutil.Error:
-        return
-    spared = set()
-    for child in children:
-        line = command(child)
-        if MARKER in line:
-            spared |= {child.pid, *(p.pid for p in _descendants(child))}
-        elif "resource_tracker" in line:
-            spared.add(child.pid)
-    targets = [child for child in children if child.pid not in spared]
-    for process in targets:
-        with contextlib.suppress(psutil.Error):
-            process.kill() if grace_s <= 0 else process.terminate()
-    _, alive = psutil.wait_procs(targets, timeout=max(grace_s, 0.1))
-    for process in alive:
-        with contextlib.suppress(psutil.Error):
-            process.kill()
-    psutil.wait_procs(alive, timeout=1)
-
-
-def _descendants(process: Any) -> list[Any]:
-    import psutil
-
-    try:
-        return process.children(recursive=True)
-    except psutil.Error:
-        return []
 
 
 def _report(args: argparse.Namespace) -> int:

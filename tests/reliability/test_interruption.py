@@ -255,9 +255,9 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
 #: a process of its own.
 STUCK = """
 import subprocess, sys, time
-from flows import cli
-cli._program = True
-cli._handle_interrupts()
+from flows import interrupts
+interrupts.as_program(True)
+interrupts.handle_interrupts()
 child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(300)"])
 print(child.pid, flush=True)
 while True:
@@ -271,7 +271,7 @@ while True:
 def test_an_interrupted_command_that_cannot_unwind_exits_within_10_s():
     """The deadline: whatever the command is stuck in, it stops what it started and exits
     with status 130 within 10 s of SIGTERM."""
-    from flows.cli import EXIT_INTERRUPTED, UNWIND_S
+    from flows.interrupts import EXIT_INTERRUPTED, UNWIND_S
 
     assert UNWIND_S < 10
     stuck = subprocess.Popen(
