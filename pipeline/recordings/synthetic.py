@@ -338,8 +338,8 @@ SLIP_DEPTH_SPREAD = 0.1
 SHEAR_STIFFNESS_SPREAD = 0.1
 #: Share of a stick-slip cycle that the slip takes (the rest the contact sticks).
 SLIP_SHARE = 0.25
-#: Share of the drive's speed that the pad loses while the contact sticks: it creeps at ``1 -
-#: STICK_SPEED_LOSS`` of it (partial slip at the contact's edge) and catches up in the slip.
+#: Share of the drive's speed that the pad loses while the contact sticks; it creeps at
+#: ``1 - STICK_SPEED_LOSS`` of it (partial slip at the contact's edge) and catches up in the slip.
 STICK_SPEED_LOSS = 0.2
 
 # The material sample along the sliding path
