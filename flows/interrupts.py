@@ -18,6 +18,7 @@ import sys
 import threading
 from typing import Any
 
+#: Exit status of an interrupted command (128 + SIGINT, as a shell reports Ctrl-C).
 EXIT_INTERRUPTED = 130
 #: Seconds from an interrupt (Ctrl-C, SIGTERM) to the hard stop of what the command started.
 UNWIND_S = 8.0
