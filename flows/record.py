@@ -196,6 +196,8 @@ class Record:
             why = f"its Prefect server ({self.api_url}) stopped answering at {when}"
         elif self.was_down:
             why = f"its Prefect server ({self.api_url}) stopped answering for a while"
+        elif self._held():
+            why = f"its Prefect server ({self.api_url}) had not taken all of it when the run ended"
         else:
             why = "its Prefect server refused part of it"
         return (

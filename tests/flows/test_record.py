@@ -17,6 +17,8 @@ class _Server:
         self.answers = True
         self.taken: list[tuple[str, object]] = []
         self.refuse: set[str] = set()
+        #: Seconds each request takes (a busy server).
+        self.slow_s = 0.0
         self.lock = threading.Lock()
 
     def client(self, sync_client=True):
@@ -34,6 +36,7 @@ class _Client:
         return False
 
     def _take(self, what, payload):
+        time.sleep(self.server.slow_s)
         with self.server.lock:
             if not self.server.answers:
                 raise httpx.ConnectError("[Errno 111] Connection refused")
@@ -130,3 +133,15 @@ def test_what_an_answering_server_refuses_is_counted_lost(fake):
     assert not record.close(timeout_s=10)
     assert [what for what, _ in fake.taken] == ["create:good"]
     assert record.lost == 1 and record.down_since is None
+
+
+def test_a_server_too_busy_to_take_it_all_before_the_end_is_named_so(fake):
+    fake.slow_s = 0.5
+    record = records.Record("http://127.0.0.1:9/api")
+    for i in range(4):
+        record.table(f"t{i}", [{"x": i}], "slow")
+    assert not record.close(timeout_s=0.2)
+    assert record.down_since is None and not record.lost
+    note = record.incomplete_note()
+    assert "had not taken all of it when the run ended" in note, note
+    assert "refused" not in note
