@@ -36,7 +36,21 @@ Objectives (:class:`Metric`), read per trial from its result cube:
 * ``readout_power_w``: ``event_rate_hz * E_event + data_rate_bps * E_link`` with the default
   :class:`pipeline.results.hardware.EnergyModel` (W);
 * ``compute_s``: the stage seconds of the point for the objective's models (all trained models,
-  spike stages included), as measured when they were computed.
+  spike stages included), as measured when they were computed;
+* ``decision_s.<model>``: the mean decision time (s of touch) of that model under early exit at
+  confidence :data:`pipeline.results.latency.EXIT_CONFIDENCE` (0.9): each recording decided at
+  the first time the softmax probability of its decided class reaches 0.9, else at the full
+  touch (:func:`pipeline.results.latency.exit_objectives`). Chosen over the earliest decision
+  time not significantly below the full touch, the report's, because a search compares trials
+  by a number that is a property of the design: a significance test's verdict also depends on
+  how many recordings the trial was tested on (more recordings make a small loss significant and
+  the time later) and moves in steps. The early exit is what a decoder deployed with that rule
+  would achieve, and its accuracy is the cost of deciding early;
+* ``decoder_energy_j.<model>``: the decoder's mean energy per decision (J) under the same early
+  exit, at the high end of its band (:class:`pipeline.results.hardware.DecoderEnergyModel`;
+  the high end so that a search never promises what only the most frugal chip delivers).
+
+Both are NaN, and the trial failed, where the cube keeps no decisions.
 """
 
 from __future__ import annotations
@@ -70,6 +84,7 @@ from pipeline.design.grid import (
 from pipeline.design.scene import Model, Scene, SceneVariants
 from pipeline.errors import SceneError
 from pipeline.results.hardware import event_power_w
+from pipeline.results.latency import exit_objectives
 
 #: The name of the trial cube's sweep.
 TRIALS = "trials"
@@ -96,6 +111,12 @@ class Metric(enum.StrEnum):
     DATA_RATE = "data_rate_bps"
     POWER = "readout_power_w"
     COMPUTE = "compute_s"
+    DECISION_TIME = "decision_s"
+    DECODER_ENERGY = "decoder_energy_j"
+
+
+#: The objectives measured per model, named ``<metric>.<model>``.
+PER_MODEL = frozenset({Metric.ACCURACY, Metric.DECISION_TIME, Metric.DECODER_ENERGY})
 
 
 class Sampler(enum.StrEnum):
@@ -155,7 +176,8 @@ class Dimension:
 
 @dataclass(frozen=True)
 class Objective:
-    """One objective: ``metric`` (of ``model`` for accuracy) and its ``direction``."""
+    """One objective: ``metric`` (of ``model`` for those of :data:`PER_MODEL`) and its
+    ``direction``."""
 
     metric: Metric
     direction: Direction
@@ -287,6 +309,11 @@ def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.nd
                 values = xr.DataArray(np.where(ok, power, np.nan), dims=(dim,))
             case Metric.COMPUTE:
                 values = cube["seconds"].sum("stage", min_count=1)
+            case Metric.DECISION_TIME | Metric.DECODER_ENERGY:
+                found = exit_objectives(cube, objective.model)
+                values = xr.DataArray(
+                    found[objective.metric is Metric.DECODER_ENERGY], dims=cube["result_key"].dims
+                )
         columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
     return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
 
@@ -442,7 +469,10 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
         problems.append('objectives: needs two or three, e.g. "accuracy.ffnn" = "max"')
         return []
     metrics = ", ".join(
-        ["accuracy.<model>", *(m.value for m in Metric if m is not Metric.ACCURACY)]
+        [
+            *(f"{m.value}.<model>" for m in Metric if m in PER_MODEL),
+            *(m.value for m in Metric if m not in PER_MODEL),
+        ]
     )
     objectives = []
     for name, direction in data.items():
@@ -458,7 +488,7 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
         except ValueError:
             problems.append(f"{where}: expected 'max' or 'min', got {direction!r}")
             continue
-        if (metric is Metric.ACCURACY) != bool(model):
+        if (metric in PER_MODEL) != bool(model):
             problems.append(f"{where}: unknown objective (known: {metrics})")
             continue
         if model:

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import xarray as xr
 
@@ -33,12 +33,19 @@ from pipeline.report.curves import Curve, MetricFit, metric_fits, sweep_curves
 from pipeline.report.designs import Design, FrameReadout, gather_designs
 from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
+from pipeline.report.latency import (
+    LATENCY_STEM,
+    LatencyCurve,
+    full_touch_energies,
+    gather_decisions,
+    latency_curves,
+)
 from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.hardware import DecoderEnergyModel, EnergyModel
 
 
 @dataclass(frozen=True)
@@ -49,7 +56,9 @@ class Report:
     panel without data, why it is "not in this run". ``sweep_plots`` and ``heatmaps`` picture the
     other sweeps; ``undrawn`` says which cubes get no picture and why. ``designs`` are the run's
     distinct points; ``untested`` counts those without per-recording results (no interval, no
-    paired test). ``searches`` are the run's searches, each by its front.
+    paired test). ``searches`` are the run's searches, each by its front. ``latency`` holds,
+    per model, accuracy against decision time at its best design and what a decision costs
+    (empty for cubes that keep no decisions); ``decoder`` prices the decoder's operations.
     """
 
     grids: tuple[str, ...]
@@ -74,6 +83,8 @@ class Report:
     time_to_accuracy: tuple[TimeToAccuracy, ...]
     missing: Mapping[Panel, str]
     searches: tuple[SearchFront, ...] = ()
+    latency: tuple[LatencyCurve, ...] = ()
+    decoder: DecoderEnergyModel = field(default_factory=DecoderEnergyModel)
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -88,6 +99,7 @@ class Report:
             *(s.stem for s in self.sweep_plots),
             *(h.stem for h in self.heatmaps),
             *(f.cost.stem for f in self.fronts),
+            *((LATENCY_STEM,) if self.latency else ()),
         )
 
     @property
@@ -102,6 +114,7 @@ def build_report(
     frame: FrameReadout | None = None,
     energy: EnergyModel | None = None,
     runs: Sequence[SweepRun] = (),
+    decoder: DecoderEnergyModel | None = None,
 ) -> Report:
     """All the report's numbers and sentences from a run root's cubes.
 
@@ -117,6 +130,9 @@ def build_report(
         :class:`~pipeline.results.hardware.EnergyModel`'s).
     runs
         The run log's sweeps of this root (the sweep's own cost).
+    decoder
+        Per-operation energies of the decoder (default:
+        :class:`~pipeline.results.hardware.DecoderEnergyModel`'s).
 
     Raises
     ------
@@ -157,7 +173,11 @@ def build_report(
     full_scale = 1.0
     if threshold:
         full_scale = float(base_value(cubes[threshold[0]], FULL_SCALE_V))
-    answers = design_answers(designs, evidence, energy, frame)
+    decoder = decoder if decoder is not None else DecoderEnergyModel()
+    decisions = gather_decisions(cubes)
+    answers = design_answers(
+        designs, evidence, energy, frame, full_touch_energies(decisions, decoder)
+    )
     dataset = dataset_kind(cubes)
     classes = n_classes(cubes)
     return Report(
@@ -183,6 +203,8 @@ def build_report(
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
         searches=search_fronts(cubes),
+        latency=latency_curves(decisions, answers, decoder),
+        decoder=decoder,
     )
 
 

@@ -30,7 +30,7 @@ comparison with the best (:func:`comparison_rows`).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from pipeline.report import paper
@@ -50,6 +50,7 @@ from pipeline.results.hardware import (
     CHIP,
     CHIP_EVENT_RATE_HZ,
     CHIP_TAXELS,
+    EnergyBand,
     EnergyModel,
     ReadoutPower,
     power_budget,
@@ -64,7 +65,8 @@ class Candidate:
     ``versus_best`` is ``accuracy(design) - accuracy(best)`` (None for the best itself and for a
     design that cannot be compared); ``holm_p`` its Holm-adjusted p-value. ``power`` is None when
     the array size or the rates are unknown; frame figures are None when the frame readout or the
-    array size is unknown.
+    array size is unknown. ``decoder_energy`` is the decoder's energy per decision at the full
+    touch, a band (None where the cubes count no operations).
     """
 
     design: Design
@@ -75,6 +77,7 @@ class Candidate:
     power: ReadoutPower | None
     frame_data_rate_bps: float | None
     frame_power: ReadoutPower | None
+    decoder_energy: EnergyBand | None = None
 
     @property
     def power_w(self) -> float:
@@ -147,13 +150,18 @@ def design_answers(
     evidence: Evidence,
     energy: EnergyModel,
     frame: FrameReadout | None,
+    decoder: Mapping[tuple[str, str], EnergyBand] | None = None,
 ) -> tuple[ModelAnswer, ...]:
-    """One :class:`ModelAnswer` per model that any design trained, in the order first met."""
+    """One :class:`ModelAnswer` per model that any design trained, in the order first met.
+
+    ``decoder`` gives the decoder's energy per decision at the full touch by (result key,
+    model), where the cubes count its operations (:mod:`pipeline.report.latency`).
+    """
     models = list(dict.fromkeys(m for d in designs for m in d.accuracy))
     return tuple(
         answer
         for model in models
-        if (answer := model_answer(designs, evidence, model, energy, frame)) is not None
+        if (answer := model_answer(designs, evidence, model, energy, frame, decoder)) is not None
     )
 
 
@@ -163,6 +171,7 @@ def model_answer(
     model: str,
     energy: EnergyModel,
     frame: FrameReadout | None,
+    decoder: Mapping[tuple[str, str], EnergyBand] | None = None,
 ) -> ModelAnswer | None:
     """The answer for ``model`` (see the module docstring); None if no design trained it."""
     mine = [d for d in designs if model in d.accuracy]
@@ -192,6 +201,7 @@ def model_answer(
             power=readout_power(d, energy),
             frame_data_rate_bps=frame.data_rate_bps(n) if known else None,
             frame_power=frame.power(n, energy) if known else None,
+            decoder_energy=(decoder or {}).get((d.key, model)),
         )
 
     top = candidate(best, None, None)
@@ -222,15 +232,36 @@ GLANCE_COLUMNS = (
 )
 
 
+#: The small table's column of the decoder's energy, where the cubes count its operations.
+DECODER_COLUMN = "decoder energy per decision"
+
+
 def glance_header(answer: ModelAnswer) -> tuple[str, ...]:
-    """The small table's header: the model's name, then :data:`GLANCE_COLUMNS`."""
-    return (answer.model.upper(), *GLANCE_COLUMNS)
+    """The small table's header: the model's name, then :data:`GLANCE_COLUMNS` (and
+    :data:`DECODER_COLUMN` after the energy per decision, where the cubes count operations)."""
+    columns = list(GLANCE_COLUMNS)
+    if has_decoder_energy(answer):
+        columns.insert(columns.index("energy per decision") + 1, DECODER_COLUMN)
+    return (answer.model.upper(), *columns)
+
+
+def has_decoder_energy(answer: ModelAnswer) -> bool:
+    """Whether any design of the answer states its decoder's energy per decision."""
+    return any(c.decoder_energy is not None for c in answer.candidates)
+
+
+def decoder_energy_text(band: EnergyBand | None) -> str:
+    """A decoder energy band as ``12.7 nJ to 23.6 nJ``; "unknown" when not stated."""
+    if band is None or not (math.isfinite(band.low_j) and math.isfinite(band.high_j)):
+        return "unknown"
+    return f"{si(band.low_j, 'J')} to {si(band.high_j, 'J')}"
 
 
 def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
     """The small table: the best design, the cheapest not significantly below it by data rate
     and by power (one row with both roles when they are the same design)."""
     rows = []
+    decoder = has_decoder_energy(answer)
     for chosen, roles in _roles(answer):
         a = chosen.accuracy
         power = chosen.power
@@ -243,6 +274,7 @@ def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
                 rate(chosen.data_rate_bps, "bit/s"),
                 f"{si(chosen.power_w, 'W')}{share}",
                 _energy(chosen),
+                *((decoder_energy_text(chosen.decoder_energy),) if decoder else ()),
                 "unknown"
                 if chosen.frame_power is None
                 else f"{times(chosen.data_rate_ratio)}, {times(chosen.power_ratio)}",

@@ -8,7 +8,9 @@ claims judged by tests (:mod:`pipeline.report.claims`), Table I with the paper's
 (:mod:`pipeline.report.tables`), the figures (the paper's, then a curve for every other 1-D
 sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipeline.report.fronts`;
 the power front is drawn once, at the top), every search's front
-(:func:`pipeline.report.trials.search_fronts`), and what accuracy costs in time.
+(:func:`pipeline.report.trials.search_fronts`), and what accuracy costs in time (where the cubes
+keep decisions, accuracy against decision time, early exit and the energy per decision first:
+:mod:`pipeline.report.latency`).
 
 Files of a report (``<root>/report`` by default), as :func:`report_files` returns them::
 
@@ -41,6 +43,7 @@ from pipeline.report.cost import observation_sentence
 from pipeline.report.designs import Cost
 from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
+from pipeline.report.latency import latency_blocks
 from pipeline.report.panels import PANEL_TITLES, Panel
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.sweeps import Heatmap, SweepPlot
@@ -108,7 +111,7 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
     blocks += _figure_blocks(report, drawn)
     blocks += _front_blocks(report, drawn)
     blocks += _search_blocks(report)
-    blocks += _time_blocks(report)
+    blocks += _time_blocks(report, drawn)
     return blocks
 
 
@@ -355,8 +358,9 @@ def _search_blocks(report: Report) -> Iterator[Block]:
         )
 
 
-def _time_blocks(report: Report) -> Iterator[Block]:
+def _time_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
     yield Heading(2, "What accuracy costs in time")
+    yield from latency_blocks(report.latency, report.decoder, drawn)
     if report.time_to_accuracy:
         yield Heading(3, "Observation time needed")
         yield Table(

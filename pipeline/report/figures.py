@@ -33,6 +33,7 @@ from pipeline.report.analysis import Report
 from pipeline.report.curves import Curve, MetricFit
 from pipeline.report.designs import Cost
 from pipeline.report.fronts import Front
+from pipeline.report.latency import LATENCY_STEM, LATENCY_TITLE, LatencyCurve
 from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si
@@ -94,6 +95,8 @@ def draw_report(report: Report) -> dict[str, Figure]:
         draw[found.stem] = lambda found=found: heatmap_figure(found)
     for front in report.fronts:
         draw[front.cost.stem] = lambda front=front: front_figure(front, chance)
+    if report.latency:
+        draw[LATENCY_STEM] = lambda: latency_figure(report.latency, chance)
     return {stem: draw[stem]() for stem in report.figure_stems}
 
 
@@ -299,6 +302,40 @@ def front_figure(front: Front, chance: float | None) -> Figure:
             ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: si(v, "W")))
     _chance(ax, chance)
     _finish(ax, f"Accuracy against {front.cost.short}", front.cost.axis, legend_outside=True)
+    return figure
+
+
+def latency_figure(curves: Sequence[LatencyCurve], chance: float | None) -> Figure:
+    """Accuracy against decision time, one line per model (its best design) with its 95 %
+    interval as a band, and a dotted line at the earliest decision not significantly below the
+    full touch."""
+    figure, ax = _new()
+    for curve in curves:
+        color = _color(curve.model)
+        many = curve.decision_s.size > 40  # a spiking decoder's steps: a line, no markers
+        ax.plot(
+            curve.decision_s,
+            100 * curve.mean,
+            marker=None if many else "o",
+            markersize=4,
+            color=color,
+            label=f"{curve.model.upper()} ({curve.label})",
+        )
+        ok = np.isfinite(curve.low) & np.isfinite(curve.high)
+        if ok.any():
+            ax.fill_between(
+                curve.decision_s,
+                100 * np.where(ok, curve.low, np.nan),
+                100 * np.where(ok, curve.high, np.nan),
+                color=color,
+                alpha=0.2,
+                linewidth=0,
+            )
+        if curve.earliest is not None:
+            ax.axvline(curve.earliest.decision_s, color=color, linestyle=":", linewidth=1.5)
+    _chance(ax, chance)
+    _finish(ax, LATENCY_TITLE, "decision time (s of touch)")
+    ax.set_ylabel("accuracy (%; band: 95 % interval)")
     return figure
 
 
