@@ -1,0 +1,108 @@
+"""The report's time section on cubes that keep decisions (by hand: tests/latency_helpers.py).
+
+On the hand-made decisions, a model's accuracy at the earlier times loses 50, 20, 3 and 0 % of
+its right recordings (nested), so against the full touch the losses are 60, 24, 2 and 0 of
+the best point's recordings: 0.75 s loses 2 (McNemar p = 0.5, not significant), 0.5 s loses 13
+(FFNN 12; p far below 0.05).
+"""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from pipeline.report import FrameReadout, build_report
+from pipeline.report.answer import DECODER_COLUMN, glance_header, glance_rows
+from pipeline.report.document import report_blocks
+from pipeline.report.figures import draw_report
+from pipeline.report.latency import LATENCY_STEM, gather_decisions
+from pipeline.report.render import render_markdown
+from pipeline.results.hardware import decoder_energy_j
+from tests.latency_helpers import FFNN_MACS, FFNN_UPDATES, SPIKING_ACS, TIMES, with_decisions
+from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
+
+SWEEPS = {"threshold": PAPER_LIKE_SWEEPS["threshold"]}
+
+
+@pytest.fixture(scope="module")
+def report():
+    cubes = {n: with_decisions(c) for n, c in make_cubes(SWEEPS).items()}
+    return build_report(cubes, frame=FrameReadout(12, 2000.0))
+
+
+def test_each_model_gets_its_curve_at_its_best_design_at_the_times_it_decides(report):
+    curves = {c.model: c for c in report.latency}
+    assert set(curves) == {"ffnn", "cnn"}
+    for answer in report.answers:
+        assert curves[answer.model].key == answer.best.design.key
+    assert curves["ffnn"].decision_s.tolist() == [0.5, 1.0]  # window boundaries only
+    assert curves["cnn"].decision_s.tolist() == TIMES.tolist()
+    cnn = curves["cnn"]
+    # The best CNN point gets 78 of 120 right at the full touch (0.6 + 0.05 bonus).
+    assert np.allclose(cnn.mean * 120, [39, 62, 76, 78])
+    assert np.all((cnn.low <= cnn.mean) & (cnn.mean <= cnn.high))
+    assert cnn.interval == "Wilson score"
+
+
+def test_the_earliest_decision_not_below_the_full_touch_is_found_by_paired_tests(report):
+    curves = {c.model: c for c in report.latency}
+    cnn = curves["cnn"].earliest
+    assert (cnn.decision_s, cnn.full_s, cnn.tested, cnn.stopped_by) == (0.75, 1.0, 2, 0.5)
+    assert (cnn.versus_full.only_a, cnn.versus_full.only_b) == (0, 2)
+    assert math.isclose(cnn.versus_full.p_value, 0.5)  # exact McNemar, 2 discordant
+    ffnn = curves["ffnn"].earliest
+    assert (ffnn.decision_s, ffnn.versus_full, ffnn.stopped_by) == (1.0, None, 0.5)
+
+
+def test_early_exit_rows_and_energies_follow_the_hand_made_confidences(report):
+    cnn = next(c for c in report.latency if c.model == "cnn")
+    rows = {row.threshold: row for row in cnn.exits}
+    # At 0.99 no right decision passes before the full touch (0.99 there): all at 1 s.
+    assert rows[0.99].mean_decision_s == 1.0 and math.isclose(rows[0.99].accuracy, 78 / 120)
+    # At 0.5 a recording right at 0.25 s exits there (39), at 0.5 s (23), 0.75 s (14), 1 s (2);
+    # the 42 wrong at the full touch never pass (0.4) and decide at 1 s.
+    expected = (39 * 0.25 + 23 * 0.5 + 14 * 0.75 + 2 * 1.0 + 42 * 1.0) / 120
+    assert math.isclose(rows[0.5].mean_decision_s, expected)
+    assert math.isclose(rows[0.5].readout_j, cnn.readout_power_w * expected)
+    full = decoder_energy_j(SPIKING_ACS * 1.0, 0.0, 400.0 * 1.0)
+    assert math.isclose(cnn.energy_at(cnn.full).low_j, full.low_j)
+    ffnn = next(a for a in report.answers if a.model == "ffnn")
+    band = ffnn.best.decoder_energy
+    assert math.isclose(band.low_j, decoder_energy_j(0, FFNN_MACS, FFNN_UPDATES).low_j)
+
+
+def test_the_answer_table_gains_the_decoder_energy_and_the_report_its_section(report):
+    answer = report.answers[0]
+    header = glance_header(answer)
+    assert header[header.index("energy per decision") + 1] == DECODER_COLUMN
+    assert all(len(row) == len(header) for row in glance_rows(answer))
+    assert report.figure_stems[-1] == LATENCY_STEM
+    text = render_markdown(report_blocks(report, set(report.figure_stems), version="t"))
+    time_section = text[text.index("## What accuracy costs in time") :]
+    for title in ("Accuracy against decision time", "Early exit", "Energy per decision"):
+        assert f"### {title}" in time_section
+    assert "figures/latency.png" in time_section and "ODIN" in time_section
+    assert not re.search(r"\bnan\b", text, flags=re.I)
+
+
+def test_the_latency_figure_is_drawn():
+    cubes = {n: with_decisions(c) for n, c in make_cubes(SWEEPS, models=("cnn",)).items()}
+    report = build_report(cubes)
+    figures = draw_report(report)
+    assert list(figures) == list(report.figure_stems) and LATENCY_STEM in figures
+    axes = figures[LATENCY_STEM].axes[0]
+    assert axes.get_xlabel() == "decision time (s of touch)"
+
+
+def test_cubes_without_decisions_or_operations_add_what_they_hold():
+    plain = build_report(make_cubes(SWEEPS))
+    assert plain.latency == () and LATENCY_STEM not in plain.figure_stems
+    assert DECODER_COLUMN not in glance_header(plain.answers[0])
+    cubes = {n: with_decisions(c, operations=False) for n, c in make_cubes(SWEEPS).items()}
+    assert all(np.isnan(d.operations).all() for d in gather_decisions(cubes).values())
+    report = build_report(cubes)
+    assert len(report.latency) == 2
+    assert DECODER_COLUMN not in glance_header(report.answers[0])
+    text = render_markdown(report_blocks(report, set(report.figure_stems), version="t"))
+    assert "unknown" in text[text.index("### Early exit") :]
