@@ -20,7 +20,9 @@ Each answer is set against the frame-based readout of the same array (``rows * c
 ``bits`` per sample at ``rate_hz``): its data rate ``n * bits * rate_hz`` and its power
 (:func:`pipeline.results.hardware.frame_power_w`), as ``frame / event`` ratios. Power is kept as
 its static and dynamic parts (:class:`~pipeline.results.hardware.ReadoutPower`); energy per
-decision is power times the seconds of touch the design observed.
+decision is power times the seconds of touch the design observed. Where the cubes count the
+decoder's operations, the decoder's energy per decision at the full touch stands beside it, a
+band (:func:`pipeline.results.hardware.decoder_energy_j`; the small table gains its column).
 
 What the report shows of it: per model a small table (:func:`glance_rows`) and one sentence on
 how sure it is (:func:`how_sure`); then, once, the method (:func:`method_sentences`) and every
