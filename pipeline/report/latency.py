@@ -66,17 +66,18 @@ class Decisions:
 
     Attributes
     ----------
-    decision_s : float64 (times,)
-        Seconds of touch, ascending.
-    correct : int8 (times, repeats, recordings)
-        1 right, 0 wrong, -1 no decision.
-    confidence : float64 (times, repeats, recordings)
-        Softmax probability of the decided class, NaN where none.
-    labels : int64 (recordings,)
-        Class of each recording.
-    operations : float64 (3, times)
-        Mean accumulates, multiply-accumulates and neuron updates per decision, cumulative;
-        NaN where the cube does not state them.
+    decision_s
+        float64 (times,): seconds of touch, ascending.
+    correct
+        int8 (times, repeats, recordings): 1 right, 0 wrong, -1 no decision.
+    confidence
+        float64 (times, repeats, recordings): softmax probability of the decided class, NaN
+        where none.
+    labels
+        int64 (recordings,): class of each recording.
+    operations
+        float64 (3, times): mean accumulates, multiply-accumulates and neuron updates per
+        decision, cumulative; NaN where the cube does not state them.
     """
 
     decision_s: np.ndarray

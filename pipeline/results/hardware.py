@@ -685,8 +685,8 @@ LOIHI = "Loihi, M. Davies et al., IEEE Micro 38(1), 2018, 14 nm, pre-silicon fig
 """The high end of a synaptic operation's energy, 23.6 pJ, and a neuron update's, 52 pJ for an
 inactive and 81 pJ for an active neuron."""
 HOROWITZ = "M. Horowitz, ISSCC 2014, 45 nm, 0.9 V"
-"""A multiply-accumulate's energy: 32-bit float multiply 3.7 pJ and add 0.9 pJ, a 64-bit read of
-an 8 kB SRAM 10 pJ."""
+"""The source of a multiply-accumulate's energy, with 3.7 pJ per 32-bit float multiply, 0.9 pJ
+per add and 10 pJ per 64-bit read of an 8 kB SRAM."""
 
 
 @dataclass(frozen=True)
