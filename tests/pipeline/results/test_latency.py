@@ -4,11 +4,15 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from pipeline.results.hardware import DecoderEnergyModel
 from pipeline.results.latency import decides, early_exit, exit_energy_j, full_touch
 
 TIMES = np.array([1.0, 2.0, 3.0])
+TIMES4 = np.array([0.1, 0.2, 0.3, 0.4])
 NAN = np.nan
 # (times, repeats=1, recordings=4). Recording 3 is never decided; recording 2 not at 1 s.
 CONFIDENCE = np.array(
@@ -97,3 +101,25 @@ def test_decision_times_of_a_model_and_its_full_touch():
 def test_bad_input_is_refused(args, match):
     with pytest.raises(ValueError, match=match):
         early_exit(*args)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    decided=arrays(np.bool_, (4, 2, 5)),
+    right=arrays(np.bool_, (4, 2, 5)),
+    confidence=arrays(np.float64, (4, 2, 5), elements=st.floats(0.0, 1.0)),
+    thresholds=st.lists(st.floats(0.0, 1.0), min_size=2, max_size=2),
+)
+def test_a_higher_threshold_never_decides_sooner_and_exits_only_where_decided(
+    decided, right, confidence, thresholds
+):
+    correct = np.where(decided, right.astype(np.int8), np.int8(-1))
+    confidence = np.where(decided, confidence, np.nan)
+    low, high = sorted(thresholds)
+    early, late = (early_exit(confidence, correct, TIMES4, t) for t in (low, high))
+    has = decided.any(axis=0)
+    assert np.array_equal(early.index >= 0, has) and np.array_equal(late.index >= 0, has)
+    assert np.all(early.index[has] <= late.index[has])
+    at = np.take_along_axis(decided, np.maximum(late.index, 0)[np.newaxis], axis=0)[0]
+    assert np.all(at[has])  # every exit is a time the pair was decided at
+    assert early.n == late.n == int(has.sum())
