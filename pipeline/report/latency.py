@@ -162,7 +162,7 @@ def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], D
     (the first cube met holding a point wins)."""
     found: dict[tuple[str, str], Decisions] = {}
     for cube in cubes.values():
-        if not all(v in cube for v in (*DECISION_VARIABLES, "decision_s")):
+        if not all(v in cube.variables for v in (*DECISION_VARIABLES, "decision_s", "label")):
             continue
         dims = sweep_dims(cube)
         order = (*dims, "model", "decision_s", "repeat", "recording")
