@@ -310,10 +310,9 @@ def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.nd
             case Metric.COMPUTE:
                 values = cube["seconds"].sum("stage", min_count=1)
             case Metric.DECISION_TIME | Metric.DECODER_ENERGY:
-                found = exit_objectives(cube, objective.model)
-                values = xr.DataArray(
-                    found[objective.metric is Metric.DECODER_ENERGY], dims=cube["result_key"].dims
-                )
+                time_s, energy_j = exit_objectives(cube, objective.model)
+                chosen = time_s if objective.metric is Metric.DECISION_TIME else energy_j
+                values = xr.DataArray(chosen, dims=cube["result_key"].dims)
         columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
     return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
 
