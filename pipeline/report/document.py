@@ -38,7 +38,7 @@ from pipeline.report.answer import (
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.cost import observation_sentence
-from pipeline.report.designs import Cost
+from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.panels import PANEL_TITLES, Panel
@@ -281,6 +281,8 @@ def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
                 "front end, loading or compiling kernels) in none. What the sweep paid is below, "
                 "under the sweep's own cost."
             )
+        if front.cost is Cost.AREA:
+            yield Paragraph(area_sentence())
         rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
         rows += [_front_row(front, p) for p in front.marked]
         yield Table(_FRONT_COLUMNS, tuple(rows))
@@ -303,10 +305,13 @@ def _front_row(front: Front, point: FrontPoint) -> tuple[str, ...]:
             f"({comparison(point.versus_front)})"  # type: ignore[arg-type]
         )
     a = point.accuracy
+    cost_text = _cost_text(front.cost, point.cost)
+    if front.cost is Cost.AREA:
+        cost_text += f" ({_cost_text(Cost.AREA, point.design.taxel_area_m2)} per taxel)"
     return (
         point.model.upper(),
         point.design.label,
-        _cost_text(front.cost, point.cost),
+        cost_text,
         pct_interval(a.mean, a.low, a.high),
         status,
     )
@@ -322,6 +327,8 @@ def _cost_text(which: Cost, value: float) -> str:
             return f"{value:.3g} bit"
         case Cost.COMPUTE:
             return f"{value:.3g} s"
+        case Cost.AREA:
+            return f"{value * 1e12:.3g} um^2"
     return si(value, "W")
 
 

@@ -297,6 +297,8 @@ def front_figure(front: Front, chance: float | None) -> Figure:
         _log_x(ax, LogLocator(subs=(1.0, 2.0, 5.0)))
         if front.cost is Cost.POWER:
             ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: si(v, "W")))
+        if front.cost is Cost.AREA:  # m^2 on the axis, um^2 in its labels
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v * 1e12:g}"))
     _chance(ax, chance)
     _finish(ax, f"Accuracy against {front.cost.short}", front.cost.axis, legend_outside=True)
     return figure
