@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -10,9 +11,11 @@ import xarray as xr
 
 from pipeline.errors import EskinError
 from pipeline.report import paper
-from pipeline.report.answer import ModelAnswer, design_answers
+from pipeline.report.answer import ModelAnswer, YieldAnswer, design_answers, yield_answers
+from pipeline.report.chips import chip_curves, pooled
 from pipeline.report.claims import (
     Claim,
+    deployment_note,
     metric_claim,
     mismatch_claim,
     optimum_claim,
@@ -29,7 +32,7 @@ from pipeline.report.cubes import (
     sweep_dims,
     sweeps_for,
 )
-from pipeline.report.curves import Curve, MetricFit, metric_fits, sweep_curves
+from pipeline.report.curves import Curve, MetricFit, metric_fits
 from pipeline.report.designs import Design, FrameReadout, gather_designs
 from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
@@ -49,7 +52,10 @@ class Report:
     panel without data, why it is "not in this run". ``sweep_plots`` and ``heatmaps`` picture the
     other sweeps; ``undrawn`` says which cubes get no picture and why. ``designs`` are the run's
     distinct points; ``untested`` counts those without per-recording results (no interval, no
-    paired test). ``searches`` are the run's searches, each by its front.
+    paired test). ``searches`` are the run's searches, each by its front. ``mismatch_note`` sets
+    Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
+    (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
+    design.
     """
 
     grids: tuple[str, ...]
@@ -74,6 +80,8 @@ class Report:
     time_to_accuracy: tuple[TimeToAccuracy, ...]
     missing: Mapping[Panel, str]
     searches: tuple[SearchFront, ...] = ()
+    mismatch_note: str | None = None
+    yield_answers: tuple[YieldAnswer, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -136,13 +144,17 @@ def build_report(
             "already in the store are not recomputed)"
         )
     energy = energy if energy is not None else EnergyModel()
+    # Points of several chips as one design each (mean over chips), the chips kept beside.
+    cubes = {name: pooled(cube) for name, cube in cubes.items()}
     evidence = gather_evidence(cubes)
     designs = gather_designs(cubes)
     curves: dict[Panel, tuple[Curve, ...]] = {}
     missing: dict[Panel, str] = {}
     for panel in PANEL_FIELDS:
         names = sweeps_for(panel, cubes)
-        found = tuple(c for n in names for c in sweep_curves(n, cubes[n], panel_x(panel, cubes[n])))
+        found = tuple(
+            c for n in names for c in chip_curves(n, cubes[n], functools.partial(panel_x, panel))
+        )
         if found:
             curves[panel] = found
         else:
@@ -183,6 +195,8 @@ def build_report(
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
         searches=search_fronts(cubes),
+        mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
+        yield_answers=yield_answers(designs, evidence, energy),
     )
 
 
@@ -219,6 +233,8 @@ def _other_pictures(
     plots, maps, undrawn = [], [], []
     for name, cube in cubes.items():
         dims = sweep_dims(cube)
+        if len(dims) == 2 and name in plotted:
+            continue  # a panel's field by deployment: the panel draws a curve per deployment
         if len(dims) == 1 and name not in plotted:
             if (plot := sweep_plot(name, cube)) is not None:
                 plots.append(plot)

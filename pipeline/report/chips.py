@@ -37,17 +37,21 @@ several mismatch sweeps that differ only in their deployment.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
+from pipeline.report.curves import Curve, sweep_curves
+from pipeline.report.panels import DEPLOYMENT
+
 #: The dimension of a cube whose points simulate several chips.
 CHIP_DIM = "chip"
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
-DEPLOYMENT = "chips.deployment"
 CHIP_COUNT = "chips.count"
 YIELD_TARGET = "chips.yield_target"
 #: The deployment the paper's Fig. 10 claim is judged on: one classifier loaded into every chip,
@@ -210,11 +214,14 @@ def _chips_as_repeats(variable: xr.DataArray) -> xr.DataArray:
 
 def chip_yields(cube: xr.Dataset) -> dict[tuple[int, str], ChipYield]:
     """``{(point index in C order over the sweep dimensions, model): ChipYield}`` of a cube of
-    several chips (empty for one without), read from its yield variables and its chips'
-    accuracies."""
-    if not has_chips(cube):
+    several chips, or of its :func:`pooled` view (empty for one without chips), read from its
+    yield variables and its chips' accuracies."""
+    if has_chips(cube):
+        per_chip = cube["accuracy_mean"]
+    elif "accuracy_per_chip" in cube:  # a pooled cube
+        per_chip = cube["accuracy_per_chip"]
+    else:
         return {}
-    per_chip = cube["accuracy_mean"]
     dims = tuple(d for d in per_chip.dims if d not in ("model", CHIP_DIM))
     models = [str(m) for m in per_chip["model"].values]
     chips = per_chip.transpose(*dims, "model", CHIP_DIM).values
@@ -285,3 +292,45 @@ def _point_values(
 
 def _or(value: float, fallback: float) -> float:
     return float(value) if math.isfinite(value) else fallback
+
+
+def split_by_deployment(cube: xr.Dataset) -> list[tuple[str, xr.Dataset]]:
+    """``[(deployment, one-dimensional cube)]``: a cube that sweeps the deployment beside one
+    other axis, one part per deployment; any other cube as it is, with the deployment its points
+    share ("" when it does not say)."""
+    dim = deployment_dim(cube)
+    if dim is None:
+        return [(deployment_of(cube), cube)]
+    return [(str(value), cube.sel({dim: value})) for value in cube[dim].values]
+
+
+def with_chip_spread(curve: Curve, cube: xr.Dataset, x: np.ndarray, group: str) -> Curve:
+    """``curve`` (of a one-dimensional cube, sorted by ``x`` as :func:`sweep_curves` sorts it)
+    with its ``group`` and, for a pooled cube of several chips, the chips' spread at each
+    point: the cube's ``accuracy_p05`` (the yield), the median and the 95th percentile of the
+    chips' accuracies."""
+    if "accuracy_per_chip" not in cube:
+        return dataclasses.replace(curve, group=group)
+    (dim,) = tuple(d for d in cube["accuracy_mean"].dims if d != "model")
+    order = np.argsort(x, kind="stable")
+    per_chip = cube["accuracy_per_chip"].sel(model=curve.model).transpose(dim, CHIP_DIM)
+    values = per_chip.values[order]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a point with no chip: all NaN
+        low, median, high = np.nanquantile(values, SPREAD_QUANTILES, axis=-1)
+    if "accuracy_p05" in cube:  # the yield as the cube states it, where it is computed once
+        stated = cube["accuracy_p05"].sel(model=curve.model).transpose(dim).values[order]
+        low = np.where(np.isfinite(stated), stated, low)
+    return dataclasses.replace(curve, group=group, chip_low=low, chip_median=median, chip_high=high)
+
+
+def chip_curves(
+    name: str, cube: xr.Dataset, x_of: Callable[[xr.Dataset], np.ndarray]
+) -> tuple[Curve, ...]:
+    """The curves of a (pooled) cube along its non-deployment axis, one per model and
+    deployment, with the chips' spread; ``x_of`` gives a one-dimensional cube's abscissa."""
+    curves = []
+    for group, part in split_by_deployment(cube):
+        x = x_of(part)
+        curves += [with_chip_spread(c, part, x, group) for c in sweep_curves(name, part, x)]
+    return tuple(curves)

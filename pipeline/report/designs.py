@@ -35,12 +35,13 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from pipeline.report.chips import ChipYield, chip_yields
 from pipeline.report.cubes import (
     axis_coordinates,
     describe_coordinate,
@@ -123,6 +124,7 @@ class Design:
     accuracy: Mapping[str, Accuracy]
     threshold_v: float = math.nan
     mismatch_sigma_rel: float = math.nan
+    yields: Mapping[str, ChipYield] = field(default_factory=dict)
 
     @property
     def taxel_area_m2(self) -> float:
@@ -271,6 +273,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
         read = (ROWS, COLS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
         fields = {f: field_values(cube, f) for f in read}
         fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
+        yields = chip_yields(cube)
         used = (
             _flat(cube["n_windows_used"], dims)
             if "n_windows_used" in cube
@@ -310,6 +313,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 if seconds is None
                 else {m: _model_seconds(seconds[p], stages, m) for m in accuracy},
                 "accuracy": accuracy,
+                "yields": {m: y for (q, m), y in yields.items() if q == p and m in accuracy},
                 **{
                     name: _float(fields[f], p)
                     for name, f in (

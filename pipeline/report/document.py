@@ -35,6 +35,7 @@ from pipeline.report.answer import (
     glance_rows,
     how_sure,
     method_sentences,
+    yield_sentence,
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.cost import observation_sentence
@@ -142,9 +143,12 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
     if not report.answers:
         yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
         return
+    by_yield = {y.model: y for y in report.yield_answers}
     for answer in report.answers:
         yield Table(glance_header(answer), glance_rows(answer))
         yield Paragraph(how_sure(answer))
+        if answer.model in by_yield:
+            yield Paragraph(yield_sentence(by_yield[answer.model]))
     if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
         yield Figure(Cost.POWER.stem, _power_caption(report))
     yield Details(
@@ -199,6 +203,8 @@ def _figure_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         yield Figure(panel.value, _caption(PANEL_TITLES[panel], report))
         for sentence in claims.get(panel, ()):
             yield Paragraph(sentence)
+        if panel is Panel.MISMATCH and report.mismatch_note:
+            yield Paragraph(report.mismatch_note)
         if panel is Panel.OBSERVATION:
             yield Paragraph(observation_sentence(report.time_to_accuracy))
     for plot in report.sweep_plots:

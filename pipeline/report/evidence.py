@@ -159,6 +159,15 @@ class Evidence:
 
             return self._over_chips(a, b, model, chip_mean, "mean")
         ca, cb = self.correct[(a, model)], self.correct[(b, model)]
+        chipped = ((a, model) in self.per_chip, (b, model) in self.per_chip)
+        if chipped[0] != chipped[1]:
+            # One design of several chips, one of one: the one chip's repeats stand beside
+            # every chip of the other, so that the chips' mean is compared with the one chip
+            # (on the recordings; that one chip is a given, not a draw).
+            many, one = (ca, cb) if chipped[0] else (cb, ca)
+            n_chips = self.per_chip[(a, model) if chipped[0] else (b, model)].shape[0]
+            one = np.tile(one[: many.shape[0] // n_chips], (n_chips, 1))
+            ca, cb = (many, one) if chipped[0] else (one, many)
         repeats = min(ca.shape[0], cb.shape[0])
         ca, cb = ca[:repeats], cb[:repeats]
         rows = (ca >= 0).any(axis=1) & (cb >= 0).any(axis=1)

@@ -5,7 +5,9 @@ no global state, nothing written (:func:`figure_images` renders one to PNG and S
 Error bars are the 95 % interval of accuracy (``accuracy_low``/``accuracy_high``), not the spread
 over folds; points without an interval (runs that predate per-recording results) have none.
 Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the class count is known.
-Every model is drawn on every panel.
+Every model is drawn on every panel. Points of several chips (:mod:`pipeline.report.chips`) draw
+the spread of their chips' accuracies (5th to 95th percentile) as a shaded band around the curve,
+apart from the error bars; one line style per deployment.
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ YLABEL = "accuracy (%; bars: 95 % interval)"
 _COLORS = {"ffnn": "tab:blue", "cnn": "tab:orange"}
 _OTHER_COLORS = ("tab:green", "tab:red", "tab:purple", "tab:brown")
 _MARKERS = ("o", "s", "^", "D")
+_LINES = ("-", "--", ":", "-.")
 _SIZE_IN = (6.4, 4.2)
 _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
@@ -146,18 +149,32 @@ def curve_figure(
     """
     figure, ax = _new()
     sweeps = list(dict.fromkeys(c.sweep for c in curves))
+    groups = list(dict.fromkeys(c.group for c in curves))
     for curve in curves:
-        marker = _MARKERS[sweeps.index(curve.sweep) % len(_MARKERS)]
-        label = curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
+        marker = _MARKERS[(sweeps.index(curve.sweep) + groups.index(curve.group)) % len(_MARKERS)]
+        label = curve.label + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
+        style = _LINES[groups.index(curve.group) % len(_LINES)]
         ax.errorbar(
             curve.x * scale,
             100 * curve.mean,
             yerr=_interval_bars(curve.mean, curve.low, curve.high),
             marker=marker,
             color=_color(curve.model),
+            linestyle=style,
             capsize=3,
             label=label,
         )
+        if curve.chip_low is not None and curve.chip_high is not None:
+            # The spread over chips, apart from the error bars (the test set's noise).
+            ax.fill_between(
+                curve.x * scale,
+                100 * curve.chip_low,
+                100 * curve.chip_high,
+                color=_color(curve.model),
+                alpha=0.12,
+                linestyle=style,
+                label=f"{label}: chips, 5th-95th percentile",
+            )
     if ticks is not None:
         ax.set_xticks(range(len(ticks)), list(ticks), rotation=30 if len(ticks) > 4 else 0)
     elif log and all(np.all(c.x > 0) for c in curves):
