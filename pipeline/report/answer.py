@@ -444,7 +444,8 @@ class YieldCandidate:
 class YieldAnswer:
     """The answer by yield for one model: the ``best`` design by yield and the cheapest by data
     rate and by power not significantly below it (None when no design states that cost);
-    ``comparisons`` the size of the Holm family, ``untested`` the designs not compared."""
+    ``comparisons`` the size of the Holm family, ``untested`` the designs not compared;
+    ``candidates`` every design of several chips, the best first."""
 
     model: str
     best: YieldCandidate
@@ -452,6 +453,7 @@ class YieldAnswer:
     by_power: YieldCandidate | None
     comparisons: int
     untested: int
+    candidates: tuple[YieldCandidate, ...] = ()
 
 
 def yield_answers(
@@ -513,6 +515,7 @@ def yield_answer(
         by_power=cheapest("power_w"),
         comparisons=len(tested),
         untested=len(tests) - len(tested),
+        candidates=(top, *rest),
     )
 
 
