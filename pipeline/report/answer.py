@@ -39,7 +39,7 @@ comparison with the best (:func:`comparison_rows`).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from pipeline.report import paper
@@ -180,16 +180,9 @@ def model_answer(
     if not mine:
         return None
 
-    def rank(d: Design) -> tuple[float, float]:
-        rate_bps = d.data_rate_bps if math.isfinite(d.data_rate_bps) else math.inf
-        return (-d.accuracy[model].mean, rate_bps)
-
-    best = min(mine, key=rank)  # min is stable: the first met among equals
-    others = [d for d in mine if d is not best]
-    tests = [evidence.compare(d.key, best.key, model) for d in others]
-    tested = [t for t in tests if t is not None]
-    adjusted = iter(holm([t.p_value for t in tested]))
-    holm_ps = [None if t is None else float(next(adjusted)) for t in tests]
+    best, others, tests, tested, holm_ps = _against_best(
+        mine, lambda d: d.accuracy[model].mean, lambda d, b: evidence.compare(d, b, model)
+    )
 
     def candidate(d: Design, test: PairedComparison | None, holm_p: float | None) -> Candidate:
         n = d.n_taxels
@@ -374,6 +367,30 @@ def comparison_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
     return tuple(rows)
 
 
+def _against_best(
+    designs: Sequence[Design],
+    score: Callable[[Design], float],
+    compare: Callable[[str, str], PairedComparison | None],
+) -> tuple[
+    Design, list[Design], list[PairedComparison | None], list[PairedComparison], list[float | None]
+]:
+    """The best of ``designs`` by ``score`` (ties to the lower data rate, then the first met),
+    the others, each one's comparison with it (``compare(key, best key)``, None: not made), the
+    comparisons made, and their Holm-adjusted p-values (None where not made)."""
+
+    def rank(d: Design) -> tuple[float, float]:
+        rate_bps = d.data_rate_bps if math.isfinite(d.data_rate_bps) else math.inf
+        return (-score(d), rate_bps)
+
+    best = min(designs, key=rank)  # min is stable: the first met among equals
+    others = [d for d in designs if d is not best]
+    tests = [compare(d.key, best.key) for d in others]
+    tested = [t for t in tests if t is not None]
+    adjusted = iter(holm([t.p_value for t in tested]))
+    holm_ps = [None if t is None else float(next(adjusted)) for t in tests]
+    return best, others, tests, tested, holm_ps
+
+
 def _roles(answer: ModelAnswer) -> list[tuple[Candidate, list[str]]]:
     roles: dict[int, tuple[Candidate, list[str]]] = {}
     for chosen, role in (
@@ -477,16 +494,9 @@ def yield_answer(
     if not mine:
         return None
 
-    def rank(d: Design) -> tuple[float, float]:
-        rate_bps = d.data_rate_bps if math.isfinite(d.data_rate_bps) else math.inf
-        return (-d.yields[model].p05, rate_bps)
-
-    best = min(mine, key=rank)
-    others = [d for d in mine if d is not best]
-    tests = [evidence.compare_yield(d.key, best.key, model) for d in others]
-    tested = [t for t in tests if t is not None]
-    adjusted = iter(holm([t.p_value for t in tested]))
-    holm_ps = [None if t is None else float(next(adjusted)) for t in tests]
+    best, others, tests, tested, holm_ps = _against_best(
+        mine, lambda d: d.yields[model].p05, lambda d, b: evidence.compare_yield(d, b, model)
+    )
 
     def candidate(d: Design, test: PairedComparison | None, p: float | None) -> YieldCandidate:
         return YieldCandidate(
