@@ -9,6 +9,7 @@ recordings, all one way, and the exact McNemar p-value is ``binomtest(k_a - k_b,
 Fold accuracies are those of the same predictions, fold by fold.
 """
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -168,8 +169,9 @@ def with_chips(cube, deployment: str, n_chips: int = 20, target: float = 0.4):
     Chip ``c`` of a point of accuracy ``a`` at mismatch ``s`` gets the first
     ``n_right(a - CHIP_LOSS[d] * s + CHIP_SPREAD[d] * s * z_c)`` recordings right, ``z_c``
     spread evenly over [-1, 1]: nested, so that paired tests are exact. The yield variables are
-    computed here by plain numpy (the 5th percentile by linear interpolation, its interval from
-    the order statistics 1 and 3 of 20 chips). Result keys get ``|deployment`` appended.
+    computed here by plain numpy (the 5th percentile the order statistic of rank ceil(0.05 N),
+    its interval, for the test's sake, the order statistics 1 and 3). Result keys get
+    ``|deployment`` appended.
     """
     dim = "sigma_rel"
     sigma = cube[dim].values
@@ -197,8 +199,8 @@ def with_chips(cube, deployment: str, n_chips: int = 20, target: float = 0.4):
     accuracy = np.stack([right[..., folds == k].mean(axis=-1) for k in range(N_FOLDS)], -1)
     accuracy = accuracy[:, :, :, None, :]
     chip_acc = per / n
-    p05 = np.quantile(chip_acc, 0.05, axis=-1)
     ordered = np.sort(chip_acc, axis=-1)
+    p05 = ordered[..., max(1, math.ceil(0.05 * n_chips - 1e-9)) - 1]  # rank ceil(0.05 N)
     keys = [f"{k}|{deployment}" for k in cube["result_key"].values]
     dims = (dim, "model", "chip")
     out = cube.drop_vars(

@@ -81,9 +81,14 @@ def has_chips(cube: xr.Dataset) -> bool:
 
 
 def chip_quantile(accuracy: np.ndarray) -> np.ndarray:
-    """The yield statistic of chip accuracies float64 (..., chips): their 5th percentile along
-    the last axis (linear interpolation), the bootstrap's statistic for ``accuracy_p05``."""
-    return np.quantile(accuracy, YIELD_QUANTILE, axis=-1)
+    """The yield statistic of chip accuracies float64 (..., chips) along the last axis: the
+    order statistic of rank ``ceil(0.05 N)`` (at least 1) of the ``N`` chips, the estimate the
+    cube's ``accuracy_p05`` is (``pipeline.results.yields.quantile_estimate_rank``), so that a
+    bootstrap of it starts from the cube's own number."""
+    values = np.sort(np.asarray(accuracy, dtype=np.float64), axis=-1)
+    n = values.shape[-1]
+    rank = max(1, math.ceil(YIELD_QUANTILE * n - 1e-9))
+    return values[..., rank - 1]
 
 
 def chip_mean(accuracy: np.ndarray) -> np.ndarray:
