@@ -577,4 +577,9 @@ def _yield(chips: ChipYield) -> str:
         if math.isfinite(chips.share) and math.isfinite(chips.target)
         else ""
     )
-    return f"5th percentile {pct_interval(chips.p05, chips.p05_low, chips.p05_high)}{share}"
+    if not math.isfinite(chips.p05_low) and math.isfinite(chips.p05_high):
+        # Fewer than 59 chips give no lower bound from order statistics, only an upper one.
+        interval = f"{pct(chips.p05)} [-, {100 * chips.p05_high:.1f}]"
+    else:
+        interval = pct_interval(chips.p05, chips.p05_low, chips.p05_high)
+    return f"5th percentile {interval}{share}"

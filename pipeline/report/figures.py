@@ -76,7 +76,9 @@ def draw_report(report: Report) -> dict[str, Figure]:
             log=False,
         ),
         Panel.SPIKE_METRICS.value: lambda: metric_figure(report.fits, chance),
-        Panel.MISMATCH.value: lambda: curve_figure(
+        Panel.MISMATCH.value: lambda: (
+            grouped_figure if any(c.group for c in curves[Panel.MISMATCH]) else curve_figure
+        )(
             PANEL_TITLES[Panel.MISMATCH],
             curves[Panel.MISMATCH],
             "threshold mismatch sigma_rel (% of threshold)",
@@ -184,6 +186,59 @@ def curve_figure(
         ax.axvline(paper_x * scale, color="grey", linestyle=":", label=f"paper: {paper_x:g}")
     _chance(ax, chance)
     _finish(ax, title, xlabel)
+    return figure
+
+
+def grouped_figure(
+    title: str,
+    curves: Sequence[Curve],
+    xlabel: str,
+    chance: float | None,
+    *,
+    log: bool = False,
+    scale: float = 1.0,
+) -> Figure:
+    """One panel per group of curves (the chips' deployments), side by side on one accuracy
+    axis: each model's accuracy with its 95 % interval bars and, for designs of several chips,
+    the chips' 5th-95th percentile band."""
+    groups = list(dict.fromkeys(c.group for c in curves))
+    figure = Figure(
+        figsize=(max(_SIZE_IN[0], 3.6 * len(groups)), _SIZE_IN[1] + 0.4), layout="constrained"
+    )
+    FigureCanvasAgg(figure)
+    axes = np.atleast_1d(figure.subplots(1, len(groups), sharey=True, squeeze=False)[0])
+    for ax, group in zip(axes, groups, strict=True):
+        mine = [c for c in curves if c.group == group]
+        sweeps = list(dict.fromkeys(c.sweep for c in mine))
+        for curve in mine:
+            marker = _MARKERS[sweeps.index(curve.sweep) % len(_MARKERS)]
+            ax.errorbar(
+                curve.x * scale,
+                100 * curve.mean,
+                yerr=_interval_bars(curve.mean, curve.low, curve.high),
+                marker=marker,
+                color=_color(curve.model),
+                capsize=3,
+                label=curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else ""),
+            )
+            if curve.chip_low is not None and curve.chip_high is not None:
+                ax.fill_between(
+                    curve.x * scale,
+                    100 * curve.chip_low,
+                    100 * curve.chip_high,
+                    color=_color(curve.model),
+                    alpha=0.15,
+                    label=f"{curve.model.upper()} chips, 5th-95th percentile",
+                )
+        if log and all(np.all(c.x > 0) for c in mine):
+            _log_x(ax, FixedLocator(np.unique(np.concatenate([c.x for c in mine])) * scale))
+        _chance(ax, chance)
+        _finish(ax, group or "-", xlabel)
+        if ax is not axes[0]:
+            ax.set_ylabel("")
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
+    figure.suptitle(_wrap(title, 90))
     return figure
 
 

@@ -88,8 +88,13 @@ def test_fig10_sets_the_deployments_side_by_side_with_their_spread(report):
     stated = deployment_sweep_p05(report, shared)
     np.testing.assert_allclose(shared.chip_low, stated)
     assert not report.heatmaps  # the 2-D sweep is Fig. 10, not a heat map
+    from matplotlib.collections import PolyCollection
+
     figure = draw_report(report)[Panel.MISMATCH.value]
-    assert len(figure.axes[0].collections) >= 6  # a band per curve beside the error bars
+    assert [ax.get_title() for ax in figure.axes] == ["per_chip", "shared", "robust"]
+    for ax in figure.axes:  # a band per model beside its error bars
+        bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
+        assert len(bands) == 2
 
 
 def deployment_sweep_p05(report, curve):
