@@ -12,7 +12,7 @@ import xarray as xr
 from pipeline.errors import EskinError
 from pipeline.report import paper
 from pipeline.report.answer import ModelAnswer, YieldAnswer, design_answers, yield_answers
-from pipeline.report.chips import chip_curves, pooled
+from pipeline.report.chips import chip_curves, fill_groups, pooled
 from pipeline.report.claims import (
     Claim,
     deployment_note,
@@ -152,8 +152,8 @@ def build_report(
     missing: dict[Panel, str] = {}
     for panel in PANEL_FIELDS:
         names = sweeps_for(panel, cubes)
-        found = tuple(
-            c for n in names for c in chip_curves(n, cubes[n], functools.partial(panel_x, panel))
+        found = fill_groups(
+            [c for n in names for c in chip_curves(n, cubes[n], functools.partial(panel_x, panel))]
         )
         if found:
             curves[panel] = found

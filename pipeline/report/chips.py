@@ -5,7 +5,7 @@ them, and its cube gains a ``chip`` dimension (coordinate 0..N-1; NaN and -1 pad
 fewer chips): ``accuracy`` (axes..., model, chip, repeat, fold), ``accuracy_mean``/``_low``/
 ``_high`` (axes..., model, chip), ``predicted``/``correct`` (axes..., model, chip, repeat,
 recording) and the spike metrics (axes..., chip); the yield statistics (axes..., model) are
-computed once, where the cube is built (:mod:`pipeline.results.yields`): ``accuracy_chip_mean``
+computed once, where the cube is built (``pipeline.results.yields``): ``accuracy_chip_mean``
 (the mean over chips), ``accuracy_p05`` (the 5th percentile over chips) with its distribution-free
 95 % interval ``accuracy_p05_low``/``_high`` (order statistics) and ``yield_share`` (the share of
 chips at or above ``chips.yield_target``).
@@ -40,7 +40,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +54,8 @@ CHIP_DIM = "chip"
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
 CHIP_COUNT = "chips.count"
 YIELD_TARGET = "chips.yield_target"
+#: The deployment of a point that names none: one chip, its own classifier (the scene's default).
+DEFAULT_DEPLOYMENT = "per_chip"
 #: The deployment the paper's Fig. 10 claim is judged on: one classifier loaded into every chip,
 #: the way chips are shipped without calibrating each.
 CLAIM_DEPLOYMENT = "shared"
@@ -339,3 +341,12 @@ def chip_curves(
         x = x_of(part)
         curves += [with_chip_spread(c, part, x, group) for c in sweep_curves(name, part, x)]
     return tuple(curves)
+
+
+def fill_groups(curves: Sequence[Curve]) -> tuple[Curve, ...]:
+    """Curves of one figure where some state their deployment: those that do not are of the
+    default one (:data:`DEFAULT_DEPLOYMENT`); curves none of which states one are returned as
+    they are."""
+    if not any(c.group for c in curves):
+        return tuple(curves)
+    return tuple(c if c.group else dataclasses.replace(c, group=DEFAULT_DEPLOYMENT) for c in curves)

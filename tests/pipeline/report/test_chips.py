@@ -141,3 +141,18 @@ def test_the_answer_by_yield_is_the_cheapest_not_significantly_below_the_best(re
     markdown = render_markdown(report_blocks(report, set(report.figure_stems), version="x"))
     answer_part = markdown[: markdown.index("## Against the paper")]
     assert "FFNN by yield" in answer_part and "CNN by yield" in answer_part
+
+
+def test_a_plain_mismatch_sweep_beside_a_shared_one_is_the_default_deployment(plain):
+    found = build_report({"mismatch": plain, "mismatch_shared": with_chips(plain, "shared")})
+    curves = found.curves[Panel.MISMATCH]
+    assert [(c.sweep, c.group, c.chip_low is None) for c in curves] == [
+        ("mismatch", "per_chip", True),
+        ("mismatch", "per_chip", True),
+        ("mismatch_shared", "shared", False),
+        ("mismatch_shared", "shared", False),
+    ]
+    (claim,) = [c for c in found.claims if c.panel is Panel.MISMATCH]
+    assert "at 30% against 0%: significantly below" in claim.sentence
+    assert "FFNN, per_chip" not in claim.sentence
+    assert "FFNN, per_chip" not in found.mismatch_note and "FFNN, shared" in found.mismatch_note
