@@ -350,3 +350,18 @@ def fill_groups(curves: Sequence[Curve]) -> tuple[Curve, ...]:
     if not any(c.group for c in curves):
         return tuple(curves)
     return tuple(c if c.group else dataclasses.replace(c, group=DEFAULT_DEPLOYMENT) for c in curves)
+
+
+def method_sentence() -> str:
+    """How designs of several chips are read and compared, said once with the answer's method."""
+    return (
+        "Designs simulated as several chips: a design's accuracy is the mean over its chips, its "
+        "95 % interval the test set's (a bootstrap over recordings, every chip's prediction of a "
+        "drawn recording drawn with it); two such designs are compared by a bootstrap over chips "
+        "and recordings together (the same recordings and, the chips being common random "
+        "numbers, the same chip indices for both), of the mean over chips or, for the answer by "
+        "yield, of the 5th percentile over chips; a design of several chips against one of one "
+        "chip compares the chips' mean with that chip on the recordings. The yield's 95 % "
+        "interval is distribution-free, from order statistics: fewer than 59 chips give no "
+        "lower bound."
+    )

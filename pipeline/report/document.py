@@ -38,6 +38,7 @@ from pipeline.report.answer import (
     yield_sentence,
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
+from pipeline.report.chips import method_sentence as chips_method_sentence
 from pipeline.report.cost import observation_sentence
 from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
@@ -159,6 +160,7 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
                 Paragraph(s)
                 for s in method_sentences(len(report.designs), report.frame, report.energy)
             ),
+            *((Paragraph(chips_method_sentence()),) if report.yield_answers else ()),
             Items(report.energy.assumptions()),
             Table(COMPARISON_COLUMNS, tuple(r for a in report.answers for r in comparison_rows(a))),
         ),

@@ -141,6 +141,7 @@ def test_the_answer_by_yield_is_the_cheapest_not_significantly_below_the_best(re
     markdown = render_markdown(report_blocks(report, set(report.figure_stems), version="x"))
     answer_part = markdown[: markdown.index("## Against the paper")]
     assert "FFNN by yield" in answer_part and "CNN by yield" in answer_part
+    assert "Designs simulated as several chips" in answer_part
 
 
 def test_a_plain_mismatch_sweep_beside_a_shared_one_is_the_default_deployment(plain):
