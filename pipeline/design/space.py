@@ -116,8 +116,8 @@ class Metric(enum.StrEnum):
         return self in (Metric.ACCURACY, Metric.YIELD)
 
 
-#: The dotted scene fields the area and yield objectives need: the mismatch that sizes the
-#: comparators' devices, and the chips a yield is taken over.
+#: The dotted scene fields the area and yield objectives need (the mismatch that sizes the
+#: comparators' devices, and the chips a yield is taken over).
 MISMATCH_FIELD = "readout.effects.threshold_mismatch"
 CHIPS_COUNT_FIELD = "chips.count"
 #: The chip dimension of a cube whose points simulate several chips.

@@ -54,10 +54,10 @@ CHIP_DIM = "chip"
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
 CHIP_COUNT = "chips.count"
 YIELD_TARGET = "chips.yield_target"
-#: The deployment of a point that names none: one chip, its own classifier (the scene's default).
+#: The deployment of a point that names none (one chip, its own classifier, the scene's default).
 DEFAULT_DEPLOYMENT = "per_chip"
-#: The deployment the paper's Fig. 10 claim is judged on: one classifier loaded into every chip,
-#: the way chips are shipped without calibrating each.
+#: The deployment the paper's Fig. 10 claim is judged on (one classifier loaded into every chip,
+#: the way chips are shipped without calibrating each).
 CLAIM_DEPLOYMENT = "shared"
 #: The quantile of the chips' accuracies the yield is (the 5th percentile).
 YIELD_QUANTILE = 0.05

@@ -62,7 +62,7 @@ class Curve:
 
     @property
     def label(self) -> str:
-        """The model, with the curve's group: ``"FFNN"``, ``"FFNN, shared"``."""
+        """The model and the curve's group, e.g. ``"FFNN"`` or ``"FFNN, shared"``."""
         return self.model.upper() + (f", {self.group}" if self.group else "")
 
     @property

@@ -171,7 +171,7 @@ A_VT_SOURCE = (
 )
 """Where :data:`A_VT_V_M` comes from."""
 MATCHED_DEVICES_PER_TAXEL = 4
-"""Matched input transistors per taxel: two comparators (up, down), a differential pair each."""
+"""Matched input transistors per taxel (two comparators, up and down, a differential pair each)."""
 
 
 @dataclass(frozen=True)
