@@ -156,27 +156,7 @@ def curve_figure(
         marker = _MARKERS[(sweeps.index(curve.sweep) + groups.index(curve.group)) % len(_MARKERS)]
         label = curve.label + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
         style = _LINES[groups.index(curve.group) % len(_LINES)]
-        ax.errorbar(
-            curve.x * scale,
-            100 * curve.mean,
-            yerr=_interval_bars(curve.mean, curve.low, curve.high),
-            marker=marker,
-            color=_color(curve.model),
-            linestyle=style,
-            capsize=3,
-            label=label,
-        )
-        if curve.chip_low is not None and curve.chip_high is not None:
-            # The spread over chips, apart from the error bars (the test set's noise).
-            ax.fill_between(
-                curve.x * scale,
-                100 * curve.chip_low,
-                100 * curve.chip_high,
-                color=_color(curve.model),
-                alpha=0.12,
-                linestyle=style,
-                label=f"{label}: chips, 5th-95th percentile",
-            )
+        _draw_curve(ax, curve, scale, marker=marker, style=style, label=label)
     if ticks is not None:
         ax.set_xticks(range(len(ticks)), list(ticks), rotation=30 if len(ticks) > 4 else 0)
     elif log and all(np.all(c.x > 0) for c in curves):
@@ -212,24 +192,8 @@ def grouped_figure(
         sweeps = list(dict.fromkeys(c.sweep for c in mine))
         for curve in mine:
             marker = _MARKERS[sweeps.index(curve.sweep) % len(_MARKERS)]
-            ax.errorbar(
-                curve.x * scale,
-                100 * curve.mean,
-                yerr=_interval_bars(curve.mean, curve.low, curve.high),
-                marker=marker,
-                color=_color(curve.model),
-                capsize=3,
-                label=curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else ""),
-            )
-            if curve.chip_low is not None and curve.chip_high is not None:
-                ax.fill_between(
-                    curve.x * scale,
-                    100 * curve.chip_low,
-                    100 * curve.chip_high,
-                    color=_color(curve.model),
-                    alpha=0.15,
-                    label=f"{curve.model.upper()} chips, 5th-95th percentile",
-                )
+            label = curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
+            _draw_curve(ax, curve, scale, marker=marker, style="-", label=label)
         if log and all(np.all(c.x > 0) for c in mine):
             _log_x(ax, FixedLocator(np.unique(np.concatenate([c.x for c in mine])) * scale))
         _chance(ax, chance)
@@ -374,6 +338,33 @@ def front_figure(front: Front, chance: float | None) -> Figure:
     _chance(ax, chance)
     _finish(ax, f"Accuracy against {front.cost.short}", front.cost.axis, legend_outside=True)
     return figure
+
+
+def _draw_curve(
+    ax: Axes, curve: Curve, scale: float, *, marker: str, style: str, label: str
+) -> None:
+    """One curve: accuracy with its 95 % interval bars and, for designs of several chips, the
+    chips' 5th-95th percentile as a band, apart from the bars (the test set's noise)."""
+    ax.errorbar(
+        curve.x * scale,
+        100 * curve.mean,
+        yerr=_interval_bars(curve.mean, curve.low, curve.high),
+        marker=marker,
+        color=_color(curve.model),
+        linestyle=style,
+        capsize=3,
+        label=label,
+    )
+    if curve.chip_low is not None and curve.chip_high is not None:
+        ax.fill_between(
+            curve.x * scale,
+            100 * curve.chip_low,
+            100 * curve.chip_high,
+            color=_color(curve.model),
+            alpha=0.15,
+            linestyle=style,
+            label=f"{label}: chips, 5th-95th percentile",
+        )
 
 
 def _interval_bars(mean: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
