@@ -9,6 +9,7 @@ recordings, all one way, and the exact McNemar p-value is ``binomtest(k_a - k_b,
 Fold accuracies are those of the same predictions, fold by fold.
 """
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -153,3 +154,106 @@ def make_cubes(
             n_windows_used=8 if scene.coding.n_windows == "auto" else scene.coding.n_windows,
         )
     return {s.name: build_cube(grid, s, records) for s in grid.sweeps}
+
+
+#: How a chip's accuracy falls with the mismatch sigma_rel, by deployment (points per unit of
+#: sigma_rel), and how far its chips spread (the chips' offsets scale with sigma_rel too).
+CHIP_LOSS = {"per_chip": 0.1, "robust": 0.3, "shared": 0.6}
+CHIP_SPREAD = {"per_chip": 0.1, "robust": 0.2, "shared": 0.4}
+
+
+def with_chips(cube, deployment: str, n_chips: int = 20, target: float = 0.4):
+    """``cube`` (one sweep of ``readout.effects.threshold_mismatch.sigma_rel``, one repeat, from
+    :func:`make_cubes`) as the contract lays out a cube of ``n_chips`` chips per point.
+
+    Chip ``c`` of a point of accuracy ``a`` at mismatch ``s`` gets the first
+    ``n_right(a - CHIP_LOSS[d] * s + CHIP_SPREAD[d] * s * z_c)`` recordings right, ``z_c``
+    spread evenly over [-1, 1]: nested, so that paired tests are exact. The yield variables are
+    computed here by plain numpy (the 5th percentile the order statistic of rank ceil(0.05 N),
+    its interval, for the test's sake, the order statistics 1 and 3). Result keys get
+    ``|deployment`` appended.
+    """
+    dim = "sigma_rel"
+    sigma = cube[dim].values
+    z = np.linspace(-1.0, 1.0, n_chips)
+    labels = cube["label"].values
+    n = labels.size
+    base = cube["accuracy_mean"].transpose(dim, "model").values
+    per = np.array(
+        [
+            [
+                [
+                    n_right(a - CHIP_LOSS[deployment] * s + CHIP_SPREAD[deployment] * s * zc)
+                    for zc in z
+                ]
+                for a in row
+            ]
+            for s, row in zip(sigma, base, strict=True)
+        ]
+    )  # (sigma, model, chip) right recordings
+    right = np.arange(n)[None, None, None, :] < per[..., None]  # (sigma, model, chip, rec)
+    wrong = (labels + 1) % 12
+    predicted = np.where(right, labels, wrong).astype(np.int16)[:, :, :, None, :]
+    correct = right.astype(np.int8)[:, :, :, None, :]
+    folds = cube["test_fold"].values[0, 0]  # (recording,)
+    accuracy = np.stack([right[..., folds == k].mean(axis=-1) for k in range(N_FOLDS)], -1)
+    accuracy = accuracy[:, :, :, None, :]
+    chip_acc = per / n
+    ordered = np.sort(chip_acc, axis=-1)
+    p05 = ordered[..., max(1, math.ceil(0.05 * n_chips - 1e-9)) - 1]  # rank ceil(0.05 N)
+    keys = [f"{k}|{deployment}" for k in cube["result_key"].values]
+    dims = (dim, "model", "chip")
+    out = cube.drop_vars(
+        [
+            *("accuracy", "accuracy_mean", "accuracy_low", "accuracy_high"),
+            *("predicted", "correct", "ssnr_db", "event_rate_hz", "data_rate_bps"),
+        ]
+    )
+    return (
+        out.assign(
+            accuracy=((*dims, "repeat", "fold"), accuracy),
+            accuracy_mean=(dims, chip_acc),
+            accuracy_low=(dims, chip_acc - 0.08),
+            accuracy_high=(dims, chip_acc + 0.08),
+            predicted=((*dims, "repeat", "recording"), predicted),
+            correct=((*dims, "repeat", "recording"), correct),
+            ssnr_db=(
+                (dim, "chip"),
+                np.broadcast_to(cube["ssnr_db"].values[:, None], (sigma.size, n_chips)),
+            ),
+            event_rate_hz=((dim, "chip"), np.tile(cube["event_rate_hz"].values[:, None], n_chips)),
+            data_rate_bps=((dim, "chip"), np.tile(cube["data_rate_bps"].values[:, None], n_chips)),
+            accuracy_chip_mean=((dim, "model"), chip_acc.mean(axis=-1)),
+            accuracy_p05=((dim, "model"), p05),
+            accuracy_p05_low=((dim, "model"), ordered[..., 0]),
+            accuracy_p05_high=((dim, "model"), ordered[..., 2]),
+            yield_share=((dim, "model"), (chip_acc >= target).mean(axis=-1)),
+        )
+        .assign_coords(
+            chip=("chip", np.arange(n_chips)),
+            result_key=(dim, keys),
+            **{
+                "chips.deployment": deployment,
+                "chips.count": n_chips,
+                "chips.yield_target": target,
+            },
+        )
+        .assign_attrs(sweep=f"{cube.attrs['sweep']}_{deployment}")
+    )
+
+
+def deployment_sweep(cube, deployments=("per_chip", "shared", "robust"), **chips):
+    """One cube of the mismatch and the deployment swept together: :func:`with_chips` of each
+    deployment, concatenated along a ``deployment`` dimension (attribute ``field``
+    ``chips.deployment``)."""
+    import xarray as xr
+
+    parts = [with_chips(cube, d, **chips).drop_vars("chips.deployment") for d in deployments]
+    joined = xr.concat(
+        parts, "deployment", data_vars="all", coords="different", compat="equals", join="exact"
+    )
+    attrs = {"field": "chips.deployment", "units": "1", "long_name": "deployment"}
+    joined = joined.assign_coords(deployment=("deployment", list(deployments), attrs))
+    return joined.transpose("sigma_rel", "deployment", ...).assign_attrs(
+        sweep="mismatch_deployment"
+    )

@@ -19,7 +19,7 @@ TOML layout::
 
     [objectives]
     "accuracy.ffnn" = "max"            # accuracy_mean of a model the base scene trains
-    "data_rate_bps" = "min"            # or readout_power_w, compute_s
+    "data_rate_bps" = "min"            # or readout_power_w, compute_s, array_area_m2
 
 A range ``{low, high}`` of an integer field is an integer range (``step`` default 1), of a float
 field a continuous one (``step`` optional, ``log = true`` samples ``log(value)`` uniformly and
@@ -48,9 +48,19 @@ Objectives (:class:`Metric`), read per trial from its result cube:
   would achieve, and its accuracy is the cost of deciding early;
 * ``decoder_energy_j.<model>``: the decoder's mean energy per decision (J) under the same early
   exit, at the high end of its band (:class:`pipeline.results.hardware.DecoderEnergyModel`;
-  the high end so that a search never promises what only the most frugal chip delivers).
+  the high end so that a search never promises what only the most frugal chip delivers); both
+  are NaN, and the trial failed, where the cube keeps no decisions;
+* ``array_area_m2``: the comparators' matched gate area of the array that the point's threshold
+  mismatch demands by Pelgrom's law (:func:`pipeline.results.hardware.array_area_m2` of
+  ``array.rows * array.cols``, ``sigma_rel`` and ``threshold_v``, m^2; minimise it): needs
+  ``readout.effects.threshold_mismatch`` in the base scene or a searched field of it;
+* ``accuracy_p05.<model>``: the yield, the 5th percentile over chips of that model's accuracy
+  (the cube's ``accuracy_p05``; maximise it): needs ``chips.count`` above 1 in the base scene
+  or among the searched fields.
 
-Both are NaN, and the trial failed, where the cube keeps no decisions.
+A point simulated as several chips (``chips.count`` > 1) states its accuracy and rates per chip:
+``accuracy.<model>`` is then the mean over chips (``accuracy_chip_mean``) and the rates are
+their means over chips.
 """
 
 from __future__ import annotations
@@ -83,7 +93,7 @@ from pipeline.design.grid import (
 )
 from pipeline.design.scene import Model, Scene, SceneVariants
 from pipeline.errors import SceneError
-from pipeline.results.hardware import event_power_w
+from pipeline.results.hardware import array_area_m2, event_power_w
 from pipeline.results.latency import exit_objectives
 
 #: The name of the trial cube's sweep.
@@ -111,12 +121,21 @@ class Metric(enum.StrEnum):
     DATA_RATE = "data_rate_bps"
     POWER = "readout_power_w"
     COMPUTE = "compute_s"
-    DECISION_TIME = "decision_s"
-    DECODER_ENERGY = "decoder_energy_j"
+    AREA = "array_area_m2"
+    YIELD = "accuracy_p05"
+
+    @property
+    def per_model(self) -> bool:
+        """Whether the objective is of one model (``<metric>.<model>``)."""
+        return self in (Metric.ACCURACY, Metric.YIELD, Metric.DECISION_TIME, Metric.DECODER_ENERGY)
 
 
-#: The objectives measured per model, named ``<metric>.<model>``.
-PER_MODEL = frozenset({Metric.ACCURACY, Metric.DECISION_TIME, Metric.DECODER_ENERGY})
+#: The dotted scene fields the area and yield objectives need (the mismatch that sizes the
+#: comparators' devices, and the chips a yield is taken over).
+MISMATCH_FIELD = "readout.effects.threshold_mismatch"
+CHIPS_COUNT_FIELD = "chips.count"
+#: The chip dimension of a cube whose points simulate several chips.
+CHIP_DIM = "chip"
 
 
 class Sampler(enum.StrEnum):
@@ -176,7 +195,7 @@ class Dimension:
 
 @dataclass(frozen=True)
 class Objective:
-    """One objective: ``metric`` (of ``model`` for those of :data:`PER_MODEL`) and its
+    """One objective: ``metric`` (of ``model`` for those :attr:`Metric.per_model`) and its
     ``direction``."""
 
     metric: Metric
@@ -295,11 +314,20 @@ def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.nd
     """float64 (points, objectives): each objective of every point of a cube with one sweep
     dimension (a trial cube), NaN where the point does not state it."""
     (dim,) = [d for d in cube["result_key"].dims]
+    cube = _over_chips(cube)
     columns = []
     for objective in objectives:
         match objective.metric:
             case Metric.ACCURACY:
                 values = cube["accuracy_mean"].sel(model=objective.model)
+            case Metric.YIELD:
+                values = (
+                    cube["accuracy_p05"].sel(model=objective.model)
+                    if "accuracy_p05" in cube
+                    else xr.DataArray(np.full(cube.sizes[dim], np.nan), dims=(dim,))
+                )
+            case Metric.AREA:
+                values = xr.DataArray(_array_area(cube, dim), dims=(dim,))
             case Metric.DATA_RATE:
                 values = cube["data_rate_bps"]
             case Metric.POWER:
@@ -315,6 +343,40 @@ def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.nd
                 values = xr.DataArray(chosen, dims=cube["result_key"].dims)
         columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
     return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
+
+
+def _over_chips(cube: xr.Dataset) -> xr.Dataset:
+    """A cube of several chips per point as one of one: ``accuracy_mean`` the mean over chips
+    (``accuracy_chip_mean``), every other variable along ``chip`` its mean over the chips."""
+    if CHIP_DIM not in cube.dims:
+        return cube
+    chipped = [name for name, v in cube.data_vars.items() if CHIP_DIM in v.dims]
+    means = {name: cube[name].mean(CHIP_DIM, skipna=True) for name in chipped}
+    if "accuracy_chip_mean" in cube:
+        means["accuracy_mean"] = cube["accuracy_chip_mean"]
+    return cube.assign(means)
+
+
+def _array_area(cube: xr.Dataset, dim: str) -> np.ndarray:
+    """float64 (points,): each point's :func:`~pipeline.results.hardware.array_area_m2`, NaN
+    where the cube does not state its mismatch."""
+    from pipeline.results.cube import field_coordinate
+
+    def values(field: str) -> np.ndarray:
+        name = field_coordinate(cube, field)
+        if name is None:
+            return np.full(cube.sizes[dim], np.nan)
+        found = cube[name].broadcast_like(cube["result_key"]).transpose(dim).values
+        return np.asarray(found, dtype=np.float64)
+
+    rows, cols = values("array.rows"), values("array.cols")
+    sigma_rel = values(f"{MISMATCH_FIELD}.sigma_rel")
+    threshold_v = values("readout.threshold_v")
+    known = np.isfinite(rows * cols * sigma_rel * threshold_v)
+    area = np.full(known.shape, np.nan)
+    if known.any():
+        area[known] = array_area_m2((rows * cols)[known], sigma_rel[known], threshold_v[known])
+    return area
 
 
 # ---------------------------------------------------------------------------------------------
@@ -353,6 +415,7 @@ def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
     dimensions = [d for f, v in dims_data.items() if (d := _read_dimension(f, v, problems))]
     _check_against_base(base, dimensions, problems)
     objectives = _read_objectives(data.get("objectives"), base, problems)
+    _check_objective_needs(base, dimensions, objectives, problems)
     return Space(name, base, tuple(dimensions), tuple(objectives), seed, sampler)
 
 
@@ -467,12 +530,7 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
     if not isinstance(data, Mapping) or not 2 <= len(data) <= 3:
         problems.append('objectives: needs two or three, e.g. "accuracy.ffnn" = "max"')
         return []
-    metrics = ", ".join(
-        [
-            *(f"{m.value}.<model>" for m in Metric if m in PER_MODEL),
-            *(m.value for m in Metric if m not in PER_MODEL),
-        ]
-    )
+    metrics = ", ".join(m.value + (".<model>" if m.per_model else "") for m in Metric)
     objectives = []
     for name, direction in data.items():
         where = f"objectives.{name}"
@@ -487,7 +545,7 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
         except ValueError:
             problems.append(f"{where}: expected 'max' or 'min', got {direction!r}")
             continue
-        if (metric in PER_MODEL) != bool(model):
+        if metric.per_model != bool(model):
             problems.append(f"{where}: unknown objective (known: {metrics})")
             continue
         if model:
@@ -500,3 +558,29 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
                 continue
         objectives.append(Objective(metric, direction, model or None))
     return objectives
+
+
+def _check_objective_needs(
+    base: Scene, dimensions: list[Dimension], objectives: list[Objective], problems: list[str]
+) -> None:
+    """The area objective needs a mismatch to size for; the yield objective needs chips."""
+    searched = [d.field for d in dimensions]
+    for objective in objectives:
+        where = f"objectives.{objective.name}"
+        if objective.metric is Metric.AREA:
+            named = MISMATCH_FIELD.rsplit(".", 1)[1] in base.readout.effects
+            if not named and not any(f.startswith(MISMATCH_FIELD + ".") for f in searched):
+                problems.append(
+                    f"{where}: needs {MISMATCH_FIELD} in the base scene or among the searched "
+                    "fields (the area is sized for the mismatch a design names)"
+                )
+        if objective.metric is Metric.YIELD:
+            try:
+                count = fields.get(base, CHIPS_COUNT_FIELD)
+            except (fields.UnknownField, AttributeError, KeyError):
+                count = 1
+            if not (isinstance(count, int) and count > 1) and CHIPS_COUNT_FIELD not in searched:
+                problems.append(
+                    f"{where}: needs {CHIPS_COUNT_FIELD} above 1 in the base scene or among the "
+                    "searched fields (a yield is taken over chips)"
+                )

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -10,9 +11,11 @@ import xarray as xr
 
 from pipeline.errors import EskinError
 from pipeline.report import paper
-from pipeline.report.answer import ModelAnswer, design_answers
+from pipeline.report.answer import ModelAnswer, YieldAnswer, design_answers, yield_answers
+from pipeline.report.chips import chip_curves, fill_groups, pooled
 from pipeline.report.claims import (
     Claim,
+    deployment_note,
     metric_claim,
     mismatch_claim,
     optimum_claim,
@@ -29,7 +32,7 @@ from pipeline.report.cubes import (
     sweep_dims,
     sweeps_for,
 )
-from pipeline.report.curves import Curve, MetricFit, metric_fits, sweep_curves
+from pipeline.report.curves import Curve, MetricFit, metric_fits
 from pipeline.report.designs import Design, FrameReadout, gather_designs
 from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
@@ -59,6 +62,10 @@ class Report:
     paired test). ``searches`` are the run's searches, each by its front. ``latency`` holds,
     per model, accuracy against decision time at its best design and what a decision costs
     (empty for cubes that keep no decisions); ``decoder`` prices the decoder's operations.
+    ``mismatch_note`` sets
+    Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
+    (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
+    design.
     """
 
     grids: tuple[str, ...]
@@ -85,6 +92,8 @@ class Report:
     searches: tuple[SearchFront, ...] = ()
     latency: tuple[LatencyCurve, ...] = ()
     decoder: DecoderEnergyModel = field(default_factory=DecoderEnergyModel)
+    mismatch_note: str | None = None
+    yield_answers: tuple[YieldAnswer, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -152,13 +161,17 @@ def build_report(
             "already in the store are not recomputed)"
         )
     energy = energy if energy is not None else EnergyModel()
+    # Points of several chips as one design each (mean over chips), the chips kept beside.
+    cubes = {name: pooled(cube) for name, cube in cubes.items()}
     evidence = gather_evidence(cubes)
     designs = gather_designs(cubes)
     curves: dict[Panel, tuple[Curve, ...]] = {}
     missing: dict[Panel, str] = {}
     for panel in PANEL_FIELDS:
         names = sweeps_for(panel, cubes)
-        found = tuple(c for n in names for c in sweep_curves(n, cubes[n], panel_x(panel, cubes[n])))
+        found = fill_groups(
+            [c for n in names for c in chip_curves(n, cubes[n], functools.partial(panel_x, panel))]
+        )
         if found:
             curves[panel] = found
         else:
@@ -205,6 +218,8 @@ def build_report(
         searches=search_fronts(cubes),
         latency=latency_curves(decisions, answers, decoder),
         decoder=decoder,
+        mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
+        yield_answers=yield_answers(designs, evidence, energy),
     )
 
 
@@ -241,6 +256,8 @@ def _other_pictures(
     plots, maps, undrawn = [], [], []
     for name, cube in cubes.items():
         dims = sweep_dims(cube)
+        if len(dims) == 2 and name in plotted:
+            continue  # a panel's field by deployment: the panel draws a curve per deployment
         if len(dims) == 1 and name not in plotted:
             if (plot := sweep_plot(name, cube)) is not None:
                 plots.append(plot)

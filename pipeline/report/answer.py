@@ -24,6 +24,15 @@ decision is power times the seconds of touch the design observed. Where the cube
 decoder's operations, the decoder's energy per decision at the full touch stands beside it, a
 band (:func:`pipeline.results.hardware.decoder_energy_j`; the small table gains its column).
 
+By yield, for runs whose designs are simulated as several chips each
+(:mod:`pipeline.report.chips`): per model, the design with the highest 5th percentile of
+accuracy over its chips (``accuracy_p05``, the share of chips a designer can sign off on) is the
+*best by yield*; every other design of several chips is compared with it by a bootstrap over
+chips and recordings together (:meth:`pipeline.report.evidence.Evidence.compare_yield`),
+Holm-corrected; the cheapest by data rate and by power not significantly below it are the
+answer by yield (:func:`yield_answers`), said in one sentence beside the answer above
+(:func:`yield_sentence`).
+
 What the report shows of it: per model a small table (:func:`glance_rows`) and one sentence on
 how sure it is (:func:`how_sure`); then, once, the method (:func:`method_sentences`) and every
 comparison with the best (:func:`comparison_rows`).
@@ -32,10 +41,11 @@ comparison with the best (:func:`comparison_rows`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from pipeline.report import paper
+from pipeline.report.chips import ChipYield
 from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost, readout_power
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import REPEATS
@@ -43,6 +53,7 @@ from pipeline.report.text import (
     NO_INTERVAL_WHY,
     comparison,
     fold_spread,
+    pct,
     pct_interval,
     rate,
     si,
@@ -180,16 +191,9 @@ def model_answer(
     if not mine:
         return None
 
-    def rank(d: Design) -> tuple[float, float]:
-        rate_bps = d.data_rate_bps if math.isfinite(d.data_rate_bps) else math.inf
-        return (-d.accuracy[model].mean, rate_bps)
-
-    best = min(mine, key=rank)  # min is stable: the first met among equals
-    others = [d for d in mine if d is not best]
-    tests = [evidence.compare(d.key, best.key, model) for d in others]
-    tested = [t for t in tests if t is not None]
-    adjusted = iter(holm([t.p_value for t in tested]))
-    holm_ps = [None if t is None else float(next(adjusted)) for t in tests]
+    best, others, tests, tested, holm_ps = _against_best(
+        mine, lambda d: d.accuracy[model].mean, lambda d, b: evidence.compare(d, b, model)
+    )
 
     def candidate(d: Design, test: PairedComparison | None, holm_p: float | None) -> Candidate:
         n = d.n_taxels
@@ -397,6 +401,30 @@ def comparison_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
     return tuple(rows)
 
 
+def _against_best(
+    designs: Sequence[Design],
+    score: Callable[[Design], float],
+    compare: Callable[[str, str], PairedComparison | None],
+) -> tuple[
+    Design, list[Design], list[PairedComparison | None], list[PairedComparison], list[float | None]
+]:
+    """The best of ``designs`` by ``score`` (ties to the lower data rate, then the first met),
+    the others, each one's comparison with it (``compare(key, best key)``, None: not made), the
+    comparisons made, and their Holm-adjusted p-values (None where not made)."""
+
+    def rank(d: Design) -> tuple[float, float]:
+        rate_bps = d.data_rate_bps if math.isfinite(d.data_rate_bps) else math.inf
+        return (-score(d), rate_bps)
+
+    best = min(designs, key=rank)  # min is stable: the first met among equals
+    others = [d for d in designs if d is not best]
+    tests = [compare(d.key, best.key) for d in others]
+    tested = [t for t in tests if t is not None]
+    adjusted = iter(holm([t.p_value for t in tested]))
+    holm_ps = [None if t is None else float(next(adjusted)) for t in tests]
+    return best, others, tests, tested, holm_ps
+
+
 def _roles(answer: ModelAnswer) -> list[tuple[Candidate, list[str]]]:
     roles: dict[int, tuple[Candidate, list[str]]] = {}
     for chosen, role in (
@@ -433,3 +461,159 @@ def _ratio(frame: float | None, event: float) -> float:
     if event <= 0:
         return math.inf if frame > 0 else math.nan
     return frame / event
+
+
+@dataclass(frozen=True)
+class YieldCandidate:
+    """One design of several chips for one model, against the model's best design by yield.
+
+    ``versus_best`` is ``yield(design) - yield(best)`` (None for the best itself and for a design
+    that cannot be compared), ``holm_p`` its Holm-adjusted p-value; the costs are NaN when
+    unknown.
+    """
+
+    design: Design
+    chips: ChipYield
+    versus_best: PairedComparison | None
+    holm_p: float | None
+    data_rate_bps: float
+    power_w: float
+
+    @property
+    def below_best(self) -> bool:
+        """Significantly below the best by yield (Holm-adjusted p < ALPHA, a negative
+        difference)."""
+        return (
+            self.versus_best is not None
+            and self.holm_p is not None
+            and self.holm_p < ALPHA
+            and self.versus_best.difference < 0
+        )
+
+
+@dataclass(frozen=True)
+class YieldAnswer:
+    """The answer by yield for one model: the ``best`` design by yield and the cheapest by data
+    rate and by power not significantly below it (None when no design states that cost);
+    ``comparisons`` the size of the Holm family, ``untested`` the designs not compared;
+    ``candidates`` every design of several chips, the best first."""
+
+    model: str
+    best: YieldCandidate
+    by_data_rate: YieldCandidate | None
+    by_power: YieldCandidate | None
+    comparisons: int
+    untested: int
+    candidates: tuple[YieldCandidate, ...] = ()
+
+
+def yield_answers(
+    designs: Sequence[Design], evidence: Evidence, energy: EnergyModel
+) -> tuple[YieldAnswer, ...]:
+    """One :class:`YieldAnswer` per model that a design of several chips states a yield for."""
+    models = list(dict.fromkeys(m for d in designs for m in d.yields))
+    return tuple(
+        answer
+        for model in models
+        if (answer := yield_answer(designs, evidence, model, energy)) is not None
+    )
+
+
+def yield_answer(
+    designs: Sequence[Design], evidence: Evidence, model: str, energy: EnergyModel
+) -> YieldAnswer | None:
+    """The answer by yield for ``model`` (see the module docstring); None when no design
+    states a finite yield for it."""
+    mine = [d for d in designs if model in d.yields and math.isfinite(d.yields[model].p05)]
+    if not mine:
+        return None
+
+    best, others, tests, tested, holm_ps = _against_best(
+        mine, lambda d: d.yields[model].p05, lambda d, b: evidence.compare_yield(d, b, model)
+    )
+
+    def candidate(d: Design, test: PairedComparison | None, p: float | None) -> YieldCandidate:
+        return YieldCandidate(
+            design=d,
+            chips=d.yields[model],
+            versus_best=test,
+            holm_p=p,
+            data_rate_bps=cost(d, model, Cost.DATA_RATE, energy),
+            power_w=cost(d, model, Cost.POWER, energy),
+        )
+
+    top = candidate(best, None, None)
+    rest = [candidate(d, t, p) for d, t, p in zip(others, tests, holm_ps, strict=True)]
+    eligible = [top, *(c for c in rest if c.versus_best is not None and not c.below_best)]
+
+    def cheapest(attribute: str) -> YieldCandidate | None:
+        priced = [c for c in eligible if math.isfinite(getattr(c, attribute))]
+        if not priced:
+            return None
+        return min(priced, key=lambda c: (getattr(c, attribute), -c.chips.p05))
+
+    return YieldAnswer(
+        model=model,
+        best=top,
+        by_data_rate=cheapest("data_rate_bps"),
+        by_power=cheapest("power_w"),
+        comparisons=len(tested),
+        untested=len(tests) - len(tested),
+        candidates=(top, *rest),
+    )
+
+
+def yield_sentence(answer: YieldAnswer) -> str:
+    """The answer by yield in one sentence (see the module docstring)."""
+    best = answer.best
+    text = (
+        f"{answer.model.upper()} by yield (the 5th percentile of accuracy over a design's "
+        f"{_chips(best.chips)}): the best is {best.design.label}, "
+        f"{_yield(best.chips)}"
+    )
+    if not answer.comparisons and not answer.untested:
+        return text + "; no other design of several chips to compare it with."
+    roles: dict[int, tuple[YieldCandidate, list[str]]] = {}
+    for c, role in ((answer.by_data_rate, "data rate"), (answer.by_power, "power")):
+        if c is not None:
+            roles.setdefault(id(c), (c, []))[1].append(role)
+    named = []
+    for c, found in roles.values():
+        by = " and by ".join(found)
+        if c is best:
+            named.append(f"it is also the cheapest by {by}")
+        elif c.versus_best is not None:
+            named.append(
+                f"the cheapest by {by} is {c.design.label}, {_yield(c.chips)}, "
+                f"{comparison(c.versus_best, c.holm_p if answer.comparisons > 1 else None)}"
+            )
+    family = (
+        f"Holm-corrected over {answer.comparisons} comparisons"
+        if answer.comparisons > 1
+        else "one comparison"
+    )
+    return (
+        text
+        + "; of the designs whose 5th percentile is not significantly below it (bootstrap over "
+        + f"chips and recordings, {family}), "
+        + "; ".join(named)
+        + "."
+    )
+
+
+def _chips(chips: ChipYield) -> str:
+    return f"{chips.n_chips} chips" + (f", deployed {chips.deployment}" if chips.deployment else "")
+
+
+def _yield(chips: ChipYield) -> str:
+    share = (
+        f", {pct(chips.share)} of chips at or above {pct(chips.target)}"
+        if math.isfinite(chips.share) and math.isfinite(chips.target)
+        else ""
+    )
+    if not math.isfinite(chips.p05_low) and math.isfinite(chips.p05_high):
+        # Fewer than 59 chips give no lower bound from order statistics, only an upper one.
+        interval = f"{pct(chips.p05)} [-, {100 * chips.p05_high:.1f}]"
+    else:
+        interval = pct_interval(chips.p05, chips.p05_low, chips.p05_high)
+    return f"5th percentile {interval}{share}"

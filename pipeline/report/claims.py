@@ -21,7 +21,11 @@ results), per model and sweep, tallied over them.
 * SSNR and STE (Fig. 9): the cube's Pearson ``r`` and two-sided ``p`` of accuracy against the
   metric; SSNR should correlate positively and STE negatively (p < 0.05).
 * Mismatch: the least-squares slope of accuracy on ``sigma_rel`` with its paired bootstrap
-  interval and p-value; supported when significantly negative.
+  interval and p-value; supported when significantly negative. Where the chips' deployment was
+  swept (:mod:`pipeline.report.chips`), the claim is judged on the ``shared`` deployment alone
+  (one classifier loaded into every chip, as chips are shipped uncalibrated), and the largest
+  mismatch is compared with the smallest by a bootstrap over chips and recordings;
+  :func:`deployment_note` sets every deployment side by side.
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.report import paper
+from pipeline.report.chips import CLAIM_DEPLOYMENT
 from pipeline.report.curves import Curve, MetricFit
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import PANEL_TITLES, Panel
@@ -42,6 +47,7 @@ from pipeline.report.text import (
     NO_INTERVAL_WHY,
     comparison,
     p_value,
+    pct,
     pct_interval,
     signed_points,
 )
@@ -311,6 +317,11 @@ def mismatch_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
     if not curves:
         return _absent(Panel.MISMATCH, text)
     parts, verdicts = [], []
+    if any(c.group == CLAIM_DEPLOYMENT for c in curves):
+        curves = [c for c in curves if c.group == CLAIM_DEPLOYMENT]
+        parts.append(
+            f"judged on the {CLAIM_DEPLOYMENT} deployment (one classifier loaded into every chip)"
+        )
     for curve in curves:
         name = _name(curve, curves)
         span = (
@@ -333,13 +344,47 @@ def mismatch_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
         else:
             state, verdict = "a significant rise", Verdict.CONTRADICTS
         per10 = 0.1  # the slope per 10 % mismatch (sigma_rel 0.1)
+        ends = ""
+        if curve.chip_low is not None:
+            test = evidence.compare(curve.keys[-1], curve.keys[0], curve.model)
+            if test is not None:
+                below = test.p_value < ALPHA and test.difference < 0
+                ends = (
+                    f"; at {curve.x[-1]:.0%} against {curve.x[0]:.0%}: "
+                    f"{'significantly below' if below else _NOT_SIGNIFICANT} "
+                    f"({comparison(test, None)}, over chips and recordings)"
+                )
         parts.append(
             f"{span}: {state}, slope {signed_points(per10 * fit.slope)} points per 10 % mismatch "
             f"[{signed_points(per10 * fit.low)}, {signed_points(per10 * fit.high)}], bootstrap "
-            f"p = {p_value(fit.p_value)}"
+            f"p = {p_value(fit.p_value)}{ends}"
         )
         verdicts.append(verdict)
     return Claim(Panel.MISMATCH, text, "; ".join(parts), _tally(verdicts))
+
+
+def deployment_note(curves: Sequence[Curve], evidence: Evidence) -> str | None:
+    """Fig. 10's deployments side by side: per model and deployment, the largest mismatch
+    against the smallest (mean over chips, bootstrap over chips and recordings) and the yield
+    there; None unless the curves hold several chips."""
+    chipped = [c for c in curves if c.chip_low is not None and c.x.size >= 2]
+    if not chipped:
+        return None
+    parts = []
+    for curve in chipped:
+        test = evidence.compare(curve.keys[-1], curve.keys[0], curve.model)
+        change = "not compared" if test is None else comparison(test, None)
+        parts.append(
+            f"{curve.label}: {change}; yield (5th percentile over chips) "
+            f"{pct(float(curve.chip_low[0]))} at {curve.x[0]:.0%}, "
+            f"{pct(float(curve.chip_low[-1]))} at {curve.x[-1]:.0%}"
+        )
+    return (
+        "Over chips, each deployment at its largest mismatch against its smallest (accuracy "
+        "the mean over chips; the difference with its 95 % interval and p from a bootstrap over "
+        "chips and recordings; the error bars are the test set's 95 % interval, the bands the "
+        "chips' spread from the 5th to the 95th percentile): " + "; ".join(parts) + "."
+    )
 
 
 def _holm_tests(
@@ -394,7 +439,7 @@ def _acc(curve: Curve, i: int) -> str:
 
 def _name(curve: Curve, curves: Sequence[Curve]) -> str:
     several = len({c.sweep for c in curves}) > 1
-    return curve.model.upper() + (f" ({curve.sweep})" if several else "")
+    return curve.label + (f" ({curve.sweep})" if several else "")
 
 
 def _absent(panel: Panel, text: str) -> Claim:

@@ -3,7 +3,7 @@
 A cube's *sweep dimensions* are those of ``accuracy_mean`` but ``model`` (one for a 1-D or zipped
 sweep, two for a product of two axes, ...). Which panel a cube feeds is decided by the scene
 fields its one dimension sweeps, read from the ``field`` attribute of its coordinates, never by
-its name.
+its name; a cube that also sweeps the chips' deployment feeds it too, one curve per deployment.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import xarray as xr
 from pipeline.report.panels import (
     COLS,
     DATASET_KIND,
+    DEPLOYMENT,
     MISMATCH_SIGMA_REL,
     N_WINDOWS,
     PANEL_FIELDS,
@@ -61,8 +62,21 @@ def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
     return [
         name
         for name, cube in cubes.items()
-        if is_one_dimensional(cube) and set(swept_fields(cube)) in wanted
+        if (is_one_dimensional(cube) and set(swept_fields(cube)) in wanted)
+        or _by_deployment(cube, wanted)
     ]
+
+
+def _by_deployment(cube: xr.Dataset, wanted: tuple[set[str], ...]) -> bool:
+    """A two-dimensional cube of a panel's field and the chips' deployment (one curve per
+    deployment, :mod:`pipeline.report.chips`)."""
+    fields = set(swept_fields(cube))
+    return (
+        "accuracy_mean" in cube
+        and len(sweep_dims(cube)) == 2
+        and DEPLOYMENT in fields
+        and fields - {DEPLOYMENT} in wanted
+    )
 
 
 def field_values(cube: xr.Dataset, field: str) -> np.ndarray | None:

@@ -40,6 +40,11 @@ class Curve:
         Accuracy (fraction) and its 95 % interval (NaN: no interval).
     std : float64 (n,)
         Population standard deviation of the fold accuracies (secondary).
+    group : str
+        What sets the curve apart from others of its sweep: the chips' deployment ("" for none).
+    chip_low, chip_median, chip_high : float64 (n,) or None
+        The 5th, 50th and 95th percentile of the chips' accuracies at each point, for points
+        of several chips (:mod:`pipeline.report.chips`); None for points of one chip.
     """
 
     sweep: str
@@ -50,6 +55,15 @@ class Curve:
     low: np.ndarray
     high: np.ndarray
     std: np.ndarray
+    group: str = ""
+    chip_low: np.ndarray | None = None
+    chip_median: np.ndarray | None = None
+    chip_high: np.ndarray | None = None
+
+    @property
+    def label(self) -> str:
+        """The model and the curve's group, e.g. ``"FFNN"`` or ``"FFNN, shared"``."""
+        return self.model.upper() + (f", {self.group}" if self.group else "")
 
     @property
     def has_interval(self) -> bool:

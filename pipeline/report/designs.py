@@ -21,7 +21,10 @@ Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
   :class:`~pipeline.results.hardware.EnergyModel`), the two parts kept apart
   (:func:`readout_power`);
 * energy per decision (J): that power times the seconds of touch the point observed,
-  ``n_windows_used * window_s`` (the windows it really used, from the cube).
+  ``n_windows_used * window_s`` (the windows it really used, from the cube);
+* array area (m^2): the comparators' matched gate area that the design's threshold mismatch
+  demands by Pelgrom's law, ``n`` times :func:`pipeline.results.hardware.taxel_area_m2` of its
+  ``sigma_rel`` and ``threshold_v`` (NaN for a design that names no mismatch).
 
 The frame-based readout of the same array (:class:`FrameReadout`) sends ``n * bits * rate_hz``
 bit/s and draws :func:`pipeline.results.hardware.frame_power_w`.
@@ -32,12 +35,13 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from pipeline.report.chips import ChipYield, chip_yields
 from pipeline.report.cubes import (
     axis_coordinates,
     describe_coordinate,
@@ -45,17 +49,23 @@ from pipeline.report.cubes import (
     point_keys,
     sweep_dims,
 )
-from pipeline.report.panels import COLS, N_WINDOWS, ROWS, WINDOW_S
+from pipeline.report.panels import COLS, MISMATCH_SIGMA_REL, N_WINDOWS, ROWS, THRESHOLD_V, WINDOW_S
 from pipeline.report.text import label
 from pipeline.results.cube import work_seconds
 from pipeline.results.hardware import (
+    A_VT_PROCESS,
+    A_VT_SOURCE,
+    A_VT_V_M,
+    MATCHED_DEVICES_PER_TAXEL,
     EnergyModel,
     ReadoutPower,
+    array_area_m2,
     event_dynamic_power_w,
     event_static_power_w,
     frame_data_rate_bps,
     frame_dynamic_power_w,
     frame_static_power_w,
+    taxel_area_m2,
 )
 from pipeline.run.stages import shared_steps
 
@@ -112,6 +122,24 @@ class Design:
     observation_s: float
     seconds: Mapping[str, float]
     accuracy: Mapping[str, Accuracy]
+    threshold_v: float = math.nan
+    mismatch_sigma_rel: float = math.nan
+    yields: Mapping[str, ChipYield] = field(default_factory=dict)
+
+    @property
+    def taxel_area_m2(self) -> float:
+        """Matched comparator gate area of one taxel (m^2, Pelgrom's law:
+        :func:`~pipeline.results.hardware.taxel_area_m2`); NaN without a mismatch to size for."""
+        if not (self.mismatch_sigma_rel >= 0 and self.threshold_v >= 0):
+            return math.nan
+        return float(taxel_area_m2(self.mismatch_sigma_rel, self.threshold_v))
+
+    @property
+    def array_area_m2(self) -> float:
+        """:attr:`taxel_area_m2` times the taxels (m^2); NaN when either is unknown."""
+        if self.n_taxels is None or not math.isfinite(self.taxel_area_m2):
+            return math.nan
+        return float(array_area_m2(self.n_taxels, self.mismatch_sigma_rel, self.threshold_v))
 
     @property
     def label(self) -> str:
@@ -136,6 +164,11 @@ class Cost(enum.Enum):
         "compute time",
     )
     POWER = ("front_power", "estimated readout power (W)", "readout power")
+    AREA = (
+        "front_area",
+        "matched comparator gate area of the array, Pelgrom's law (um^2)",
+        "array area",
+    )
 
     @property
     def stem(self) -> str:
@@ -176,6 +209,18 @@ class FrameReadout:
         )
 
 
+def area_sentence() -> str:
+    """What the array-area cost is and what it rests on, in one paragraph."""
+    return (
+        "Array area is the comparators' matched gate area that a design's threshold mismatch "
+        "demands by Pelgrom's law: offset sigma = sigma_rel x threshold = A_VT / sqrt(W L) per "
+        f"input transistor, {MATCHED_DEVICES_PER_TAXEL} of them per taxel (two comparators, a "
+        f"differential pair each), with A_VT = {A_VT_V_M * 1e9:g} mV um for {A_VT_PROCESS} "
+        f"({A_VT_SOURCE}). It is a lower bound (wiring, the front end and the other devices are "
+        "not counted); designs that name no mismatch assume perfect matching and have no area."
+    )
+
+
 def readout_power(design: Design, energy: EnergyModel) -> ReadoutPower | None:
     """The design's event readout power, static and dynamic; None when its array size or its
     rates are unknown."""
@@ -202,6 +247,8 @@ def cost(design: Design, model: str, which: Cost, energy: EnergyModel) -> float:
         case Cost.POWER:
             power = readout_power(design, energy)
             return math.nan if power is None else power.total_w
+        case Cost.AREA:
+            return design.array_area_m2
     raise ValueError(f"unknown cost {which}")
 
 
@@ -223,8 +270,10 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
             v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
             for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
         }
-        fields = {f: field_values(cube, f) for f in (ROWS, COLS, WINDOW_S, N_WINDOWS)}
+        read = (ROWS, COLS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
+        fields = {f: field_values(cube, f) for f in read}
         fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
+        yields = chip_yields(cube)
         used = (
             _flat(cube["n_windows_used"], dims)
             if "n_windows_used" in cube
@@ -264,6 +313,14 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 if seconds is None
                 else {m: _model_seconds(seconds[p], stages, m) for m in accuracy},
                 "accuracy": accuracy,
+                "yields": {m: y for (q, m), y in yields.items() if q == p and m in accuracy},
+                **{
+                    name: _float(fields[f], p)
+                    for name, f in (
+                        ("threshold_v", THRESHOLD_V),
+                        ("mismatch_sigma_rel", MISMATCH_SIGMA_REL),
+                    )
+                },
             }
     return tuple(
         Design(**(e | {"sweeps": tuple(e["sweeps"]), "settings": tuple(e["settings"])}))
@@ -301,6 +358,15 @@ def _int(values: np.ndarray | None, p: int) -> int | None:
         return int(values[p])
     except (TypeError, ValueError):
         return None
+
+
+def _float(values: np.ndarray | None, p: int) -> float:
+    if values is None:
+        return math.nan
+    try:
+        return float(values[p])
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def _model_seconds(row: np.ndarray, stages: list[str], model: str) -> float:

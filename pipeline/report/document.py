@@ -37,10 +37,12 @@ from pipeline.report.answer import (
     glance_rows,
     how_sure,
     method_sentences,
+    yield_sentence,
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
+from pipeline.report.chips import method_sentence as chips_method_sentence
 from pipeline.report.cost import observation_sentence
-from pipeline.report.designs import Cost
+from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.latency import latency_blocks
@@ -145,9 +147,12 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
     if not report.answers:
         yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
         return
+    by_yield = {y.model: y for y in report.yield_answers}
     for answer in report.answers:
         yield Table(glance_header(answer), glance_rows(answer))
         yield Paragraph(how_sure(answer))
+        if answer.model in by_yield:
+            yield Paragraph(yield_sentence(by_yield[answer.model]))
     if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
         yield Figure(Cost.POWER.stem, _power_caption(report))
     yield Details(
@@ -158,6 +163,7 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
                 Paragraph(s)
                 for s in method_sentences(len(report.designs), report.frame, report.energy)
             ),
+            *((Paragraph(chips_method_sentence()),) if report.yield_answers else ()),
             Items(report.energy.assumptions()),
             Table(COMPARISON_COLUMNS, tuple(r for a in report.answers for r in comparison_rows(a))),
         ),
@@ -202,6 +208,8 @@ def _figure_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         yield Figure(panel.value, _caption(PANEL_TITLES[panel], report))
         for sentence in claims.get(panel, ()):
             yield Paragraph(sentence)
+        if panel is Panel.MISMATCH and report.mismatch_note:
+            yield Paragraph(report.mismatch_note)
         if panel is Panel.OBSERVATION:
             yield Paragraph(observation_sentence(report.time_to_accuracy))
     for plot in report.sweep_plots:
@@ -284,6 +292,8 @@ def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
                 "front end, loading or compiling kernels) in none. What the sweep paid is below, "
                 "under the sweep's own cost."
             )
+        if front.cost is Cost.AREA:
+            yield Paragraph(area_sentence())
         rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
         rows += [_front_row(front, p) for p in front.marked]
         yield Table(_FRONT_COLUMNS, tuple(rows))
@@ -306,10 +316,13 @@ def _front_row(front: Front, point: FrontPoint) -> tuple[str, ...]:
             f"({comparison(point.versus_front)})"  # type: ignore[arg-type]
         )
     a = point.accuracy
+    cost_text = _cost_text(front.cost, point.cost)
+    if front.cost is Cost.AREA:
+        cost_text += f" ({_cost_text(Cost.AREA, point.design.taxel_area_m2)} per taxel)"
     return (
         point.model.upper(),
         point.design.label,
-        _cost_text(front.cost, point.cost),
+        cost_text,
         pct_interval(a.mean, a.low, a.high),
         status,
     )
@@ -325,6 +338,8 @@ def _cost_text(which: Cost, value: float) -> str:
             return f"{value:.3g} bit"
         case Cost.COMPUTE:
             return f"{value:.3g} s"
+        case Cost.AREA:
+            return f"{value * 1e12:.3g} um^2"
     return si(value, "W")
 
 

@@ -14,6 +14,13 @@ both predicted in every such repeat; then :func:`pipeline.results.stats.compare_
 recordings) and its p-value (exact McNemar for one repeat, bootstrap otherwise). A trend along
 several points (:func:`pipeline.results.stats.trend`) uses the recordings all of them predicted.
 
+Points of several chips (:mod:`pipeline.report.chips`) hold ``correct`` per chip, int8 (chips,
+repeats, n_run_recordings), in ``per_chip``; ``correct`` holds their chips as repeats. Two such
+points are compared by a bootstrap over chips and recordings together
+(:func:`pipeline.results.stats.compare_over_chips`): the mean over chips by
+:meth:`Evidence.compare`, the 5th percentile over chips (the yield) by
+:meth:`Evidence.compare_yield`.
+
 Seeds: every bootstrap draws from ``numpy.random.default_rng([REPORT_SEED, crc32(part), ...])``
 with the parts the compared result keys and the model (:func:`rng_for`), so a comparison gives
 the same interval wherever the report shows it and in whatever order the report computes it.
@@ -30,7 +37,13 @@ import xarray as xr
 
 from pipeline.report.cubes import field_values, point_keys, sweep_dims
 from pipeline.report.panels import DATASET_KIND, DATASET_PATH
-from pipeline.results.stats import PairedComparison, Trend, compare_paired, trend
+from pipeline.results.stats import (
+    PairedComparison,
+    Trend,
+    compare_over_chips,
+    compare_paired,
+    trend,
+)
 
 REPORT_SEED = 20_240_531
 """The report's fixed seed, the root of every bootstrap generator (:func:`rng_for`)."""
@@ -55,12 +68,16 @@ class Evidence:
         Class of each of the run's ``n`` recordings.
     correct : dict
         ``(result key, model)`` -> int8 ``(repeats, n)``: 1 right, 0 wrong, -1 no prediction;
-        only points that kept predictions are here.
+        only points that kept predictions are here (a point of several chips: its chips'
+        repeats, chip-major).
+    per_chip : dict
+        ``(result key, model)`` -> int8 ``(chips, repeats, n)`` of the points of several chips.
     """
 
     labels: np.ndarray
     correct: Mapping[tuple[str, str], np.ndarray]
     _memo: dict = field(default_factory=dict, repr=False)
+    per_chip: Mapping[tuple[str, str], np.ndarray] = field(default_factory=dict)
 
     def has(self, key: str, model: str) -> bool:
         """Whether the point holds per-recording results for ``model``."""
@@ -97,10 +114,60 @@ class Evidence:
             resamples=RESAMPLES,
         )
 
+    def compare_yield(self, a: str, b: str, model: str) -> PairedComparison | None:
+        """``yield(a) - yield(b)`` of ``model``, the yield being the 5th percentile of the
+        chips' accuracies (:func:`pipeline.report.chips.chip_quantile`), with the interval and
+        p-value of a bootstrap over chips and recordings; None unless both points hold
+        several chips' predictions on common recordings."""
+        from pipeline.report.chips import chip_quantile
+
+        memo = ("yield", a, b, model)
+        if memo not in self._memo:
+            self._memo[memo] = self._over_chips(a, b, model, chip_quantile, "yield")
+        return self._memo[memo]
+
+    def _over_chips(
+        self, a: str, b: str, model: str, statistic, what: str
+    ) -> PairedComparison | None:
+        if (a, model) not in self.per_chip or (b, model) not in self.per_chip:
+            return None
+        ca, cb = self.per_chip[(a, model)], self.per_chip[(b, model)]
+        repeats = min(ca.shape[1], cb.shape[1])
+        ca, cb = ca[:, :repeats], cb[:, :repeats]
+        # The chips that ran (a point pads its chips beyond its count with -1), and the
+        # repeats every chip of both ran.
+        ca, cb = ca[(ca >= 0).any(axis=(1, 2))], cb[(cb >= 0).any(axis=(1, 2))]
+        rows = (ca >= 0).any(axis=2).all(axis=0) & (cb >= 0).any(axis=2).all(axis=0)
+        ca, cb = ca[:, rows], cb[:, rows]
+        cols = (ca >= 0).all(axis=(0, 1)) & (cb >= 0).all(axis=(0, 1))
+        if not len(ca) or not len(cb) or not rows.any() or not cols.any():
+            return None
+        return compare_over_chips(
+            ca[:, :, cols] == 1,
+            cb[:, :, cols] == 1,
+            self.labels[cols],
+            statistic=statistic,
+            rng=rng_for(what, a, b, model),
+            resamples=RESAMPLES,
+        )
+
     def _compare(self, a: str, b: str, model: str) -> PairedComparison | None:
         if not (self.has(a, model) and self.has(b, model)):
             return None
+        if (a, model) in self.per_chip and (b, model) in self.per_chip:
+            from pipeline.report.chips import chip_mean
+
+            return self._over_chips(a, b, model, chip_mean, "mean")
         ca, cb = self.correct[(a, model)], self.correct[(b, model)]
+        chipped = ((a, model) in self.per_chip, (b, model) in self.per_chip)
+        if chipped[0] != chipped[1]:
+            # One design of several chips, one of one: the one chip's repeats stand beside
+            # every chip of the other, so that the chips' mean is compared with the one chip
+            # (on the recordings; that one chip is a given, not a draw).
+            many, one = (ca, cb) if chipped[0] else (cb, ca)
+            n_chips = self.per_chip[(a, model) if chipped[0] else (b, model)].shape[0]
+            one = np.tile(one[: many.shape[0] // n_chips], (n_chips, 1))
+            ca, cb = (many, one) if chipped[0] else (one, many)
         repeats = min(ca.shape[0], cb.shape[0])
         ca, cb = ca[:repeats], cb[:repeats]
         rows = (ca >= 0).any(axis=1) & (cb >= 0).any(axis=1)
@@ -119,11 +186,22 @@ class Evidence:
 
 def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
     """The per-recording results of every point of every cube that kept them."""
+    from pipeline.report.chips import CHIP_DIM, CHIP_REPEAT, PER_CHIP, pooled
+
     index: dict[tuple[str, str, int], int] = {}
     found: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+    chips: dict[tuple[str, str], np.ndarray] = {}
     for cube in cubes.values():
         if "correct" not in cube:
             continue
+        cube = pooled(cube)
+        if PER_CHIP in cube:
+            layout = (*sweep_dims(cube), "model", CHIP_DIM, CHIP_REPEAT, "recording")
+            by_chip = cube[PER_CHIP].transpose(*layout).values
+            by_chip = by_chip.reshape(-1, *by_chip.shape[len(layout) - 4 :])
+            for p, key in enumerate(point_keys(cube)):
+                for m, model in enumerate(str(v) for v in cube["model"].values):
+                    chips.setdefault((key, model), by_chip[p, m])
         dims = sweep_dims(cube)
         names = [str(n) for n in cube["recording"].values]
         labels = [int(v) for v in cube["label"].values]
@@ -147,12 +225,17 @@ def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
     labels = np.zeros(n, dtype=np.int64)
     for (_, _, label), i in index.items():
         labels[i] = label
-    arrays = {}
+    arrays, per_chip = {}, {}
     for (key, model), (columns, values) in found.items():
         full = np.full((values.shape[0], n), -1, dtype=np.int8)
         full[:, columns] = values
         arrays[(key, model)] = full
-    return Evidence(labels=labels, correct=arrays)
+        if (key, model) in chips:
+            values = chips[(key, model)]
+            full = np.full((*values.shape[:2], n), -1, dtype=np.int8)
+            full[:, :, columns] = values
+            per_chip[(key, model)] = full
+    return Evidence(labels=labels, correct=arrays, per_chip=per_chip)
 
 
 def _dataset_ids(cube: xr.Dataset) -> list[str]:

@@ -5,7 +5,9 @@ no global state, nothing written (:func:`figure_images` renders one to PNG and S
 Error bars are the 95 % interval of accuracy (``accuracy_low``/``accuracy_high``), not the spread
 over folds; points without an interval (runs that predate per-recording results) have none.
 Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the class count is known.
-Every model is drawn on every panel.
+Every model is drawn on every panel. Points of several chips (:mod:`pipeline.report.chips`) draw
+the spread of their chips' accuracies (5th to 95th percentile) as a shaded band around the curve,
+apart from the error bars; one line style per deployment.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ YLABEL = "accuracy (%; bars: 95 % interval)"
 _COLORS = {"ffnn": "tab:blue", "cnn": "tab:orange"}
 _OTHER_COLORS = ("tab:green", "tab:red", "tab:purple", "tab:brown")
 _MARKERS = ("o", "s", "^", "D")
+_LINES = ("-", "--", ":", "-.")
 _SIZE_IN = (6.4, 4.2)
 _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
@@ -74,7 +77,9 @@ def draw_report(report: Report) -> dict[str, Figure]:
             log=False,
         ),
         Panel.SPIKE_METRICS.value: lambda: metric_figure(report.fits, chance),
-        Panel.MISMATCH.value: lambda: curve_figure(
+        Panel.MISMATCH.value: lambda: (
+            grouped_figure if any(c.group for c in curves[Panel.MISMATCH]) else curve_figure
+        )(
             PANEL_TITLES[Panel.MISMATCH],
             curves[Panel.MISMATCH],
             "threshold mismatch sigma_rel (% of threshold)",
@@ -149,18 +154,12 @@ def curve_figure(
     """
     figure, ax = _new()
     sweeps = list(dict.fromkeys(c.sweep for c in curves))
+    groups = list(dict.fromkeys(c.group for c in curves))
     for curve in curves:
-        marker = _MARKERS[sweeps.index(curve.sweep) % len(_MARKERS)]
-        label = curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
-        ax.errorbar(
-            curve.x * scale,
-            100 * curve.mean,
-            yerr=_interval_bars(curve.mean, curve.low, curve.high),
-            marker=marker,
-            color=_color(curve.model),
-            capsize=3,
-            label=label,
-        )
+        marker = _MARKERS[(sweeps.index(curve.sweep) + groups.index(curve.group)) % len(_MARKERS)]
+        label = curve.label + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
+        style = _LINES[groups.index(curve.group) % len(_LINES)]
+        _draw_curve(ax, curve, scale, marker=marker, style=style, label=label)
     if ticks is not None:
         ax.set_xticks(range(len(ticks)), list(ticks), rotation=30 if len(ticks) > 4 else 0)
     elif log and all(np.all(c.x > 0) for c in curves):
@@ -170,6 +169,43 @@ def curve_figure(
         ax.axvline(paper_x * scale, color="grey", linestyle=":", label=f"paper: {paper_x:g}")
     _chance(ax, chance)
     _finish(ax, title, xlabel)
+    return figure
+
+
+def grouped_figure(
+    title: str,
+    curves: Sequence[Curve],
+    xlabel: str,
+    chance: float | None,
+    *,
+    log: bool = False,
+    scale: float = 1.0,
+) -> Figure:
+    """One panel per group of curves (the chips' deployments), side by side on one accuracy
+    axis: each model's accuracy with its 95 % interval bars and, for designs of several chips,
+    the chips' 5th-95th percentile band."""
+    groups = list(dict.fromkeys(c.group for c in curves))
+    figure = Figure(
+        figsize=(max(_SIZE_IN[0], 3.6 * len(groups)), _SIZE_IN[1] + 0.4), layout="constrained"
+    )
+    FigureCanvasAgg(figure)
+    axes = np.atleast_1d(figure.subplots(1, len(groups), sharey=True, squeeze=False)[0])
+    for ax, group in zip(axes, groups, strict=True):
+        mine = [c for c in curves if c.group == group]
+        sweeps = list(dict.fromkeys(c.sweep for c in mine))
+        for curve in mine:
+            marker = _MARKERS[sweeps.index(curve.sweep) % len(_MARKERS)]
+            label = curve.model.upper() + (f" ({curve.sweep})" if len(sweeps) > 1 else "")
+            _draw_curve(ax, curve, scale, marker=marker, style="-", label=label)
+        if log and all(np.all(c.x > 0) for c in mine):
+            _log_x(ax, FixedLocator(np.unique(np.concatenate([c.x for c in mine])) * scale))
+        _chance(ax, chance)
+        _finish(ax, group or "-", xlabel)
+        if ax is not axes[0]:
+            ax.set_ylabel("")
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
+    figure.suptitle(_wrap(title, 90))
     return figure
 
 
@@ -300,6 +336,8 @@ def front_figure(front: Front, chance: float | None) -> Figure:
         _log_x(ax, LogLocator(subs=(1.0, 2.0, 5.0)))
         if front.cost is Cost.POWER:
             ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: si(v, "W")))
+        if front.cost is Cost.AREA:  # m^2 on the axis, um^2 in its labels
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v * 1e12:g}"))
     _chance(ax, chance)
     _finish(ax, f"Accuracy against {front.cost.short}", front.cost.axis, legend_outside=True)
     return figure
@@ -337,6 +375,33 @@ def latency_figure(curves: Sequence[LatencyCurve], chance: float | None) -> Figu
     _finish(ax, LATENCY_TITLE, "decision time (s of touch)")
     ax.set_ylabel("accuracy (%; band: 95 % interval)")
     return figure
+
+
+def _draw_curve(
+    ax: Axes, curve: Curve, scale: float, *, marker: str, style: str, label: str
+) -> None:
+    """One curve: accuracy with its 95 % interval bars and, for designs of several chips, the
+    chips' 5th-95th percentile as a band, apart from the bars (the test set's noise)."""
+    ax.errorbar(
+        curve.x * scale,
+        100 * curve.mean,
+        yerr=_interval_bars(curve.mean, curve.low, curve.high),
+        marker=marker,
+        color=_color(curve.model),
+        linestyle=style,
+        capsize=3,
+        label=label,
+    )
+    if curve.chip_low is not None and curve.chip_high is not None:
+        ax.fill_between(
+            curve.x * scale,
+            100 * curve.chip_low,
+            100 * curve.chip_high,
+            color=_color(curve.model),
+            alpha=0.15,
+            linestyle=style,
+            label=f"{label}: chips, 5th-95th percentile",
+        )
 
 
 def _interval_bars(mean: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:

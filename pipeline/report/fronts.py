@@ -1,7 +1,8 @@
 """Hardware cost fronts: accuracy against each cost of a design, per model.
 
 For one model and one :class:`~pipeline.report.designs.Cost` (address-event data rate, event
-rate, equivalent bits, compute seconds, estimated readout power), every design with a known cost
+rate, equivalent bits, compute seconds, estimated readout power, the comparators' matched area
+that the design's mismatch demands), every design with a known cost
 and accuracy is a point. A point is *on the front* when every cheaper-or-equal point is strictly
 less accurate (:func:`pipeline.report.cost.pareto_front`): the cheapest design for each accuracy
 level. A point off the front is *dominated* by the most accurate front point that costs no more

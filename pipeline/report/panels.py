@@ -22,6 +22,9 @@ COLS = scene_field("array.cols")
 DATASET_KIND = scene_field("dataset.kind")
 DATASET_PATH = scene_field("dataset.path")
 REPEATS = scene_field("training.repeats")
+#: How one classifier meets many chips (the scene's ``chips`` part; see
+#: :mod:`pipeline.report.chips`).
+DEPLOYMENT = "chips.deployment"
 
 
 class Panel(enum.StrEnum):

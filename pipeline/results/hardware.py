@@ -71,6 +71,31 @@ chip; a test holds it within 30 %). Static power is then 98 % of the event reado
 such rates the bias floor, not the events, sets the cost. The frame readout's ADC constants are
 order-of-magnitude ASSUMPTIONS (no frame-readout chip of this array is calibrated here).
 
+Area of the comparators' matched devices (Pelgrom's law). A design that names a threshold
+mismatch ``sigma_rel`` (``readout.effects.threshold_mismatch``: each taxel's threshold is
+``threshold_v * (1 + sigma_rel * z)``) asks for comparators whose input offset has the standard
+deviation ``sigma_V = sigma_rel * threshold_v``. The offset of a differential pair is the
+threshold-voltage difference of its two input transistors, which Pelgrom's law (M. J. M. Pelgrom,
+A. C. J. Duinmaijer and A. P. G. Welbers, "Matching properties of MOS transistors", IEEE JSSC
+24(5), 1989) gives as ``sigma(dV_T) = A_VT / sqrt(W L)``, so each input transistor needs the gate
+area
+
+.. math::
+
+    W L = \left(\frac{A_\mathrm{VT}}{\sigma_V}\right)^2
+        = \left(\frac{A_\mathrm{VT}}{\mathrm{sigma\_rel} \cdot \mathrm{threshold\_v}}\right)^2
+        \quad \text{[m}^2\text{]},
+
+and a taxel, with two comparators (up and down) of two input transistors each
+(:data:`MATCHED_DEVICES_PER_TAXEL`), ``A_taxel = 4 W L``; the array ``A_array = n A_taxel``
+(:func:`taxel_area_m2`, :func:`array_area_m2`). :data:`A_VT_V_M` is declared once with its process
+(:data:`A_VT_PROCESS`) and source (:data:`A_VT_SOURCE`). This is the matched gate area the
+mismatch demands, not a layout: wiring, the front end and the comparators' other devices are
+not counted, so it is a lower bound, and a meaningful one only where it exceeds the process's
+minimum device (0.22 um x 0.18 um = 0.04 um^2 in 180 nm CMOS), which is not applied. A design
+that names no mismatch, or ``sigma_rel = 0``, assumes perfect matching, which no finite device
+gives: its area is not stated (NaN), rather than infinite or a guessed minimum.
+
 Not modelled: clock generation and distribution, protocol overhead on the link (framing,
 handshakes, idle), the multiplexer's switching energy (small against a conversion), leakage of
 digital logic, and the classifier. The estimate is good to an order of magnitude at best.
@@ -125,12 +150,16 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "A_VT_PROCESS",
+    "A_VT_SOURCE",
+    "A_VT_V_M",
     "CHIP",
     "CHIP_EVENT_RATE_HZ",
     "CHIP_TAXELS",
     "DECODER_OPERATIONS",
     "HOROWITZ",
     "LOIHI",
+    "MATCHED_DEVICES_PER_TAXEL",
     "MAX_BITS",
     "ODIN",
     "PARAMETERS",
@@ -141,6 +170,7 @@ __all__ = [
     "Parameter",
     "PowerBudget",
     "ReadoutPower",
+    "array_area_m2",
     "decoder_energy_j",
     "energy_per_decision_j",
     "event_data_rate_bps",
@@ -151,7 +181,10 @@ __all__ = [
     "frame_dynamic_power_w",
     "frame_power_w",
     "frame_static_power_w",
+    "matched_device_area_m2",
+    "offset_sigma_v",
     "power_budget",
+    "taxel_area_m2",
 ]
 
 MAX_BITS = 64
@@ -164,6 +197,20 @@ CHIP = (
 """The chip the event readout's defaults are calibrated on (see the module docstring)."""
 CHIP_TAXELS, CHIP_EVENT_RATE_HZ = 192, 2200.0
 """Its array and its events per second in all, which the calibration feeds the model."""
+
+A_VT_V_M = 5e-9
+"""Pelgrom's threshold-matching coefficient A_VT, in V m (5 mV um), of :data:`A_VT_PROCESS`."""
+A_VT_PROCESS = "180 nm bulk CMOS (gate oxide about 4 nm)"
+"""The process :data:`A_VT_V_M` stands for."""
+A_VT_SOURCE = (
+    "assumed from the trend of A_VT with gate-oxide thickness, about 1 mV um per nm of oxide, "
+    "reviewed in P. R. Kinget, 'Device mismatch and tradeoffs in the design of analog "
+    "circuits', IEEE JSSC 40(6), 2005, Sec. II; an order-of-magnitude figure: a foundry's "
+    "matching data for the process at hand replaces it"
+)
+"""Where :data:`A_VT_V_M` comes from."""
+MATCHED_DEVICES_PER_TAXEL = 4
+"""Matched input transistors per taxel (two comparators, up and down, a differential pair each)."""
 
 
 @dataclass(frozen=True)
@@ -677,6 +724,64 @@ def energy_per_decision_j(power_w: Any, observation_s: Any) -> Any:
     power_w = _non_negative("power_w", power_w)
     observation_s = _non_negative("observation_s", observation_s)
     return _plain(1.0 * power_w * observation_s)
+
+
+def offset_sigma_v(sigma_rel: Any, threshold_v: Any) -> Any:
+    """Standard deviation of a taxel's threshold, ``sigma_rel * threshold_v``, in V.
+
+    ``sigma_rel`` (relative threshold mismatch, ``readout.effects.threshold_mismatch.sigma_rel``)
+    and ``threshold_v`` (V) are finite and >= 0 and broadcast (float64 V).
+    """
+    sigma_rel = _non_negative("sigma_rel", sigma_rel)
+    threshold_v = _non_negative("threshold_v", threshold_v)
+    return _plain(1.0 * sigma_rel * threshold_v)
+
+
+def matched_device_area_m2(sigma_v: Any, a_vt_v_m: float = A_VT_V_M) -> Any:
+    """Gate area ``W L = (A_VT / sigma_V)**2`` of one transistor of a pair whose offset has the
+    standard deviation ``sigma_v`` (V), in m^2 (Pelgrom's law, see the module docstring).
+
+    ``sigma_v`` is finite and >= 0 and broadcasts; where it is 0 (perfect matching) the area is
+    NaN: no finite device gives it. ``a_vt_v_m`` is A_VT in V m (default :data:`A_VT_V_M`).
+
+    Raises
+    ------
+    ValueError
+        An input is not numeric, is NaN, infinite or negative, or ``a_vt_v_m`` is not > 0.
+    """
+    sigma_v = _non_negative("sigma_v", sigma_v)
+    if not (math.isfinite(a_vt_v_m) and a_vt_v_m > 0):
+        raise ValueError(f"a_vt_v_m must be finite and > 0, got {a_vt_v_m!r}")
+    sigma = np.asarray(sigma_v, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        area = np.where(sigma > 0, (a_vt_v_m / np.where(sigma > 0, sigma, 1.0)) ** 2, np.nan)
+    return _keep(sigma_v, area)
+
+
+def taxel_area_m2(sigma_rel: Any, threshold_v: Any, a_vt_v_m: float = A_VT_V_M) -> Any:
+    """Matched gate area of one taxel, ``MATCHED_DEVICES_PER_TAXEL * W L``, in m^2.
+
+    ``W L`` is :func:`matched_device_area_m2` of :func:`offset_sigma_v`; the inputs broadcast;
+    NaN where ``sigma_rel * threshold_v`` is 0 (no mismatch named: nothing to size for).
+    """
+    device = matched_device_area_m2(offset_sigma_v(sigma_rel, threshold_v), a_vt_v_m)
+    return _plain(MATCHED_DEVICES_PER_TAXEL * device)
+
+
+def array_area_m2(
+    n_taxels: Any, sigma_rel: Any, threshold_v: Any, a_vt_v_m: float = A_VT_V_M
+) -> Any:
+    """Matched gate area of an array of ``n_taxels`` taxels, ``n_taxels * taxel_area_m2``, in
+    m^2; the inputs broadcast, NaN as in :func:`taxel_area_m2`."""
+    n_taxels = _non_negative("n_taxels", n_taxels)
+    return _plain(1.0 * n_taxels * taxel_area_m2(sigma_rel, threshold_v, a_vt_v_m))
+
+
+def _keep(like: Any, values: np.ndarray) -> Any:
+    """``values`` shaped as ``like``: a DataArray keeps its coordinates, a 0-d one is a float."""
+    if hasattr(like, "copy") and hasattr(like, "dims"):
+        return like.copy(data=values)
+    return _plain(values)
 
 
 ODIN = "ODIN, C. Frenkel et al., IEEE TBioCAS 13(1), 2019, 28 nm, measured"

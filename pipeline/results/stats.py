@@ -70,6 +70,17 @@ the least-squares slope of the points' accuracies ``acc_l`` on ``x_l``,
 bootstrap, paired across levels (the same resampled recordings at every level), as for
 :func:`compare_paired` with ``R > 1`` (``p = 1`` when the observed slope is 0).
 
+Chips (:func:`compare_over_chips`). A design simulated as ``C`` chips (one fabricated chip each,
+the same chip instances for every design: common random numbers) gives ``correct`` of shape
+``(chips, repeats, n)``, and per chip the accuracy ``acc_c = sum_i s_ci / (n R)``. A statistic of
+the chips' accuracies ``T(acc_1, ..., acc_C)`` (their mean, or their 5th percentile: the yield)
+is compared between two designs by a bootstrap over both sources of chance at once: each resample
+draws recordings (stratified within classes, as above, the same for both designs) and chips (with
+replacement, the same chip indices for both designs when they have as many chips; independently
+otherwise), ``d*_b = T(acc*_a) - T(acc*_b)`` with ``acc*_c = sum_i w_bi s_ci / (n R)`` over the
+drawn chips; percentile interval and bootstrap p-value as for ``R > 1`` above. The chip spread
+and the test set's noise both widen the interval; neither is mistaken for the other.
+
 Every percentile interval is widened, if needed, to contain its estimate (a percentile interval
 of a skewed bootstrap distribution can miss it by a resample), so ``low <= estimate <= high``
 always holds. No function returns NaN or divides by zero: one class, one recording, 0 % or 100 %
@@ -80,7 +91,7 @@ bootstraps are vectorized (no loop over resamples) and deterministic given the G
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -479,6 +490,87 @@ def trend(
     return Trend(slope, low, high, _bootstrap_p(slope, boot), method, confidence)
 
 
+def compare_over_chips(
+    correct_a: np.ndarray,
+    correct_b: np.ndarray,
+    labels: np.ndarray,
+    *,
+    statistic: Callable[[np.ndarray], np.ndarray],
+    rng: np.random.Generator,
+    confidence: float = 0.95,
+    resamples: int = 2000,
+) -> PairedComparison:
+    """Compare a statistic of the chips' accuracies of two designs, resampling chips and
+    recordings together (see the module docstring).
+
+    Parameters
+    ----------
+    correct_a, correct_b
+        bool-like (chips, repeats, n_recordings): right predictions of each chip of ``a`` and of
+        ``b``; recording ``i`` and repeat ``r`` the same recording and split in both. The chip
+        counts may differ (then chips are drawn independently for each design).
+    labels
+        int (n_recordings,): class of each recording; recordings are resampled within classes.
+    statistic
+        Maps float64 chip accuracies (..., chips) to (...), along the last axis: e.g. the mean,
+        or the 5th percentile over chips.
+    rng, confidence, resamples
+        As in :func:`compare_paired`.
+
+    Returns
+    -------
+    PairedComparison
+        ``statistic(acc_a) - statistic(acc_b)``, its percentile interval and two-sided bootstrap
+        p-value; ``only_a``/``only_b`` count the (chip, repeat, recording) triples right in one
+        design only (chip by chip; 0 when the chip counts differ).
+
+    Raises
+    ------
+    ValueError
+        A shape, value, ``confidence`` or ``resamples`` is invalid.
+    TypeError
+        ``rng`` is not a :class:`numpy.random.Generator`.
+    """
+    correct_a = _correct_array(correct_a, "correct_a", ndim=3)
+    correct_b = _correct_array(correct_b, "correct_b", ndim=3)
+    if correct_a.shape[1:] != correct_b.shape[1:]:
+        raise ValueError(
+            "correct_a and correct_b must share (repeats, n_recordings), got "
+            f"{correct_a.shape} and {correct_b.shape}"
+        )
+    _, repeats, n = correct_a.shape
+    labels = _labels_array(labels, n)
+    _check_settings(rng, confidence, resamples)
+    scale = float(n * repeats)
+    # (chips, n) right predictions per recording; chip accuracies are weights @ these / (n R).
+    per_a = correct_a.sum(axis=1, dtype=np.int64)
+    per_b = correct_b.sum(axis=1, dtype=np.int64)
+    observed = float(
+        np.asarray(statistic(per_a.sum(axis=1) / scale))
+        - np.asarray(statistic(per_b.sum(axis=1) / scale))
+    )
+    weights = _bootstrap_weights(labels, resamples, rng)
+    boot_a = weights @ per_a.T.astype(np.float64) / scale  # (B, chips of a)
+    boot_b = weights @ per_b.T.astype(np.float64) / scale
+    chips_a = rng.integers(0, per_a.shape[0], size=(resamples, per_a.shape[0]))
+    same = per_a.shape[0] == per_b.shape[0]
+    chips_b = chips_a if same else rng.integers(0, per_b.shape[0], size=(resamples, per_b.shape[0]))
+    boot = np.asarray(statistic(np.take_along_axis(boot_a, chips_a, axis=1))) - np.asarray(
+        statistic(np.take_along_axis(boot_b, chips_b, axis=1))
+    )
+    low, high = _contain(observed, *_percentile(boot, confidence))
+    only_a = int(np.count_nonzero(correct_a & ~correct_b)) if same else 0
+    only_b = int(np.count_nonzero(correct_b & ~correct_a)) if same else 0
+    method = (
+        "bootstrap over chips and recordings "
+        f"({'paired chips' if same else 'independent chips'}, stratified paired recordings, "
+        f"{resamples} resamples, percentile); two-sided bootstrap test"
+    )
+    return PairedComparison(
+        observed, low, high, _bootstrap_p(observed, boot), only_a, only_b, method, confidence
+    )
+
+
 def _stratified_draws(
     labels: np.ndarray, resamples: int, rng: np.random.Generator
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
@@ -598,7 +690,7 @@ def _bootstrap_p(observed: float, boot: np.ndarray) -> float:
 def _correct_array(values: np.ndarray, name: str, *, ndim: int) -> np.ndarray:
     """Validate a bool-like array of ``ndim`` dimensions and return it as bool."""
     array = np.asarray(values)
-    shape = "(repeats, n_recordings)" if ndim == 2 else "(levels, repeats, n_recordings)"
+    shape = "(repeats, n_recordings)" if ndim == 2 else "(levels or chips, repeats, n_recordings)"
     if array.ndim != ndim:
         raise ValueError(f"{name} must have shape {shape}, got {array.ndim}-D shape {array.shape}")
     if any(size < 1 for size in array.shape):

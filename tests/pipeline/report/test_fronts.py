@@ -16,7 +16,7 @@ from pipeline.report.figures import front_figure
 from pipeline.report.render import render_markdown
 from pipeline.results.hardware import EnergyModel, frame_power_w
 from tests.pipeline.report.test_answer import SWEEPS, by_threshold
-from tests.report_helpers import make_cubes
+from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +47,8 @@ def test_front_and_marked_points(report):
 
 
 def test_every_cost_has_a_front_and_the_frame_readout_is_a_reference(report):
-    assert [f.cost for f in report.fronts] == list(Cost)
+    # A threshold sweep names no mismatch: no design has an area to be on a front.
+    assert [f.cost for f in report.fronts] == [c for c in Cost if c is not Cost.AREA]
     power = front(report, Cost.POWER)
     ((label, value),) = power.references
     assert label == "frame readout, 4 taxels"
@@ -83,3 +84,22 @@ def test_a_zero_event_rate_is_priced_not_divided_by():
     assert math.isinf(answer.by_data_rate.data_rate_ratio)
     markdown = render_markdown(report_blocks(report, set(), version="t"))
     assert "nan" not in markdown.lower() and "inf" not in markdown.split("## Against")[0]
+
+
+def test_the_area_front_is_the_pelgrom_area_of_the_mismatch_a_design_names():
+    from pipeline.results.hardware import array_area_m2, taxel_area_m2
+
+    found = build_report(make_cubes({"mismatch": PAPER_LIKE_SWEEPS["mismatch"]}))
+    area = front(found, Cost.AREA)
+    sigmas = sorted({p.design.mismatch_sigma_rel for p in area.points})
+    assert sigmas == [0.1, 0.2, 0.3]  # sigma_rel 0 asks for perfect matching: no area
+    for point in area.points:
+        design = point.design
+        assert point.cost == pytest.approx(
+            array_area_m2(design.n_taxels, design.mismatch_sigma_rel, design.threshold_v)
+        )
+        assert design.taxel_area_m2 == pytest.approx(
+            taxel_area_m2(design.mismatch_sigma_rel, design.threshold_v)
+        )
+    # Less mismatch costs area and, here, buys accuracy: every design is on the front.
+    assert all(p.on_front for p in area.points)

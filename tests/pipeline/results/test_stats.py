@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from pipeline.results.stats import (
     _bootstrap_weights,
     accuracy_interval,
+    compare_over_chips,
     compare_paired,
     holm,
     trend,
@@ -534,3 +535,61 @@ def test_invalid_input_raises_a_value_error_naming_the_problem(name, call, messa
 def test_rng_must_be_a_generator():
     with pytest.raises(TypeError, match="Generator"):
         accuracy_interval(np.ones((1, 3)), np.zeros(3, dtype=int), rng=np.random.RandomState(0))
+
+
+def _p05(accuracy):
+    return np.quantile(accuracy, 0.05, axis=-1)
+
+
+def test_over_one_chip_the_chip_bootstrap_is_the_paired_one():
+    rng = np.random.default_rng(3)
+    labels = np.arange(60) % 4
+    a = rng.random((1, 2, 60)) < 0.7
+    b = rng.random((1, 2, 60)) < 0.5
+    paired = compare_paired(a[0], b[0], labels, rng=np.random.default_rng(7), resamples=500)
+    chips = compare_over_chips(
+        a,
+        b,
+        labels,
+        statistic=lambda x: x.mean(axis=-1),
+        rng=np.random.default_rng(7),
+        resamples=500,
+    )
+    assert chips.difference == pytest.approx(paired.difference, abs=1e-12)
+    assert (chips.low, chips.high) == pytest.approx((paired.low, paired.high), abs=1e-12)
+    assert chips.p_value == pytest.approx(paired.p_value)
+    assert (chips.only_a, chips.only_b) == (paired.only_a, paired.only_b)
+
+
+def test_the_chip_bootstrap_sees_the_spread_over_chips():
+    # 40 chips, 120 recordings: a's chips are all right on 70 % of the recordings; b's chips
+    # average 70 % too, but half of them are right on only 50 %. Their means are equal, their
+    # 5th percentiles are not.
+    labels = np.arange(120) % 12
+    a = np.zeros((40, 1, 120), dtype=bool)
+    a[:, :, :84] = True
+    b = np.zeros((40, 1, 120), dtype=bool)
+    b[::2, :, :108] = True
+    b[1::2, :, :60] = True
+    mean = compare_over_chips(
+        a,
+        b,
+        labels,
+        statistic=lambda x: x.mean(axis=-1),
+        rng=np.random.default_rng(1),
+        resamples=400,
+    )
+    assert mean.difference == pytest.approx(0.0) and mean.p_value == 1.0
+    low = compare_over_chips(
+        a, b, labels, statistic=_p05, rng=np.random.default_rng(1), resamples=400
+    )
+    assert low.difference == pytest.approx(0.7 - 0.5)
+    assert low.low > 0 and low.p_value < 0.05
+    assert low.low <= low.difference <= low.high
+    # Different chip counts are drawn independently; the statistic is still theirs.
+    other = compare_over_chips(
+        a[:10], b, labels, statistic=_p05, rng=np.random.default_rng(1), resamples=50
+    )
+    assert other.difference == pytest.approx(0.2) and (other.only_a, other.only_b) == (0, 0)
+    with pytest.raises(ValueError, match="share"):
+        compare_over_chips(a[:, :, :60], b, labels, statistic=_p05, rng=np.random.default_rng(1))
