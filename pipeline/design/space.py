@@ -121,13 +121,19 @@ class Metric(enum.StrEnum):
     DATA_RATE = "data_rate_bps"
     POWER = "readout_power_w"
     COMPUTE = "compute_s"
+    DECISION_TIME = "decision_s"
+    DECODER_ENERGY = "decoder_energy_j"
     AREA = "array_area_m2"
     YIELD = "accuracy_p05"
 
     @property
     def per_model(self) -> bool:
         """Whether the objective is of one model (``<metric>.<model>``)."""
-        return self in (Metric.ACCURACY, Metric.YIELD, Metric.DECISION_TIME, Metric.DECODER_ENERGY)
+        return self in _PER_MODEL
+
+
+#: The objectives of one model each.
+_PER_MODEL = frozenset({Metric.ACCURACY, Metric.YIELD, Metric.DECISION_TIME, Metric.DECODER_ENERGY})
 
 
 #: The dotted scene fields the area and yield objectives need (the mismatch that sizes the
