@@ -247,11 +247,14 @@ def test_no_page_points_outside_the_project(site):
     """Readers have this project, not the folders around it: no page names ``../shared`` or a
     folder of the machine that built it, and every relative link and resource of a page is a
     file of the site."""
-    outside = [str(ROOT.parent), "../shared"]
+    # The building machine's folder as a whole path: "/work" must not match "flows/work.html".
+    outside = [rf"(?<![\w./-]){re.escape(str(ROOT.parent))}(?![\w.-])", re.escape("../shared")]
     found = []
     for page in pages(site):
         text = page.read_text()
-        found += [f"{page.relative_to(site)}: {name}" for name in outside if name in text]
+        found += [
+            f"{page.relative_to(site)}: {m.group()}" for p in outside if (m := re.search(p, text))
+        ]
         for tag, value, _ in resources(page).found:
             if re.match(r"^([a-z][a-z0-9+.-]*:|#)", value, re.I):
                 continue  # a URL, mailto: or a place on the same page
