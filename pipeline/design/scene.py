@@ -564,6 +564,12 @@ class Scene:
 _LEFT_OUT_WHEN_EMPTY = frozenset({"chips"})
 
 
+def part_left_out(top: str, value: Any) -> bool:
+    """Whether top-level part ``top`` holding ``value`` is left out of the canonical form (and
+    of a cube's scene coordinates): a part added after keys existed, at its neutral defaults."""
+    return top in _LEFT_OUT_WHEN_EMPTY and not fields.plain(value, canonical=True)
+
+
 def chip_refusals(scene: Scene) -> Iterator[tuple[str, str]]:
     """``(field, text)`` for a ``shared`` or ``robust`` deployment whose readout draws no fixed
     effect: every chip would be the nominal one."""
