@@ -711,9 +711,9 @@ def real_train(
     def draw(effect: Effect, static: bool):
         if static and chip is None:
             return _NOMINAL
-        if static:
+        if static and (chip or pool):
             return effect_rng(seed, effect, taxel, chip=chip, pool=pool)
-        return effect_rng(seed, effect, taxel, recording)
+        return effect_rng(seed, effect, taxel, None if static else recording)
 
     offset_v, amplifier_sigma_v, amplifier_rng, rail_v = 0.0, 0.0, None, math.inf
     if Effect.AMPLIFIER_OFFSET in effects:

@@ -49,10 +49,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import binom
 
 __all__ = [
     "CONFIDENCE",
+    "binomial_cdf",
     "QUANTILE",
     "quantile_estimate_rank",
     "quantile_interval_ranks",
@@ -79,9 +79,23 @@ def rank_coverage(n: int, low: int | None, high: int | None, q: float = QUANTILE
     """The least probability that ``[X_(low), X_(high)]`` of ``n`` values holds the
     ``q``-quantile: ``F(high - 1) - F(low - 1)`` of ``Bin(n, q)``; a missing bound (None) is
     an open end."""
-    upper = 1.0 if high is None else float(binom.cdf(high - 1, n, q))
-    lower = 0.0 if low is None else float(binom.cdf(low - 1, n, q))
+    cdf = binomial_cdf(n, q)
+    upper = 1.0 if high is None else float(cdf[high - 1])
+    lower = 0.0 if low is None else float(cdf[low - 1])
     return upper - lower
+
+
+def binomial_cdf(n: int, q: float) -> np.ndarray:
+    """float64 ``(n + 1,)``: ``F(k)`` of ``Bin(n, q)`` for ``k = 0 .. n``, from the log pmf
+    (``lgamma``; no overflow for any chip count), capped at 1. Plain numpy: building a cube
+    does not import scipy.stats."""
+    k = np.arange(n + 1)
+    lgamma = np.vectorize(math.lgamma, otypes=[np.float64])
+    log_pmf = (
+        lgamma(n + 1.0) - lgamma(k + 1.0) - lgamma(n - k + 1.0)
+        + k * math.log(q) + (n - k) * math.log1p(-q)
+    )  # fmt: skip
+    return np.minimum(np.cumsum(np.exp(log_pmf)), 1.0)
 
 
 def quantile_interval_ranks(
@@ -94,7 +108,7 @@ def quantile_interval_ranks(
     even ``X_(n)`` is not an upper bound."""
     if n < 1:
         return None, None
-    cdf = binom.cdf(np.arange(n + 1), n, q)  # cdf[k] = F(k)
+    cdf = binomial_cdf(n, q)  # cdf[k] = F(k)
     best: tuple[int, float, int, int] | None = None
     for low in range(1, n + 1):
         need = confidence + cdf[low - 1]
