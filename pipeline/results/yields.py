@@ -46,14 +46,15 @@ noise, floored at 0: what the chips differ by beyond what the test set can resol
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 __all__ = [
     "CONFIDENCE",
-    "binomial_cdf",
     "QUANTILE",
+    "binomial_cdf",
     "quantile_estimate_rank",
     "quantile_interval_ranks",
     "rank_coverage",
@@ -85,6 +86,7 @@ def rank_coverage(n: int, low: int | None, high: int | None, q: float = QUANTILE
     return upper - lower
 
 
+@functools.lru_cache(maxsize=256)
 def binomial_cdf(n: int, q: float) -> np.ndarray:
     """float64 ``(n + 1,)``: ``F(k)`` of ``Bin(n, q)`` for ``k = 0 .. n``, from the log pmf
     (``lgamma``; no overflow for any chip count), capped at 1. Plain numpy: building a cube
@@ -95,9 +97,12 @@ def binomial_cdf(n: int, q: float) -> np.ndarray:
         lgamma(n + 1.0) - lgamma(k + 1.0) - lgamma(n - k + 1.0)
         + k * math.log(q) + (n - k) * math.log1p(-q)
     )  # fmt: skip
-    return np.minimum(np.cumsum(np.exp(log_pmf)), 1.0)
+    cdf = np.minimum(np.cumsum(np.exp(log_pmf)), 1.0)
+    cdf.setflags(write=False)  # cached: shared by every caller
+    return cdf
 
 
+@functools.lru_cache(maxsize=256)
 def quantile_interval_ranks(
     n: int, q: float = QUANTILE, confidence: float = CONFIDENCE
 ) -> tuple[int | None, int | None]:
