@@ -15,6 +15,7 @@ import sys
 from tqdm import tqdm
 
 from benchmarks import (
+    chips,
     coding,
     encoder,
     kernels,
@@ -30,7 +31,7 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, planning)
+QUICK = (encoder, coding, kernels, training, planning, chips)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 

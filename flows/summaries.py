@@ -56,6 +56,7 @@ def result_summary(result: Any) -> dict[str, Any]:
                 "folds": [float(a) for a in np.ravel(cv.fold_accuracy)],
                 "repeats": int(np.atleast_2d(cv.fold_accuracy).shape[0]),
                 **_interval(cv, result.labels, scene, model.value),
+                **_chips(cv, result.labels, scene),
             }
             for model, cv in result.accuracy.items()
         },
@@ -84,6 +85,28 @@ def _interval(cv: Any, labels: np.ndarray | None, scene: Any, model: str) -> dic
     return {"low": interval.low, "high": interval.high, "interval": interval.method}
 
 
+def _chips(cv: Any, labels: np.ndarray | None, scene: Any) -> dict[str, Any]:
+    """A model's accuracy over the chips of a scene that simulates chips (``mean``, ``folds``
+    and the interval are chip 0's): ``chips`` with the count, the deployment, each chip's
+    accuracy and the yield statistics of :func:`pipeline.results.yields.yield_statistics`."""
+    predicted = getattr(cv, "chip_predicted", None)
+    if predicted is None or labels is None:
+        return {}
+    from pipeline.results.yields import yield_statistics
+
+    per_chip = (predicted == labels).mean(axis=(1, 2))
+    stats = yield_statistics(per_chip, scene.chips.yield_target)
+    return {
+        "chips": {
+            "count": int(per_chip.size),
+            "deployment": scene.chips.deployment.value,
+            "yield_target": scene.chips.yield_target,
+            "accuracy": [float(a) for a in per_chip],
+            **{name: float(value) for name, value in stats.items()},
+        }
+    }
+
+
 def format_summary(s: Mapping[str, Any]) -> str:
     """The text ``eskin run`` prints for a :func:`result_summary` (no trailing newline)."""
     lines = [
@@ -96,6 +119,7 @@ def format_summary(s: Mapping[str, Any]) -> str:
     for model, acc in s["accuracy"].items():
         lines.append(
             f"  {model.upper():5s} accuracy {100 * acc['mean']:5.1f} %"
+            + (" on chip 0" if "chips" in acc else "")
             + (
                 f" (95 % interval {100 * acc['low']:.1f}-{100 * acc['high']:.1f} %)"
                 if "low" in acc
@@ -105,6 +129,14 @@ def format_summary(s: Mapping[str, Any]) -> str:
             + f"{len(acc['folds']) // acc['repeats']} folds"
             + (f" x {acc['repeats']} repeats" if acc["repeats"] > 1 else "")
         )
+        if "chips" in acc:
+            c = acc["chips"]
+            lines.append(
+                f"        {c['count']} chips ({c['deployment']}): mean "
+                f"{100 * c['accuracy_chip_mean']:.1f} %, 5th percentile "
+                f"{100 * c['accuracy_p05']:.1f} %, {100 * c['yield_share']:.0f} % of chips at "
+                f"or above {100 * c['yield_target']:.0f} %"
+            )
     ssnr = "inf (REAL = TRUE)" if math.isinf(s["ssnr_db"]) else f"{s['ssnr_db']:.2f}"
     lines += [
         f"  SSNR {ssnr} dB, STE {s['ste_s2']:.3g} s^2 (sign-safe {s['ste_sign_safe_s2']:.3g})",

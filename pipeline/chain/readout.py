@@ -78,7 +78,12 @@ independent draws of which one is never looked at.
 Randomness
 ----------
 Static effects (offsets, mismatch) are properties of the chip: they are drawn from
-``effect_rng(seed, effect, taxel)``, the same for every recording. Noise is drawn from
+``effect_rng(seed, effect, taxel)``, the same for every recording. Chip ``k`` of a design
+(``chips.count``) draws them from ``effect_rng(seed, effect, taxel, chip=k)``: chip 0 is that
+same stream, any other chip a stream of its own (:func:`effect_rng`), and every draw is a
+standard normal scaled by the effect's sigma, so chip ``k`` of two designs shares its draws
+(common random numbers) whatever their sigmas. The *nominal* chip (``chip=None``) draws no
+static effect at all (every one is 0) but keeps the noise. Noise is drawn from
 ``effect_rng(seed, effect, taxel, recording)``, one value per sample in time order, drawn inside
 the compiled loops (the same numbers as ``standard_normal(n_samples)``, without the array). No
 generator is created for an effect that is not named, so an ideal scene draws no random numbers
@@ -125,14 +130,35 @@ _COUNT_LIMIT = 2**61
 _TYPICAL_SAMPLES_PER_SPIKE = 4
 
 
-def effect_rng(seed: int, effect: Effect, taxel: int, recording: int | None = None):
+# The tag of the chip streams' spawn keys: five entries, never the length of an effect's key
+# (two) or a noise key (three), so no chip stream is another stream.
+_CHIP_TAG = 0xC41B
+
+
+def effect_rng(
+    seed: int,
+    effect: Effect,
+    taxel: int,
+    recording: int | None = None,
+    *,
+    chip: int = 0,
+    pool: int = 0,
+):
     """The generator of one effect for one taxel (and one recording, for noise).
 
     Streams are independent across effects, taxels and recordings, and do not depend on which
     other effects a scene names or on the array size, so taxel 0 of a 3x3 and of a 5x5 scene see
-    the same draws.
+    the same draws. A static effect of ``chip`` ``k > 0`` of chip ``pool`` ``p`` (0: the chips
+    a design is tested on; 1: the training chips of a ``robust`` deployment) has the stream
+    ``(effect, taxel, tag, p, k)``; chip 0 of pool 0 is the effect's own stream, so a scene of one
+    chip draws what it drew before chips existed. Noise (``recording`` given) ignores the chip:
+    it belongs to the recording, the same on every chip.
     """
-    key = (_EFFECT_STREAM[effect], taxel) + (() if recording is None else (recording,))
+    key: tuple[int, ...] = (_EFFECT_STREAM[effect], taxel)
+    if recording is not None:
+        key += (recording,)
+    elif chip or pool:
+        key += (_CHIP_TAG, pool, chip)
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=key))
 
 
@@ -651,6 +677,8 @@ def real_train(
     taxel: int,
     recording: int,
     max_spikes: int = MAX_SPIKES_PER_TRAIN,
+    chip: int | None = 0,
+    pool: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The REAL train of one taxel: the readout's effects applied to ``v``, then encoded.
 
@@ -664,6 +692,9 @@ def real_train(
         Threshold, full scale and the effects to simulate (only those named are).
     seed, taxel, recording : int
         Scene seed and indices from which every random draw is derived.
+    chip, pool : int
+        The chip whose static effects are drawn (:func:`effect_rng`); ``chip=None`` the
+        nominal chip, whose static effects are all 0.
 
     Returns
     -------
@@ -678,6 +709,10 @@ def real_train(
     nominal = (theta, theta_min)
 
     def draw(effect: Effect, static: bool):
+        if static and chip is None:
+            return _NOMINAL
+        if static and (chip or pool):
+            return effect_rng(seed, effect, taxel, chip=chip, pool=pool)
         return effect_rng(seed, effect, taxel, None if static else recording)
 
     offset_v, amplifier_sigma_v, amplifier_rng, rail_v = 0.0, 0.0, None, math.inf
@@ -718,6 +753,17 @@ def real_train(
     if comparator_noise is not None:
         decision_noise = (comparator_noise.sigma_v, lambda: draw(Effect.COMPARATOR_NOISE, False))
     return _encode(v, fs_hz, readout, up, down, floor_v, decision_noise, max_spikes)
+
+
+class _Nominal:
+    """The draws of the nominal chip: every static effect at exactly 0."""
+
+    @staticmethod
+    def standard_normal(size: int | None = None):
+        return 0.0 if size is None else np.zeros(size)
+
+
+_NOMINAL = _Nominal()
 
 
 def true_train(

@@ -88,6 +88,13 @@ class CrossValidation:
     test_fold
         int64 ``(repeats, n_recordings)``, read-only, or ``None``: the fold that tested each
         recording.
+    chip_accuracy
+        float64 ``(chips, repeats, folds)``, read-only, or ``None``: ``fold_accuracy`` of every
+        chip of a scene that simulates chips (:mod:`pipeline.chain.deployment`);
+        ``fold_accuracy`` is then chip 0's.
+    chip_predicted
+        int64 ``(chips, repeats, n_recordings)``, read-only, or ``None``: ``predicted`` of every
+        chip.
     """
 
     model: Model
@@ -96,6 +103,8 @@ class CrossValidation:
     train_loss: np.ndarray | None = None
     predicted: np.ndarray | None = None
     test_fold: np.ndarray | None = None
+    chip_accuracy: np.ndarray | None = None
+    chip_predicted: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for name, dtype in (
@@ -103,6 +112,8 @@ class CrossValidation:
             ("train_loss", np.float64),
             ("predicted", np.int64),
             ("test_fold", np.int64),
+            ("chip_accuracy", np.float64),
+            ("chip_predicted", np.int64),
         ):
             value = getattr(self, name)
             if value is not None:
@@ -462,6 +473,27 @@ def _train_and_evaluate(
     ``(F,)`` test accuracy, float64 ``(F,)`` mean training loss of the last epoch, and per fold
     the int64 ``(n_test_i,)`` predicted class indices of its test set, in test-set order.
     """
+    net, train_loss = fit_folds(train_x, train_y, folds, model, n_classes, training, seed)
+    guesses = predict_folds(net, test_x)
+    correct = np.array(
+        [np.sum(g == np.asarray(t)) for g, t in zip(guesses, test_y, strict=True)], dtype=np.float64
+    )
+    n_test = np.array([len(t) for t in test_y], dtype=np.float64)
+    return correct / n_test, train_loss, guesses
+
+
+def fit_folds(
+    train_x: Sequence[np.ndarray],
+    train_y: Sequence[np.ndarray],
+    folds: Sequence[int],
+    model: Model,
+    n_classes: int,
+    training: TrainingSpec,
+    seed: int,
+) -> tuple[torch.nn.Module, np.ndarray]:
+    """Train the given folds as one batch (``F = len(folds)``): the trained fold-batched net
+    (in eval mode) and float64 ``(F,)`` mean training loss of the last epoch; arguments as
+    for :func:`_train_and_evaluate`."""
     n_folds = len(folds)
     sample_shape = tuple(train_x[0].shape[1:])
     x, n_train = _stack_padded(train_x, torch.float32)
@@ -520,12 +552,13 @@ def _train_and_evaluate(
                 last_loss += loss.detach()
 
     net.eval()
+    return net, (last_loss / active_batches).numpy().astype(np.float64)
+
+
+def predict_folds(net: torch.nn.Module, test_x: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """Each fold's predicted class indices: int64 ``(n_i,)`` for fold ``i``'s float32 inputs
+    ``test_x[i]`` ``(n_i, C, H, W)``, by the fold-batched ``net`` of :func:`fit_folds`."""
     xt, n_test = _stack_padded(test_x, torch.float32)
-    yt, _ = _stack_padded([np.asarray(t, dtype=np.int64) for t in test_y], torch.int64)
     with torch.inference_mode():
         predicted = net(xt).argmax(dim=-1)
-    real_test = torch.arange(xt.shape[1]).reshape(1, -1) < torch.from_numpy(n_test).reshape(-1, 1)
-    correct = ((predicted == yt) & real_test).sum(dim=1).numpy()
-    train_loss = (last_loss / active_batches).numpy().astype(np.float64)
-    guesses = [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]
-    return correct.astype(np.float64) / n_test.astype(np.float64), train_loss, guesses
+    return [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]

@@ -108,6 +108,14 @@ class Encoder(enum.StrEnum):
     DECAYING = "decaying"  # the threshold restarts at threshold_v after a spike, then decays
 
 
+class Deployment(enum.StrEnum):
+    """How one trained classifier meets the chips of a design (:mod:`pipeline.chain.deployment`)."""
+
+    PER_CHIP = "per_chip"  # each chip is calibrated: trained and tested on its own encoding
+    SHARED = "shared"  # one classifier, trained on the nominal chip, loaded into every chip
+    ROBUST = "robust"  # one classifier, trained on chips drawn apart from the tested ones
+
+
 class Effect(enum.StrEnum):
     """Non-ideal readout effects, in the order they act on the signal."""
 
@@ -209,6 +217,11 @@ EFFECT_TYPES: dict[Effect, type] = {
     Effect.THRESHOLD_MISMATCH: ThresholdMismatch,
 }
 RANDOM_EFFECTS = frozenset(EFFECT_TYPES) - {Effect.SATURATION}
+#: Effects drawn once per chip (fixed-pattern, the same for every recording); the others are
+#: drawn per recording (noise) or draw nothing (saturation).
+FIXED_EFFECTS = frozenset(
+    {Effect.AMPLIFIER_OFFSET, Effect.COMPARATOR_OFFSET, Effect.THRESHOLD_MISMATCH}
+)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -337,6 +350,12 @@ class ReadoutSpec:
         return any(e in RANDOM_EFFECTS for e in self.effects)
 
     @property
+    def draws_fixed_effects(self) -> bool:
+        """Whether a named effect is drawn once per chip (:data:`FIXED_EFFECTS`), so that
+        chips of the design differ."""
+        return any(e in FIXED_EFFECTS for e in self.effects)
+
+    @property
     def equivalent_bits(self) -> float:
         """Resolution in bits, ``log2(full_scale_v / threshold_v)`` (of the first threshold)."""
         return math.log2(self.full_scale_v / self.threshold_v)
@@ -380,6 +399,51 @@ class TrainingSpec:
     seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
 
 
+MAX_CHIPS = 1000
+
+
+@dataclass(frozen=True)
+class ChipsSpec:
+    """Chips built from the design: ``count`` simulated chips, each with its own draw of the
+    readout's fixed effects (offsets, threshold mismatch), and how the classifier is
+    ``deployment`` onto them (:mod:`pipeline.chain.chips`, :mod:`pipeline.chain.deployment`).
+
+    ``yield_target`` is the accuracy a chip must reach to count toward the yield
+    (:mod:`pipeline.results.yields`); it changes no simulation, only the cube's yield share.
+    Its default, 0.5, is a plain majority-correct bar that does not depend on the data set
+    (chance is one over the class count); a designer sets the bar the application needs.
+    """
+
+    count: int = param(
+        1,
+        "1",
+        "simulated chips of the design",
+        within=Range(1, MAX_CHIPS),
+        neutral=True,
+        cost=Cost.SIZE,
+    )
+    deployment: Deployment = param(
+        Deployment.PER_CHIP,
+        "1",
+        "how the trained classifier is deployed onto the chips",
+        neutral=True,
+    )
+    yield_target: float = param(
+        0.5,
+        "1",
+        "accuracy a chip must reach to count toward the yield",
+        within=Range(0, 1, low_open=True, high_open=True),
+        neutral=True,
+        cost=Cost.FREE,
+    )
+
+    @property
+    def simulated(self) -> bool:
+        """Whether the scene simulates chips beyond today's one (more than one, or a
+        deployment other than ``per_chip``)."""
+        return self.count > 1 or self.deployment is not Deployment.PER_CHIP
+
+
 @dataclass(frozen=True)
 class Scene:
     """One simulated situation. Build with :meth:`from_dict`, :meth:`from_toml` or :meth:`paper`."""
@@ -391,6 +455,12 @@ class Scene:
     readout: ReadoutSpec = part(ReadoutSpec)
     coding: CodingSpec = part(CodingSpec)
     training: TrainingSpec = part(TrainingSpec)
+    chips: ChipsSpec = part(ChipsSpec)
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the parts refuse together: a deployment of one classifier onto many chips
+        needs a readout whose chips differ (a named fixed effect)."""
+        yield from chip_refusals(self)
 
     # -- construction ---------------------------------------------------------------------------
 
@@ -483,8 +553,34 @@ class Scene:
             else:
                 data = {top: fields.plain(value, canonical=True)}
                 text = _canonical_json(fields.select(data, paths).get(top, {}))
+            if text == "{}" and top in _LEFT_OUT_WHEN_EMPTY:
+                continue  # a part added later, at its neutral defaults: no key changes
             items.append(f'"{top}":{text}')
         return "{" + ",".join(items) + "}"
+
+
+#: Parts added after keys existed whose fields are all neutral: left out of the canonical form
+#: (and of every key) while all of them hold their defaults.
+_LEFT_OUT_WHEN_EMPTY = frozenset({"chips"})
+
+
+def part_left_out(top: str, value: Any) -> bool:
+    """Whether top-level part ``top`` holding ``value`` is left out of the canonical form (and
+    of a cube's scene coordinates): a part added after keys existed, at its neutral defaults."""
+    return top in _LEFT_OUT_WHEN_EMPTY and not fields.plain(value, canonical=True)
+
+
+def chip_refusals(scene: Scene) -> Iterator[tuple[str, str]]:
+    """``(field, text)`` for a ``shared`` or ``robust`` deployment whose readout draws no fixed
+    effect: every chip would be the nominal one."""
+    chips = scene.chips
+    if chips.deployment is not Deployment.PER_CHIP and not scene.readout.draws_fixed_effects:
+        fixed = ", ".join(sorted(e.value for e in FIXED_EFFECTS))
+        yield (
+            "chips.deployment",
+            f"{chips.deployment.value!r} needs a readout effect drawn per chip ({fixed}); "
+            "with none every chip is identical",
+        )
 
 
 #: Canonical memo: the canonical JSON of a part object by its ``id``, with the object itself,
@@ -640,10 +736,12 @@ class SceneVariants:
 
     def problems(self, indices: Sequence[int]) -> list[str]:
         """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
+        parts: dict[str, Any] = {}
         problems: list[str] = []
         for top, part_indices in self._part_indices:
-            problems += self._part(top, part_indices(indices), indices)[1]
-        return problems
+            parts[top], found = self._part(top, part_indices(indices), indices)
+            problems += found
+        return problems + _scene_refusals(self._cls(**parts))
 
     def scene(self, indices: Sequence[int]) -> Scene:
         """The scene with each field set to ``values[indices[axis]]``.
@@ -659,6 +757,7 @@ class SceneVariants:
             value, found = self._part(top, part_indices(indices), indices)
             parts[top] = value
             problems += found
+        problems += _scene_refusals(self._cls(**parts))
         if problems:
             raise SceneError(problems, self.source)
         return self._cls(**parts)
@@ -680,6 +779,12 @@ class SceneVariants:
         problems: list[str] = []
         part = fields.read_slot(fields.slot_named(self._cls)[top], data[top], top, problems)
         return part, problems
+
+
+def _scene_refusals(scene: Scene) -> list[str]:
+    """What a scene built part by part refuses across its parts (:meth:`Scene.refusals`), as
+    :func:`pipeline.design.fields.read` reports it."""
+    return [f"{name}: {text}" for name, text in scene.refusals()]
 
 
 def _copy_plain(value: Any) -> Any:

@@ -47,11 +47,15 @@ from typing import Any
 
 import numpy as np
 
+from pipeline.chain.chips import ChipTrains
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded, SpikeTrains, train_starts
 
 __all__ = [
+    "CHIP_RESULT_VARIABLES",
+    "CHIP_SPIKE_VARIABLES",
     "Charge",
+    "ChipResults",
     "OutOfFold",
     "Record",
     "RecordingsInfo",
@@ -266,6 +270,31 @@ class SpikeEntry:
     seconds: dict[str, float]
     paid: Paid | None = None
     paid_for: str | None = None
+    chips: ChipTrains | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ChipResults:
+    """Every chip's results of a point that simulates chips (:mod:`pipeline.chain.deployment`).
+
+    Attributes
+    ----------
+    fold_accuracy : dict[str, np.ndarray]
+        Model name -> float64 (chip, repeats, folds) accuracy in [0, 1].
+    predicted : dict[str, np.ndarray]
+        Model name -> int64 (chip, repeats, n_recordings) out-of-fold predicted class.
+    metrics : tuple of SpikeMetrics
+        Each chip's spike metrics.
+    """
+
+    fold_accuracy: Mapping[str, np.ndarray]
+    predicted: Mapping[str, np.ndarray]
+    metrics: tuple[SpikeMetrics, ...]
+
+    @property
+    def n_chips(self) -> int:
+        """Number of chips."""
+        return len(self.metrics)
 
 
 @dataclass(frozen=True, eq=False)
@@ -298,6 +327,9 @@ class ResultEntry:
         steps its own computation ran, plus the paid seconds of a spike entry charged to it
         (``paid_for``); a step whose output it found made is not there. None in entries
         written before they were kept.
+    chips : ChipResults or None
+        Every chip's accuracy, predictions and spike metrics, for a point that simulates chips
+        (``fold_accuracy``, ``out_of_fold`` and ``metrics`` are then chip 0's); else None.
     """
 
     fold_accuracy: dict[str, np.ndarray]
@@ -307,6 +339,7 @@ class ResultEntry:
     out_of_fold: OutOfFold | None = None
     n_windows_used: int | None = None
     paid: Paid | None = None
+    chips: ChipResults | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -318,16 +351,92 @@ METRICS_VARIABLE = Variable(
 )
 
 
-def train_variables(prefix: str, optional: bool = False) -> tuple[Variable, ...]:
-    """The four variables of one set of ragged trains (``true`` or ``real``)."""
+def train_variables(
+    prefix: str, optional: bool = False, grid: tuple[str, str] = ("recording", "taxel")
+) -> tuple[Variable, ...]:
+    """The four variables of one set of ragged trains (``true`` or ``real``), trains on
+    ``grid``."""
     event = (f"{prefix}_event",)
-    grid = ("recording", "taxel")
     what = prefix.upper()
     return (
         Variable(f"{prefix}_times_s", event, "float64", "s", f"{what} spike times", optional),
         Variable(f"{prefix}_polarity", event, "int8", "1", f"{what} spike polarity", optional),
         Variable(f"{prefix}_start", grid, "int64", "1", f"first {what} event", optional),
         Variable(f"{prefix}_count", grid, "int64", "1", f"{what} spikes per train", optional),
+    )
+
+
+_CHIP_METRICS = Variable(
+    "chips_metrics", ("chip", "metric"), "float64", "1", "each chip's spike metrics", True
+)
+#: The spike entry's variables of a scene that simulates chips: every chip's REAL trains, rows
+#: chip-major ``(chip, recording)`` pairs (:class:`~pipeline.chain.chips.ChipTrains`), the
+#: reference a deployed classifier trains on, and each chip's metrics.
+CHIP_SPIKE_VARIABLES = (
+    *train_variables("chips", optional=True, grid=("chip_recording", "taxel")),
+    *train_variables("reference", optional=True),
+    _CHIP_METRICS,
+)
+#: The result entry's variables of a point that simulates chips: every chip's accuracy and
+#: out-of-fold predictions, and each chip's metrics.
+CHIP_RESULT_VARIABLES = (
+    Variable(
+        "chip_accuracy", ("model", "chip", "repeat", "fold"), "float64", "1",
+        "each chip's fold accuracy", True,
+    ),
+    Variable(
+        "chip_predicted", ("model", "chip", "repeat", "recording"), "int64", "1",
+        "each chip's out-of-fold predicted class", True,
+    ),
+    _CHIP_METRICS,
+)  # fmt: skip
+
+
+def _chip_spike_values(chips: ChipTrains | None, duration: np.ndarray) -> Values:
+    """The arrays of a spike entry's chips; none for a scene of one chip."""
+    if chips is None:
+        return {}
+    values = _train_values("chips", chips.real)
+    if chips.real.count.shape[0] != chips.n_chips * len(duration):
+        raise ValueError("chips: rows are not chips times recordings")
+    if chips.reference is not None:
+        values |= _train_values("reference", chips.reference)
+    values["chips_metrics"] = np.stack([_metric_values(m) for m in chips.metrics])
+    return values
+
+
+def _read_chip_trains(values: Mapping[str, np.ndarray], duration: np.ndarray) -> ChipTrains | None:
+    if "chips_metrics" not in values:
+        return None
+    metrics = tuple(_read_metrics({"metrics": row}) for row in values["chips_metrics"])
+    real = _read_trains(values, "chips", np.tile(duration, len(metrics)))
+    reference = None
+    if "reference_count" in values:
+        reference = _read_trains(values, "reference", duration)
+    return ChipTrains(real, len(metrics), metrics, reference)
+
+
+def _chip_result_values(chips: ChipResults | None, models: list[str]) -> Values:
+    """The arrays of a result entry's chips; none for a point of one chip."""
+    if chips is None:
+        return {}
+    if list(chips.fold_accuracy) != models or list(chips.predicted) != models:
+        raise ValueError(f"chips: models {list(chips.fold_accuracy)}, accuracy of {models}")
+    return {
+        "chip_accuracy": np.stack([np.asarray(v) for v in chips.fold_accuracy.values()]),
+        "chip_predicted": np.stack([np.asarray(v) for v in chips.predicted.values()]),
+        "chips_metrics": np.stack([_metric_values(m) for m in chips.metrics]),
+    }
+
+
+def _read_chip_results(values: Mapping[str, np.ndarray], models: list[str]) -> ChipResults | None:
+    if "chip_accuracy" not in values:
+        return None
+    accuracy, predicted = values["chip_accuracy"], values["chip_predicted"]
+    return ChipResults(
+        {m: accuracy[i] for i, m in enumerate(models)},
+        {m: predicted[i] for i, m in enumerate(models)},
+        tuple(_read_metrics({"metrics": row}) for row in values["chips_metrics"]),
     )
 
 
@@ -349,6 +458,7 @@ def encode_spike_entry(entry: SpikeEntry) -> tuple[Values, Attrs]:
             raise ValueError("REAL and TRUE trains differ in duration_s")
     values["duration_s"] = duration
     values["metrics"] = _metric_values(entry.metrics)
+    values |= _chip_spike_values(entry.chips, duration)
     attrs = {"ideal": ideal, "seconds": seconds_attr(entry.seconds)}
     if entry.paid is not None:
         if entry.paid_for is None:
@@ -368,7 +478,12 @@ def decode_spike_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any
     if paid_for is not None and not isinstance(paid_for, str):
         raise TypeError("attribute 'paid_for' is not a str")
     return SpikeEntry(
-        Encoded(true, real), _read_metrics(values), read_seconds(attrs), read_paid(attrs), paid_for
+        Encoded(true, real),
+        _read_metrics(values),
+        read_seconds(attrs),
+        read_paid(attrs),
+        paid_for,
+        _read_chip_trains(values, duration),
     )
 
 
@@ -388,6 +503,7 @@ def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
         "model": np.array(models, dtype=str),
         **_out_of_fold_values(entry.out_of_fold, models, rows[0].shape[0]),
         "metrics": _metric_values(entry.metrics),
+        **_chip_result_values(entry.chips, models),
     }
     if entry.n_windows_used is not None:
         values["n_windows_used"] = np.asarray(entry.n_windows_used)
@@ -411,6 +527,7 @@ def decode_result_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, An
         _read_out_of_fold(values, models),
         None if n_windows is None else int(n_windows),
         read_paid(attrs),
+        _read_chip_results(values, models),
     )
 
 

@@ -75,6 +75,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pipeline.chain import jit
+from pipeline.chain.chips import ChipTrains, encode_chips
 from pipeline.chain.coding import frames, resolve_n_windows
 from pipeline.chain.frontend import FrontEnd, fit_front_end
 from pipeline.chain.metrics import (
@@ -95,6 +96,7 @@ from pipeline.design.scene import (
     CanonicalMemo,
     CodingSpec,
     DatasetSpec,
+    Deployment,
     Model,
     ReadoutSpec,
     Scene,
@@ -102,8 +104,11 @@ from pipeline.design.scene import (
 )
 from pipeline.recordings.sources import Recordings, load_recordings
 from pipeline.run.records import (
+    CHIP_RESULT_VARIABLES,
+    CHIP_SPIKE_VARIABLES,
     METRICS_VARIABLE,
     Charge,
+    ChipResults,
     OutOfFold,
     Record,
     RecordingsInfo,
@@ -221,10 +226,14 @@ class Spikes:
         readout.
     metrics : SpikeMetrics
         Scene-level SSNR, STE, rates and resolution.
+    chips : ChipTrains or None
+        Every chip's REAL trains and metrics and the deployment's reference trains, for a scene
+        that simulates chips (:attr:`pipeline.design.scene.ChipsSpec.simulated`); else None.
     """
 
     encoded: Encoded
     metrics: SpikeMetrics
+    chips: ChipTrains | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -241,12 +250,20 @@ class Rates:
         Class index of each recording, into ``class_names``, shape ``(n_recordings,)``.
     class_names : tuple[str, ...]
         Class names.
+    chip_counts : int64 or None
+        Every chip's ``counts``, shape ``(n_chips, n_recordings, channels, n_taxels,
+        n_windows)``, for a scene that simulates chips; else None.
+    reference_counts : int64 or None
+        The counts of the reference a ``shared`` or ``robust`` classifier trains on, shaped as
+        ``counts``; else None.
     """
 
     counts: np.ndarray
     dropped: np.ndarray
     labels: np.ndarray
     class_names: tuple[str, ...]
+    chip_counts: np.ndarray | None = None
+    reference_counts: np.ndarray | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -329,15 +346,34 @@ def encode_spikes(
     array: ArraySpec,
     readout: ReadoutSpec,
     seed: int | None,
+    count: int | None,
+    deployment: Deployment | None,
     watch: Stopwatch,
 ) -> Spikes:
     """Warm the kernels up (step ``setup``), encode every taxel of every recording, then measure
-    the trains (step ``metrics``)."""
+    the trains (step ``metrics``); for a scene that simulates chips (``count`` and
+    ``deployment`` given), every chip and the deployment's reference too
+    (:func:`pipeline.chain.chips.encode_chips`)."""
     with watch.stage(SETUP_STEP):
         warm_kernels(readout)
     encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
     with watch.stage("metrics"):
-        return Spikes(encoded, spike_metrics(encoded, readout))
+        metrics = spike_metrics(encoded, readout)
+    if count is None or deployment is None:
+        return Spikes(encoded, metrics)
+    chips = encode_chips(
+        recordings,
+        front_end,
+        array,
+        readout,
+        seed,
+        count,
+        deployment,
+        encoded,
+        functools.partial(spike_metrics, readout=readout),
+        watch.stage,
+    )
+    return Spikes(encoded, metrics, chips)
 
 
 # A tiny signal (samples, Hz, cycles per second) to warm the kernels up on: a few crossings.
@@ -389,7 +425,16 @@ def code_rates(
     """Rate-code the REAL trains (step ``coding``), labelled by the recordings' classes."""
     with watch.stage("coding"):
         counts, dropped = rate_frames(spikes.encoded.real, coding)
-    return Rates(counts, dropped, recordings.labels, recordings.class_names)
+        chips = spikes.chips
+        chip_counts = reference_counts = None
+        if chips is not None:
+            chip_counts = rate_frames(chips.real, coding)[0]
+            chip_counts = chip_counts.reshape(chips.n_chips, -1, *chip_counts.shape[1:])
+            if chips.reference is not None:
+                reference_counts = rate_frames(chips.reference, coding)[0]
+    return Rates(
+        counts, dropped, recordings.labels, recordings.class_names, chip_counts, reference_counts
+    )
 
 
 def classify(
@@ -400,7 +445,18 @@ def classify(
     for model in training.models:
         with watch.stage(f"train_{model.value}"):
             with jit.one_off():  # torch and scikit-learn: once per process
+                from pipeline.chain.deployment import validate_chips
                 from pipeline.chain.training import cross_validate
+            if rates.chip_counts is not None:
+                accuracy[model] = validate_chips(
+                    rates.chip_counts,
+                    rates.reference_counts,
+                    rates.labels,
+                    model,
+                    training,
+                    class_names=rates.class_names,
+                )
+                continue
             accuracy[model] = cross_validate(
                 rates.counts, rates.labels, model, training, class_names=rates.class_names
             )
@@ -413,6 +469,10 @@ def classify(
 
 def _draws_random_numbers(scene: Scene) -> bool:
     return scene.readout.is_random
+
+
+def _simulates_chips(scene: Scene) -> bool:
+    return scene.chips.simulated
 
 
 @dataclass(frozen=True)
@@ -579,7 +639,9 @@ class Level:
 
 
 def _spike_entry(output: Spikes, seconds: StepSeconds, made: Callable[[str], Any]) -> SpikeEntry:
-    return SpikeEntry(output.encoded, output.metrics, seconds.work, seconds.paid, seconds.point)
+    return SpikeEntry(
+        output.encoded, output.metrics, seconds.work, seconds.paid, seconds.point, output.chips
+    )
 
 
 def _result_entry(
@@ -603,6 +665,20 @@ def _result_entry(
         ),
         n_windows_used=int(made(RATES.name).counts.shape[-1]),
         paid=seconds.paid,
+        chips=_chip_results(accuracy, made(SPIKES.name).chips),
+    )
+
+
+def _chip_results(
+    accuracy: dict[Model, CrossValidation], chips: ChipTrains | None
+) -> ChipResults | None:
+    """Every chip's accuracy, predictions and spike metrics; None for a scene of one chip."""
+    if chips is None:
+        return None
+    return ChipResults(
+        fold_accuracy={model.value: cv.chip_accuracy for model, cv in accuracy.items()},
+        predicted={model.value: cv.chip_predicted for model, cv in accuracy.items()},
+        metrics=chips.metrics,
     )
 
 
@@ -628,7 +704,13 @@ FRONT_END = Level(
 #: sweep store keeps its output.
 SPIKES = Level(
     name="spikes",
-    reads=(Read("array"), Read("readout"), Read("seed", when=_draws_random_numbers)),
+    reads=(
+        Read("array"),
+        Read("readout"),
+        Read("seed", when=_draws_random_numbers),
+        Read("chips.count", when=_simulates_chips),
+        Read("chips.deployment", when=_simulates_chips),
+    ),
     after=(RECORDINGS, FRONT_END),
     compute=encode_spikes,
     steps=(SETUP_STEP, "taxels", "readout", "metrics"),
@@ -641,6 +723,7 @@ SPIKES = Level(
             *train_variables("real", optional=True),
             Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
             METRICS_VARIABLE,
+            *CHIP_SPIKE_VARIABLES,
         ),
         make=_spike_entry,
         encode=encode_spike_entry,
@@ -691,6 +774,7 @@ RESULTS = Level(
             Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
             Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
             METRICS_VARIABLE,
+            *CHIP_RESULT_VARIABLES,
         ),
         make=_result_entry,
         encode=encode_result_entry,

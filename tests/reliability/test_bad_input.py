@@ -334,6 +334,36 @@ CASES.append(
     )
 )
 
+# The chips of a design: (id, [chips] lines of the base scene, [readout] lines, the culprit).
+CASES += [
+    (
+        name,
+        lambda t, c=chips, r=readout: scene_grid(t, readout=r, training=f"[chips]\n{c}"),
+        culprit,
+    )
+    for name, chips, readout, culprit in [
+        ("scene-chip-count-zero", "count = 0", "", "chips.count"),
+        ("scene-chip-count-fraction", "count = 2.5", "", "chips.count"),
+        ("scene-chip-count-above-maximum", "count = 1001", "", "chips.count"),
+        ("scene-shared-chips-all-alike", 'deployment = "shared"', "", "chips.deployment"),
+        (
+            "scene-robust-chips-only-noise",
+            'deployment = "robust"\ncount = 4',
+            "effects.amplifier_noise = {}",
+            "chips.deployment",
+        ),
+        ("scene-yield-target-one", "yield_target = 1.0", "", "chips.yield_target"),
+        ("scene-yield-target-zero", "yield_target = 0", "", "chips.yield_target"),
+    ]
+]
+CASES.append(
+    (
+        "grid-chip-count-negative",
+        lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "chips.count" = [1, -3] }\n'),
+        "chips.count",
+    )
+)
+
 
 def tree(path: Path):
     """Everything at and below ``path`` (names, sizes, modes), or None if it does not exist."""

@@ -334,12 +334,15 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
 
 
 def keyed_dict(scene: Scene) -> dict:
-    """The scene's plain form without what no key holds: its name, and the fixed-threshold
-    encoder (the neutral default) with the decay of a threshold it does not decay."""
+    """The scene's plain form without what no key holds: its name, the fixed-threshold
+    encoder (the neutral default) with the decay of a threshold it does not decay, and the
+    chips part while all its fields hold their (neutral) defaults."""
     data = scene.to_dict()
     data.pop("name")
     if data["readout"]["encoder"] == "lcs":
         del data["readout"]["encoder"], data["readout"]["decay"]
+    if not fields.plain(scene.chips, canonical=True):
+        del data["chips"]
     return data
 
 

@@ -1,0 +1,155 @@
+"""Chips as a population: common random numbers, the nominal chip, deployments, keys, entries."""
+
+from dataclasses import astuple
+
+import numpy as np
+import pytest
+
+from pipeline.chain import deployment
+from pipeline.chain.readout import effect_rng, level_crossings, real_train
+from pipeline.design.scene import Effect, ReadoutSpec, Scene
+from pipeline.run.records import (
+    decode_result_entry,
+    decode_spike_entry,
+    encode_result_entry,
+    encode_spike_entry,
+)
+from pipeline.run.simulate import run_scene
+from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Stopwatch, cache_key
+
+
+def readout(**effects) -> ReadoutSpec:
+    return Scene.from_dict({"readout": {"threshold_v": 0.05, "effects": effects}}).readout
+
+
+def signal() -> np.ndarray:
+    t = np.arange(4000) / 2000.0
+    return 0.4 * np.sin(2 * np.pi * 3.0 * t) + 0.05 * np.sin(2 * np.pi * 41.0 * t)
+
+
+def test_chip_k_scales_its_own_standard_normal_by_each_designs_sigma():
+    v = signal()
+    for chip in (0, 1, 7):
+        z = effect_rng(3, Effect.THRESHOLD_MISMATCH, 2, chip=chip).standard_normal()
+        for sigma in (0.1, 0.3):
+            times, polarity = real_train(
+                v, 2000.0, readout(threshold_mismatch={"sigma_rel": sigma}),
+                seed=3, taxel=2, recording=0, chip=chip,
+            )  # fmt: skip
+            expected = level_crossings(v, 2000.0, 0.05 * (1 + sigma * z))
+            assert np.array_equal(times, expected[0]) and np.array_equal(polarity, expected[1])
+    # Chip 0 is the stream a scene of one chip draws from; other chips and pools differ.
+    draws = {
+        (chip, pool): effect_rng(3, Effect.THRESHOLD_MISMATCH, 2, chip=chip, pool=pool).random()
+        for chip in (0, 1, 2)
+        for pool in (0, 1)
+    }
+    assert draws[0, 0] == effect_rng(3, Effect.THRESHOLD_MISMATCH, 2).random()
+    assert len(set(draws.values())) == len(draws)
+
+
+def test_the_nominal_chip_draws_no_fixed_effect_but_keeps_the_noise():
+    v = signal()
+    fixed = readout(
+        threshold_mismatch={"sigma_rel": 0.4},
+        comparator_offset={"sigma_v": 0.01},
+        amplifier_noise={"sigma_v": 0.01},
+    )
+    noise_only = readout(amplifier_noise={"sigma_v": 0.01})
+    nominal = real_train(v, 2000.0, fixed, seed=1, taxel=0, recording=4, chip=None)
+    plain = real_train(v, 2000.0, noise_only, seed=1, taxel=0, recording=4)
+    assert np.allclose(nominal[0], plain[0], rtol=0, atol=1e-12)
+    assert np.array_equal(nominal[1], plain[1])
+
+
+SMOKE = Scene.builtin("smoke").replace(
+    **{
+        "readout.effects": {"threshold_mismatch": {"sigma_rel": 0.5}},
+        "training.models": ["ffnn"],
+        "training.epochs": 2,
+        "dataset.duration_s": 1.0,
+    }
+)
+
+
+def test_default_chips_change_no_key_and_the_yield_target_none():
+    scene = Scene.builtin("smoke")
+    assert "chips" not in scene.canonical()
+    target = scene.replace(**{"chips.yield_target": 0.9})
+    assert all(cache_key(target, level.name) == cache_key(scene, level.name) for level in LEVELS)
+    many = SMOKE.replace(**{"chips.count": 3})
+    shared = many.replace(**{"chips.deployment": "shared"})
+    keys = {cache_key(s, SPIKES.name) for s in (SMOKE, many, shared)}
+    assert len(keys) == 3
+    assert cache_key(shared.replace(**{"chips.yield_target": 0.9}), RESULTS.name) == cache_key(
+        shared, RESULTS.name
+    )
+
+
+@pytest.fixture(scope="module")
+def one_chip():
+    return run_scene(SMOKE)
+
+
+def test_per_chip_chip_0_is_the_scene_of_one_chip(one_chip):
+    cv = run_scene(SMOKE.replace(**{"chips.count": 2})).accuracy
+    (model,) = cv
+    alone = one_chip.accuracy[model]
+    assert np.array_equal(cv[model].fold_accuracy, alone.fold_accuracy)
+    assert np.array_equal(cv[model].chip_accuracy[0], alone.fold_accuracy)
+    assert np.array_equal(cv[model].chip_predicted[0], alone.predicted)
+    assert cv[model].chip_accuracy.shape == (2, 1, SMOKE.training.folds)
+
+
+@pytest.mark.parametrize("kind", ["shared", "robust"])
+def test_a_deployed_classifier_trains_once_per_fold_whatever_the_chips(kind, monkeypatch, one_chip):
+    calls = []
+    fit = deployment.fit_folds
+    monkeypatch.setattr(
+        deployment, "fit_folds", lambda *a, **k: calls.append(len(a[2])) or fit(*a, **k)
+    )
+    scene = SMOKE.replace(**{"chips.count": 5, "chips.deployment": kind, "training.repeats": 2})
+    (cv,) = run_scene(scene).accuracy.values()
+    assert calls == [scene.training.folds] * 2  # one batched training of the folds per repeat
+    assert cv.chip_accuracy.shape == (5, 2, scene.training.folds)
+    assert cv.chip_predicted.shape == (5, 2, 48)
+    assert np.array_equal(cv.fold_accuracy, cv.chip_accuracy[0])
+    # Accuracy per fold is the share of the fold's recordings each chip got right.
+    labels = one_chip.labels
+    for k in range(5):
+        for r in range(2):
+            right = cv.chip_predicted[k, r] == labels
+            by_fold = [right[cv.test_fold[r] == f].mean() for f in range(scene.training.folds)]
+            assert np.allclose(cv.chip_accuracy[k, r], by_fold)
+
+
+def test_chip_trains_and_results_round_trip_through_their_entries():
+    scene = SMOKE.replace(**{"chips.count": 3, "chips.deployment": "shared"})
+    outputs = {}
+    watch = Stopwatch(None)
+    for level in LEVELS:
+        outputs[level.name] = level.run(scene, outputs, watch)
+    spikes = outputs[SPIKES.name]
+    entry = SPIKES.record.make(spikes, _seconds(), outputs.get)
+    back = decode_spike_entry(*encode_spike_entry(entry))
+    for a, b in (
+        (entry.chips.real, back.chips.real),
+        (entry.chips.reference, back.chips.reference),
+    ):
+        for name in ("times_s", "polarity", "count", "duration_s"):
+            assert np.array_equal(getattr(a, name), getattr(b, name))
+    assert [astuple(m) for m in back.chips.metrics] == [astuple(m) for m in entry.chips.metrics]
+    assert back.chips.n_chips == 3
+    assert np.array_equal(back.chips.chip(0).times_s, spikes.encoded.real.times_s)
+    result = RESULTS.record.make(outputs[RESULTS.name], _seconds(), outputs.get)
+    again = decode_result_entry(*encode_result_entry(result))
+    for model, values in result.chips.fold_accuracy.items():
+        assert np.array_equal(again.chips.fold_accuracy[model], values)
+        assert np.array_equal(again.chips.predicted[model], result.chips.predicted[model])
+    assert [astuple(m) for m in again.chips.metrics] == [astuple(m) for m in result.chips.metrics]
+
+
+def _seconds():
+    from pipeline.run.records import StepSeconds
+
+    return StepSeconds({"readout": 1.0}, {}, "key")
