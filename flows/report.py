@@ -83,7 +83,6 @@ def write_run_report(
     from storage.report import check_report_folder
     from storage.runlog import read_sweep_records
 
-    cubes = _without_chip_cubes(cubes, note=True)
     frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
     report = build_report(
         cubes, frame=frame, energy=energy, runs=sweep_runs(read_sweep_records(store.root))
@@ -132,30 +131,8 @@ def report_answers(
 
     if problems := _adc_problems(adc_bits, adc_rate_hz):
         raise EskinError("; ".join(problems))
-    cubes = _without_chip_cubes(cubes)
     frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
     return tuple(build_report(cubes, frame=frame, energy=energy).answers)
-
-
-def _without_chip_cubes(
-    cubes: Mapping[str, xr.Dataset], note: bool = False
-) -> Mapping[str, xr.Dataset]:
-    """``cubes`` but those with a ``chip`` dimension (sweeps of chip populations), which the
-    report does not read yet (their yield variables are in the cubes); ``note``: say so on
-    stderr.
-
-    Raises
-    ------
-    EskinError
-        Every cube has a chip dimension.
-    """
-    kept = {name: cube for name, cube in cubes.items() if "chip" not in cube.dims}
-    left = ", ".join(name for name in cubes if name not in kept)
-    if not kept:
-        raise EskinError(f"the report does not read chip sweeps yet ({left}); open the cubes")
-    if note and left:
-        print(f"eskin: note: the report leaves out the chip sweeps ({left})", file=sys.stderr)
-    return kept
 
 
 def _adc_problems(adc_bits: int, adc_rate_hz: float | None) -> list[str]:

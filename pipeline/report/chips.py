@@ -46,8 +46,11 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from pipeline.design.scene import Deployment
 from pipeline.report.curves import Curve, sweep_curves
 from pipeline.report.panels import DEPLOYMENT
+from pipeline.results.yields import QUANTILE as YIELD_QUANTILE
+from pipeline.results.yields import quantile_estimate_rank
 
 #: The dimension of a cube whose points simulate several chips.
 CHIP_DIM = "chip"
@@ -55,12 +58,10 @@ CHIP_DIM = "chip"
 CHIP_COUNT = "chips.count"
 YIELD_TARGET = "chips.yield_target"
 #: The deployment of a point that names none (one chip, its own classifier, the scene's default).
-DEFAULT_DEPLOYMENT = "per_chip"
+DEFAULT_DEPLOYMENT = Deployment.PER_CHIP.value
 #: The deployment the paper's Fig. 10 claim is judged on (one classifier loaded into every chip,
 #: the way chips are shipped without calibrating each).
-CLAIM_DEPLOYMENT = "shared"
-#: The quantile of the chips' accuracies the yield is (the 5th percentile).
-YIELD_QUANTILE = 0.05
+CLAIM_DEPLOYMENT = Deployment.SHARED.value
 #: The band of the chips' accuracies the figures draw around a curve (5th to 95th percentile).
 SPREAD_QUANTILES = (0.05, 0.5, 0.95)
 #: The chips' predictions a pooled cube keeps beside their pooling (axes..., model, chip,
@@ -89,8 +90,7 @@ def chip_quantile(accuracy: np.ndarray) -> np.ndarray:
     bootstrap of it starts from the cube's own number."""
     values = np.sort(np.asarray(accuracy, dtype=np.float64), axis=-1)
     n = values.shape[-1]
-    rank = max(1, math.ceil(YIELD_QUANTILE * n - 1e-9))
-    return values[..., rank - 1]
+    return values[..., quantile_estimate_rank(n, YIELD_QUANTILE) - 1]
 
 
 def chip_mean(accuracy: np.ndarray) -> np.ndarray:
