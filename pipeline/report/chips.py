@@ -135,7 +135,7 @@ def pooled(cube: xr.Dataset) -> xr.Dataset:
     """
     if not has_chips(cube):
         return cube
-    from pipeline.report.evidence import rng_for
+    from pipeline.report.seeds import rng_for
     from pipeline.results.stats import accuracy_interval
 
     per_chip = cube["accuracy_mean"]

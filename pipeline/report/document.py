@@ -43,11 +43,12 @@ from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Parag
 from pipeline.report.chips import method_sentence as chips_method_sentence
 from pipeline.report.cost import observation_sentence
 from pipeline.report.designs import Cost, area_sentence
-from pipeline.report.evidence import ALPHA, REPORT_SEED, RESAMPLES
+from pipeline.report.evidence import ALPHA, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.latency import latency_blocks
 from pipeline.report.panels import PANEL_TITLES, Panel
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
+from pipeline.report.seeds import REPORT_SEED
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.tables import TABLE_COLUMNS, table_notes, table_rows
 from pipeline.report.text import NO_INTERVAL_WHY, comparison, pct, pct_interval, rate, si

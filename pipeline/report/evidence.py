@@ -21,14 +21,13 @@ points are compared by a bootstrap over chips and recordings together
 :meth:`Evidence.compare`, the 5th percentile over chips (the yield) by
 :meth:`Evidence.compare_yield`.
 
-Seeds: every bootstrap draws from ``numpy.random.default_rng([REPORT_SEED, crc32(part), ...])``
-with the parts the compared result keys and the model (:func:`rng_for`), so a comparison gives
-the same interval wherever the report shows it and in whatever order the report computes it.
+Seeds: every bootstrap draws from its own generator (:func:`pipeline.report.seeds.rng_for`), so a
+comparison gives the same interval wherever the report shows it and in whatever order the report
+computes it.
 """
 
 from __future__ import annotations
 
-import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -37,6 +36,7 @@ import xarray as xr
 
 from pipeline.report.cubes import field_values, point_keys, sweep_dims
 from pipeline.report.panels import DATASET_KIND, DATASET_PATH
+from pipeline.report.seeds import rng_for
 from pipeline.results.stats import (
     PairedComparison,
     Trend,
@@ -45,17 +45,10 @@ from pipeline.results.stats import (
     trend,
 )
 
-REPORT_SEED = 20_240_531
-"""The report's fixed seed, the root of every bootstrap generator (:func:`rng_for`)."""
 RESAMPLES = 2000
 """Bootstrap resamples of every paired comparison and trend the report tests."""
 ALPHA = 0.05
 """Significance level of every test the report judges a claim or a design by."""
-
-
-def rng_for(*parts: str) -> np.random.Generator:
-    """The bootstrap generator of one comparison: ``default_rng([REPORT_SEED, crc32(part)...])``."""
-    return np.random.default_rng([REPORT_SEED, *(zlib.crc32(p.encode("utf-8")) for p in parts)])
 
 
 @dataclass(frozen=True, eq=False)

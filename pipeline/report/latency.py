@@ -45,7 +45,8 @@ import xarray as xr
 from pipeline.report.answer import ModelAnswer, decoder_energy_text
 from pipeline.report.blocks import Block, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.cubes import point_keys, sweep_dims
-from pipeline.report.evidence import ALPHA, Evidence, rng_for
+from pipeline.report.evidence import ALPHA, Evidence
+from pipeline.report.seeds import rng_for
 from pipeline.report.text import comparison, pct, pct_interval, si
 from pipeline.results.hardware import DecoderEnergyModel, EnergyBand, decoder_energy_j
 from pipeline.results.latency import EXIT_THRESHOLDS, early_exit, exit_energy_j
