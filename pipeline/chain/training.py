@@ -88,6 +88,20 @@ class CrossValidation:
     test_fold
         int64 ``(repeats, n_recordings)``, read-only, or ``None``: the fold that tested each
         recording.
+    decision_s
+        float64 ``(D,)``, read-only, or ``None``: the decision times (s of touch) at which
+        decisions were read, the end of every frame column (window or step); ``None`` when
+        :func:`cross_validate` was not told the column length.
+    decision_predicted
+        int64 ``(repeats, D, n_recordings)``, read-only, or ``None``: the label each recording
+        got from its fold's model read at each decision time (the last is ``predicted``).
+    decision_confidence
+        float32 ``(repeats, D, n_recordings)``, read-only, or ``None``: the softmax probability
+        of that label.
+    operations
+        float64 ``(D, 3)``, read-only, or ``None``: mean over recordings (and repeats) of the
+        accumulates, multiply-accumulates and neuron updates a decision read at each decision
+        time cost (:func:`pipeline.chain.operations.count_operations`).
     """
 
     model: Model
@@ -96,6 +110,10 @@ class CrossValidation:
     train_loss: np.ndarray | None = None
     predicted: np.ndarray | None = None
     test_fold: np.ndarray | None = None
+    decision_s: np.ndarray | None = None
+    decision_predicted: np.ndarray | None = None
+    decision_confidence: np.ndarray | None = None
+    operations: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for name, dtype in (
@@ -108,6 +126,17 @@ class CrossValidation:
             if value is not None:
                 value = np.array(value, dtype=dtype)
                 value = value.reshape(1, -1) if value.ndim == 1 else value
+                value.setflags(write=False)
+                object.__setattr__(self, name, value)
+        for name, dtype in (
+            ("decision_s", np.float64),
+            ("decision_predicted", np.int64),
+            ("decision_confidence", np.float32),
+            ("operations", np.float64),
+        ):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.array(value, dtype=dtype)
                 value.setflags(write=False)
                 object.__setattr__(self, name, value)
 
@@ -327,6 +356,7 @@ def cross_validate(
     *,
     class_names: Sequence[str] | None = None,
     batched: bool = True,
+    frame_s: float | None = None,
 ) -> CrossValidation:
     """Stratified k-fold cross-validated accuracy of one classifier.
 
@@ -334,7 +364,9 @@ def cross_validate(
     ----------
     frames
         ``(n_recordings, C, H, W)`` spike counts (int64 or float): C channels (polarities),
-        H taxels in raster order, W windows.
+        H taxels in raster order, W windows (for the SNN: 2 polarities, H taxels, W steps).
+        The FFNN's and CNN's are standardized (:func:`standardize`); the SNN's are fed as
+        counts.
     labels
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
@@ -347,6 +379,12 @@ def cross_validate(
     batched
         Train all folds as one batched computation (fast); ``False`` trains them one after the
         other with the same code. Both give the same result up to floating-point rounding.
+    frame_s
+        Seconds of touch per frame column (the window, or the SNN's step). When given, every
+        test recording's decision is also read at the end of every column, with its confidence
+        and its operations (:attr:`CrossValidation.decision_s`): the SNN's output at every
+        step; the FFNN's and CNN's on the frame's first ``k`` windows, the later ones set to
+        their training mean (0 once standardized), for every ``k``.
 
     Returns
     -------
@@ -374,6 +412,8 @@ def cross_validate(
         raise ValueError("frames hold non-finite values")
     model = Model(model)
     classes, y, counts = np.unique(labels, return_inverse=True, return_counts=True)
+    inputs = _as_counts if model is Model.SNN else standardize
+    decide = frame_s is not None
 
     def name(label: int) -> str:
         if class_names is not None and 0 <= label < len(class_names):
@@ -395,16 +435,18 @@ def cross_validate(
     accuracy, train_loss = [], []
     predicted = np.zeros((training.repeats, len(y)), dtype=np.int64)
     test_fold = np.zeros((training.repeats, len(y)), dtype=np.int64)
+    n_decisions = frames.shape[-1]
+    decided = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.int64)
+    confidence = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.float32)
+    operations = np.zeros((n_decisions, 3), dtype=np.float64)
     for repeat in range(training.repeats):
         seed = repeat_seed(training.seed, repeat)
         splits = stratified_folds(y, training.folds, seed)
-        train_x, test_x = zip(
-            *(standardize(frames[tr], frames[te]) for tr, te in splits), strict=True
-        )
+        train_x, test_x = zip(*(inputs(frames[tr], frames[te]) for tr, te in splits), strict=True)
         groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
-        fold_accuracy, fold_loss_, fold_predicted = [], [], []
+        fold_accuracy, fold_loss_, fold_predicted, fold_decisions = [], [], [], []
         for group in groups:
-            a, loss, guess = _train_and_evaluate(
+            a, loss, guess, decisions = _train_and_evaluate(
                 [train_x[f] for f in group],
                 [y[splits[f][0]] for f in group],
                 [test_x[f] for f in group],
@@ -414,15 +456,31 @@ def cross_validate(
                 len(classes),
                 training,
                 seed,
+                decide,
             )
             fold_accuracy.append(a)
             fold_loss_.append(loss)
             fold_predicted.extend(guess)
+            fold_decisions.extend(decisions)
         for f, (_, test) in enumerate(splits):
             predicted[repeat, test] = classes[fold_predicted[f]]
             test_fold[repeat, test] = f
+            if decide:
+                guess_d, confidence_d, operations_d = fold_decisions[f]
+                decided[repeat][:, test] = classes[guess_d]
+                confidence[repeat][:, test] = confidence_d
+                operations += operations_d.sum(axis=0)
         accuracy.append(np.concatenate(fold_accuracy))
         train_loss.append(np.concatenate(fold_loss_))
+    if not decide:
+        return CrossValidation(
+            model,
+            np.stack(accuracy),
+            time.perf_counter() - start,
+            np.stack(train_loss),
+            predicted,
+            test_fold,
+        )
     return CrossValidation(
         model,
         np.stack(accuracy),
@@ -430,7 +488,23 @@ def cross_validate(
         np.stack(train_loss),
         predicted,
         test_fold,
+        decision_times_s(frame_s, n_decisions),
+        decided,
+        confidence,
+        operations / (training.repeats * len(y)),
     )
+
+
+def decision_times_s(frame_s: float, n_columns: int) -> np.ndarray:
+    """float64 ``(n_columns,)``: the end of every frame column, ``(k + 1) * frame_s``, rounded
+    to the nanosecond so that the times of different columns that coincide (a window boundary
+    and a step's end) compare equal."""
+    return np.round((np.arange(n_columns, dtype=np.float64) + 1.0) * frame_s, 9)
+
+
+def _as_counts(train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The SNN's inputs: the counts themselves as float32 (events stay events)."""
+    return np.asarray(train, dtype=np.float32), np.asarray(test, dtype=np.float32)
 
 
 def _stack_padded(
@@ -454,8 +528,10 @@ def _train_and_evaluate(
     n_classes: int,
     training: TrainingSpec,
     seed: int,
-) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions.
+    decide: bool = False,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[tuple[np.ndarray, ...]]]:
+    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions
+    and, with ``decide``, the decisions at every frame column (:func:`_decisions`; else ``[]``).
 
     ``train_x[i]`` is float32 ``(n_i, C, H, W)``, ``train_y[i]`` int ``(n_i,)`` for fold
     ``folds[i]``, likewise the test sets; ``seed`` is the repeat's training seed. Returns float64
@@ -477,17 +553,19 @@ def _train_and_evaluate(
         training.hidden_units,
         n_folds,
         [fold_generator(seed, f, "init") for f in folds],
+        training.snn,
     )
+    epochs = training.snn.epochs if model is Model.SNN else training.epochs
     params = [p for p in net.parameters()]
     optimizer = FoldAdam(params, training.learning_rate)
 
     # Epoch orders: per fold, a fresh permutation of its own training set per epoch from its own
     # generator, padded with row 0 of the fold (weight 0) up to n_max; as flat row indices.
-    order = torch.zeros(training.epochs, n_folds, n_max, dtype=torch.int64)
+    order = torch.zeros(epochs, n_folds, n_max, dtype=torch.int64)
     for i, fold in enumerate(folds):
         shuffle = fold_generator(seed, fold, "shuffle")
         n = int(n_train[i])
-        for epoch in range(training.epochs):
+        for epoch in range(epochs):
             order[epoch, i, :n] = torch.randperm(n, generator=shuffle)
     order += (torch.arange(n_folds) * n_max).reshape(1, n_folds, 1)
 
@@ -507,7 +585,7 @@ def _train_and_evaluate(
 
     net.train()
     last_loss = torch.zeros(n_folds, dtype=torch.float32)
-    for epoch in range(training.epochs):
+    for epoch in range(epochs):
         epoch_order = order[epoch]
         for s, stop, weights, active in batches:
             rows = epoch_order[:, s:stop].reshape(-1)
@@ -516,7 +594,7 @@ def _train_and_evaluate(
             loss = fold_loss(net(xb), yb, weights)
             grads = torch.autograd.grad(loss.sum(), params)
             optimizer.step(grads, active)
-            if epoch == training.epochs - 1:
+            if epoch == epochs - 1:
                 last_loss += loss.detach()
 
     net.eval()
@@ -528,4 +606,56 @@ def _train_and_evaluate(
     correct = ((predicted == yt) & real_test).sum(dim=1).numpy()
     train_loss = (last_loss / active_batches).numpy().astype(np.float64)
     guesses = [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]
-    return correct.astype(np.float64) / n_test.astype(np.float64), train_loss, guesses
+    decisions = _decisions(net, model, xt, n_test) if decide else []
+    return correct.astype(np.float64) / n_test.astype(np.float64), train_loss, guesses, decisions
+
+
+#: Most input cells (folds x samples x prefixes x frame cells) evaluated at once when reading
+#: the FFNN's and CNN's decisions on prefixes of the frames: bounds their memory (16 MB).
+_PREFIX_CELLS = 4_000_000
+
+
+@torch.inference_mode()
+def _decisions(
+    net: torch.nn.Module, model: Model, xt: torch.Tensor, n_test: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Every fold's decisions at the end of every frame column of its test inputs ``xt``
+    (float32 ``(F, B, C, H, W)``, fold ``f``'s first ``n_test[f]`` rows real).
+
+    Returns, per fold: int64 ``(W, n_test_f)`` class indices, float32 ``(W, n_test_f)`` their
+    softmax probability, float64 ``(n_test_f, W, 3)`` operations (:mod:`pipeline.chain.operations`).
+    The SNN's are its outputs at every step. The FFNN's and CNN's at column ``k`` are those of
+    the trained model on the frame whose columns after ``k`` are 0, the training mean of a
+    standardized input: a prefix of the full-touch model, which costs no training.
+    """
+    from pipeline.chain.operations import count_operations
+
+    n_folds, batch = xt.shape[:2]
+    n_columns = xt.shape[-1]
+    if model is Model.SNN:
+        logits = net.decision_logits(xt)  # (F, B, W, n_classes)
+        operations = count_operations(net, xt).stacked()  # (F, B, W, 3)
+    else:
+        cells = max(1, xt[0, 0].numel() * n_folds * batch)
+        chunk = max(1, _PREFIX_CELLS // cells)
+        column = torch.arange(n_columns)
+        parts_logits, parts_operations = [], []
+        for first in range(0, n_columns, chunk):
+            ends = torch.arange(first, min(first + chunk, n_columns))
+            keep = (column.reshape(1, -1) <= ends.reshape(-1, 1)).to(xt.dtype)  # (L, W)
+            prefixes = xt.unsqueeze(2) * keep.reshape(1, 1, len(ends), 1, 1, n_columns)
+            prefixes = prefixes.reshape(n_folds, batch * len(ends), *xt.shape[2:])
+            parts_logits.append(net(prefixes).reshape(n_folds, batch, len(ends), -1))
+            counted = count_operations(net, prefixes).stacked()
+            parts_operations.append(counted.reshape(n_folds, batch, len(ends), 3))
+        logits = torch.cat(parts_logits, dim=2)
+        operations = np.concatenate(parts_operations, axis=2)
+    probability, decided = torch.softmax(logits, dim=-1).max(dim=-1)  # (F, B, W)
+    return [
+        (
+            decided[f, : int(n)].T.numpy().astype(np.int64),
+            probability[f, : int(n)].T.numpy().astype(np.float32),
+            operations[f, : int(n)],
+        )
+        for f, n in enumerate(n_test)
+    ]

@@ -99,6 +99,7 @@ class Model(enum.StrEnum):
 
     FFNN = "ffnn"
     CNN = "cnn"
+    SNN = "snn"  # leaky integrate-and-fire layer on the spike trains, deciding at every step
 
 
 class Encoder(enum.StrEnum):
@@ -358,6 +359,45 @@ class CodingSpec:
 
 
 @dataclass(frozen=True)
+class SNNSpec:
+    """The spiking decoder (:class:`~pipeline.chain.models.FoldSNN`): ON and OFF spikes of each
+    taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
+    neurons, a readout read at every step; trained ``epochs`` epochs through time with a
+    fast-sigmoid surrogate gradient of slope ``surrogate_slope``."""
+
+    step_s: float = param(
+        0.02,
+        "s",
+        "time step of the spiking decoder (spikes binned per step; divides coding.window_s)",
+        within=Range(1e-4, 3600),
+        cost=Cost.SIZE,
+    )
+    hidden_neurons: int = param(
+        100, "1", "leaky integrate-and-fire neurons of the spiking decoder", within=Range(1, 10_000)
+    )
+    tau_mem_s: float = param(
+        0.1, "s", "membrane time constant of the spiking decoder's neurons", within=_TAU
+    )
+    threshold: float = param(
+        1.0,
+        "1",
+        "firing threshold of the spiking decoder's membrane (input current units)",
+        within=Range(0, 1e6, low_open=True),
+        cost=Cost.FREE,
+    )
+    surrogate_slope: float = param(
+        25.0,
+        "1",
+        "slope of the fast-sigmoid surrogate gradient of a spike (per unit of membrane)",
+        within=Range(0, 1e6, low_open=True),
+        cost=Cost.FREE,
+    )
+    epochs: int = param(
+        100, "1", "training epochs of the spiking decoder", within=Range(1, 100_000)
+    )
+
+
+@dataclass(frozen=True)
 class TrainingSpec:
     """Classifiers and stratified k-fold cross-validation."""
 
@@ -378,6 +418,7 @@ class TrainingSpec:
         within=Range(1, 100),
     )
     seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
+    snn: SNNSpec = part(SNNSpec, only_when=("models", Model.SNN))
 
 
 @dataclass(frozen=True)
@@ -391,6 +432,24 @@ class Scene:
     readout: ReadoutSpec = part(ReadoutSpec)
     coding: CodingSpec = part(CodingSpec)
     training: TrainingSpec = part(TrainingSpec)
+
+    def refusals(self) -> Iterator[tuple[str, str]]:
+        """What the parts refuse together: the spiking decoder's step must fit whole in a
+        rate-coding window, so that every window boundary is one of its decision times."""
+        if Model.SNN not in self.training.models:
+            return
+        step_s, window_s = self.training.snn.step_s, self.coding.window_s
+        steps = round(window_s / step_s)
+        if step_s > window_s:
+            yield (
+                "training.snn.step_s",
+                f"{step_s!r} s is longer than coding.window_s = {window_s!r} s",
+            )
+        elif abs(steps * step_s - window_s) > 1e-9 * window_s:
+            yield (
+                "training.snn.step_s",
+                f"{step_s!r} s does not divide coding.window_s = {window_s!r} s",
+            )
 
     # -- construction ---------------------------------------------------------------------------
 
@@ -641,8 +700,12 @@ class SceneVariants:
     def problems(self, indices: Sequence[int]) -> list[str]:
         """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
         problems: list[str] = []
+        parts: dict[str, Any] = {}
         for top, part_indices in self._part_indices:
-            problems += self._part(top, part_indices(indices), indices)[1]
+            parts[top], found = self._part(top, part_indices(indices), indices)
+            problems += found
+        if not problems:
+            problems += _refused_together(self._cls(**parts))
         return problems
 
     def scene(self, indices: Sequence[int]) -> Scene:
@@ -659,9 +722,12 @@ class SceneVariants:
             value, found = self._part(top, part_indices(indices), indices)
             parts[top] = value
             problems += found
+        scene = None if problems else self._cls(**parts)
+        if scene is not None:
+            problems += _refused_together(scene)
         if problems:
             raise SceneError(problems, self.source)
-        return self._cls(**parts)
+        return scene
 
     def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
         found = self._parts.get((top, part_indices))
@@ -680,6 +746,12 @@ class SceneVariants:
         problems: list[str] = []
         part = fields.read_slot(fields.slot_named(self._cls)[top], data[top], top, problems)
         return part, problems
+
+
+def _refused_together(scene: Scene) -> list[str]:
+    """What a scene's parts refuse together (:meth:`Scene.refusals`), as reading says it."""
+    refusals = getattr(scene, "refusals", None)
+    return [] if refusals is None else [f"{name}: {text}" for name, text in refusals()]
 
 
 def _copy_plain(value: Any) -> Any:

@@ -1,0 +1,206 @@
+"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
+
+Input
+    A recording's spike trains counted in steps of :math:`\\Delta t` (``training.snn.step_s``),
+    per polarity and taxel: ``x`` of shape ``(C=2, H=taxels, T=steps)``, ON (+1) counts then OFF
+    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). The counts are fed
+    as they are (no standardization), so every input is a number of events.
+
+Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset by subtraction)
+    With :math:`\\beta = \\exp(-\\Delta t / \\tau_\\mathrm{mem})` (``tau_mem_s``), threshold
+    :math:`\\vartheta` (``threshold``) and input current
+    :math:`I_t = W_1^\\top x_t + b_1` (one matrix product for all steps at once),
+
+    .. math::
+
+        u_t = \\beta u_{t-1} + I_t - \\vartheta s_{t-1}, \\qquad
+        s_t = \\Theta(u_t - \\vartheta), \\qquad u_0 = s_0 = 0,
+
+    :math:`\\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
+    gradient (snnTorch's default ``reset_delay`` with a detached reset).
+
+Surrogate gradient
+    The spike's derivative is replaced by the fast sigmoid's (SuperSpike; snnTorch's
+    ``surrogate.fast_sigmoid``) with slope :math:`k` (``surrogate_slope``):
+
+    .. math::
+
+        \\frac{\\partial s_t}{\\partial u_t} \\approx \\frac{1}{(1 + k |u_t - \\vartheta|)^2}.
+
+    Backpropagation through time is then a linear recursion backwards in time,
+    :math:`g_t = \\frac{\\partial L}{\\partial s_t} \\frac{\\partial s_t}{\\partial u_t}
+    + \\beta g_{t+1}`, :math:`\\partial L / \\partial I_t = g_t`.
+
+Readout and decisions
+    A non-spiking integrator sums the output currents :math:`W_2^\\top s_t + b_2` of every step;
+    the decision read at step :math:`t` (at :math:`t \\Delta t` seconds of touch) is the argmax of
+    their running mean :math:`z_t = \\frac{1}{t} \\sum_{t' \\le t} (W_2^\\top s_{t'} + b_2)`, its
+    confidence the softmax probability of that class. Training minimizes the cross-entropy of
+    :math:`z_T`, the decision at the end of the touch, as the FFNN and CNN are trained on the
+    whole touch; an earlier decision reads the same network on the evidence so far, as theirs
+    read the same network on the windows so far (:mod:`pipeline.chain.training`).
+
+Speed
+    The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
+    recursion above) wrapped in one :class:`torch.autograd.Function`, so that autograd sees one
+    node per layer, not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop
+    of autograd operations over the steps costs tens of microseconds per operation and step;
+    indexing a tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward
+    pass). The kernel's gradient is tested against plain autograd on the same equations.
+    Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import torch
+from torch import nn
+
+from pipeline.chain.jit import kernel
+from pipeline.chain.models import _FoldModel, _uniform
+
+
+@kernel()
+def _lif_forward(current, beta, threshold, slope, spikes, slopes):  # pragma: no cover - compiled
+    """Spikes of ``M x N`` neurons over ``T`` steps, and each step's surrogate derivative
+    ``ds/du``; all float32 ``(M, T, N)`` (``M`` independent groups, each stepped through time
+    with its ``N`` neurons contiguous)."""
+    n_groups, n_steps, n = current.shape
+    u = np.zeros(n, dtype=np.float32)
+    s = np.zeros(n, dtype=np.float32)
+    for m in range(n_groups):
+        u[:] = 0.0
+        s[:] = 0.0
+        for t in range(n_steps):
+            for i in range(n):
+                value = np.float32(beta * u[i] + current[m, t, i] - threshold * s[i])
+                u[i] = value
+                s[i] = 1.0 if value > threshold else 0.0
+                spikes[m, t, i] = s[i]
+                d = 1.0 + slope * abs(value - threshold)
+                slopes[m, t, i] = 1.0 / (d * d)
+
+
+@kernel()
+def _lif_backward(grad_spikes, slopes, beta, grad_current):  # pragma: no cover - compiled
+    """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` and the surrogate derivatives."""
+    n_groups, n_steps, n = slopes.shape
+    g = np.zeros(n, dtype=np.float32)
+    for m in range(n_groups):
+        g[:] = 0.0
+        for t in range(n_steps - 1, -1, -1):
+            for i in range(n):
+                g[i] = grad_spikes[m, t, i] * slopes[m, t, i] + beta * g[i]
+                grad_current[m, t, i] = g[i]
+
+
+class LeakyLayer(torch.autograd.Function):
+    """Spikes ``float32 (M, T, N)`` of ``M x N`` LIF neurons driven by ``current`` ``float32
+    (M, T, N)`` over ``T`` steps (see the module docstring); differentiable in ``current``
+    through the surrogate."""
+
+    @staticmethod
+    def forward(ctx, current, beta, threshold, slope):  # type: ignore[override]
+        current = current.detach().contiguous()
+        spikes = torch.empty_like(current)
+        slopes = torch.empty_like(current)
+        _lif_forward(
+            current.numpy(),
+            float(beta),
+            float(threshold),
+            float(slope),
+            spikes.numpy(),
+            slopes.numpy(),
+        )
+        ctx.save_for_backward(slopes)
+        ctx.beta = float(beta)
+        return spikes
+
+    @staticmethod
+    def backward(ctx, grad_spikes):  # type: ignore[override]
+        (slopes,) = ctx.saved_tensors
+        grad = torch.empty_like(slopes)
+        grad_spikes = grad_spikes.detach().contiguous()
+        _lif_backward(grad_spikes.numpy(), slopes.numpy(), ctx.beta, grad.numpy())
+        return grad, None, None, None
+
+
+class FoldSNN(_FoldModel):
+    """Spiking decoder batched over folds: ``Linear(C*H, hidden) -> LIF -> Linear(hidden,
+    n_classes) -> running mean over steps``.
+
+    Parameters (float32): ``w1 (F, C*H, hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden,
+    n_classes)``, ``b2 (F, n_classes)``, drawn per fold in that order as the FFNN's
+    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``).
+
+    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, T, n_classes)``: the logits
+    :math:`z_t` of a decision read at every step.
+    """
+
+    def __init__(
+        self,
+        input_shape: tuple[int, int, int],
+        n_classes: int,
+        hidden_neurons: int,
+        generators: Sequence[torch.Generator],
+        *,
+        step_s: float,
+        tau_mem_s: float,
+        threshold: float,
+        surrogate_slope: float,
+    ):
+        super().__init__(input_shape, n_classes, len(generators))
+        c, h, _ = self.input_shape
+        n_in = c * h
+        self.hidden_neurons = int(hidden_neurons)
+        self.beta = math.exp(-step_s / tau_mem_s)
+        self.threshold = float(threshold)
+        self.surrogate_slope = float(surrogate_slope)
+        per_fold = [
+            [
+                _uniform(g, (n_in, hidden_neurons), n_in),
+                _uniform(g, (hidden_neurons,), n_in),
+                _uniform(g, (hidden_neurons, n_classes), hidden_neurons),
+                _uniform(g, (n_classes,), hidden_neurons),
+            ]
+            for g in generators
+        ]
+        w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
+        self.w1, self.b1 = nn.Parameter(w1), nn.Parameter(b1)
+        self.w2, self.b2 = nn.Parameter(w2), nn.Parameter(b2)
+
+    def hidden_spikes(self, x: torch.Tensor) -> torch.Tensor:
+        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``."""
+        self._check(x)
+        n_folds, batch, c, h, n_steps = x.shape
+        steps = x.reshape(n_folds, batch, c * h, n_steps).transpose(2, 3)  # (F, B, T, C*H)
+        current = torch.baddbmm(
+            self.b1.unsqueeze(1), steps.reshape(n_folds, batch * n_steps, c * h), self.w1
+        )  # (F, B*T, hidden): every step's input current in one product
+        spikes = LeakyLayer.apply(
+            current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
+            self.beta,
+            self.threshold,
+            self.surrogate_slope,
+        )
+        return spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step, the
+        mean output current over the whole touch: what training fits."""
+        spikes = self.hidden_spikes(x)
+        rate = spikes.mean(dim=2)  # (F, B, hidden)
+        return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
+    def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step: the
+        running mean of the output currents (the last step's is :meth:`forward`'s)."""
+        spikes = self.hidden_spikes(x)
+        n_folds, batch, n_steps, hidden = spikes.shape
+        out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
+        out = out.reshape(n_folds, batch, n_steps, self.n_classes)
+        count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
+        return out.cumsum(dim=2) / count + self.b2.reshape(n_folds, 1, 1, -1)
