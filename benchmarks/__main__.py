@@ -23,6 +23,7 @@ from benchmarks import (
     planning,
     scale,
     search,
+    snn,
     sweep,
     sweep_scale,
     training,
@@ -30,7 +31,7 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, planning)
+QUICK = (encoder, coding, kernels, training, snn, planning)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 
