@@ -492,6 +492,8 @@ def cost_parts(value: Any) -> tuple[Any, list[Any]]:
                 declared, v = slot.declared, getattr(value, slot.name)
                 if declared is not None and (declared.label or declared.cost is Cost.FREE):
                     continue
+                if slot.only_when is not None and left_out(slot, v, True, value):
+                    continue  # the parameters of an option not chosen cost nothing
                 if declared is not None and declared.cost is Cost.SIZE:
                     sizes.append(v)
                 if v is not None:

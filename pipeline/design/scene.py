@@ -370,7 +370,6 @@ class SNNSpec:
         "s",
         "time step of the spiking decoder (spikes binned per step; divides coding.window_s)",
         within=Range(1e-4, 3600),
-        cost=Cost.SIZE,
     )
     hidden_neurons: int = param(
         100, "1", "leaky integrate-and-fire neurons of the spiking decoder", within=Range(1, 10_000)

@@ -334,12 +334,15 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
 
 
 def keyed_dict(scene: Scene) -> dict:
-    """The scene's plain form without what no key holds: its name, and the fixed-threshold
-    encoder (the neutral default) with the decay of a threshold it does not decay."""
+    """The scene's plain form without what no key holds: its name, the fixed-threshold
+    encoder (the neutral default) with the decay of a threshold it does not decay, and the
+    spiking decoder's fields of a scene that does not train it."""
     data = scene.to_dict()
     data.pop("name")
     if data["readout"]["encoder"] == "lcs":
         del data["readout"]["encoder"], data["readout"]["decay"]
+    if "snn" not in data["training"]["models"]:
+        del data["training"]["snn"]
     return data
 
 
