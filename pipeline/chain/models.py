@@ -99,6 +99,30 @@ def _uniform(generator: torch.Generator, shape: tuple[int, ...], fan_in: int) ->
     return torch.rand(shape, generator=generator, dtype=torch.float32) * (2 * bound) - bound
 
 
+def two_layers(
+    module: nn.Module,
+    n_in: int,
+    hidden: int,
+    n_classes: int,
+    generators: Sequence[torch.Generator],
+) -> None:
+    """Give ``module`` the parameters of two fold-batched linear layers, float32 ``w1 (F, n_in,
+    hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden, n_classes)``, ``b2 (F, n_classes)``, drawn
+    per fold in that order from the fold's own generator (PyTorch's default bounds)."""
+    per_fold = [
+        [
+            _uniform(g, (n_in, hidden), n_in),
+            _uniform(g, (hidden,), n_in),
+            _uniform(g, (hidden, n_classes), hidden),
+            _uniform(g, (n_classes,), hidden),
+        ]
+        for g in generators
+    ]
+    w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
+    module.w1, module.b1 = nn.Parameter(w1), nn.Parameter(b1)
+    module.w2, module.b2 = nn.Parameter(w2), nn.Parameter(b2)
+
+
 class _FoldModel(nn.Module):
     """Common part: fold count, input shape, class count, and the parameter draw order."""
 
@@ -131,20 +155,7 @@ class FoldFFNN(_FoldModel):
         generators: Sequence[torch.Generator],
     ):
         super().__init__(input_shape, n_classes, len(generators))
-        n_in = math.prod(self.input_shape)
-        # Per fold, draw order: w1, b1, w2, b2 (a fold's generator is used by that fold only).
-        per_fold = [
-            [
-                _uniform(g, (n_in, hidden_units), n_in),
-                _uniform(g, (hidden_units,), n_in),
-                _uniform(g, (hidden_units, n_classes), hidden_units),
-                _uniform(g, (n_classes,), hidden_units),
-            ]
-            for g in generators
-        ]
-        w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
-        self.w1, self.b1 = nn.Parameter(w1), nn.Parameter(b1)
-        self.w2, self.b2 = nn.Parameter(w2), nn.Parameter(b2)
+        two_layers(self, math.prod(self.input_shape), hidden_units, n_classes, generators)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, n_classes)`` for ``x: float32 (F, B, C, H, W)``."""

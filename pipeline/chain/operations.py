@@ -127,7 +127,7 @@ def count_operations(model: nn.Module, x: torch.Tensor) -> Operations:
     if isinstance(model, FoldSNN):
         hidden, n_classes = model.hidden_neurons, model.n_classes
         events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step
-        spikes = model.hidden_spikes(x).sum(dim=3).to(torch.float64)  # (F, B, T)
+        spikes = model.hidden_spikes(x)[0].sum(dim=3).to(torch.float64)  # (F, B, T)
         acs = torch.cumsum(events * hidden + spikes * n_classes, dim=2).numpy()
         n_steps = x.shape[-1]
         updates = np.broadcast_to(

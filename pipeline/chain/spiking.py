@@ -57,56 +57,73 @@ from collections.abc import Sequence
 
 import numpy as np
 import torch
-from torch import nn
 
 from pipeline.chain.jit import kernel
-from pipeline.chain.models import _FoldModel, _uniform
+from pipeline.chain.models import _FoldModel, two_layers
 
 
 @kernel()
-def _lif_forward(current, beta, threshold, slope, spikes, slopes):  # pragma: no cover - compiled
-    """Spikes of ``M x N`` neurons over ``T`` steps, and each step's surrogate derivative
-    ``ds/du``; all float32 ``(M, T, N)`` (``M`` independent groups, each stepped through time
-    with its ``N`` neurons contiguous)."""
+def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # pragma: no cover
+    """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
+    derivative ``ds/du``) and, unless it is empty, ``spikes`` are float32 ``(M, T, N)`` (``M``
+    independent groups, each with its ``N`` neurons contiguous); ``rate`` float32 ``(M, N)``
+    gets each neuron's mean spike count over the steps."""
     n_groups, n_steps, n = current.shape
+    keep = spikes.size > 0
+    beta, threshold, slope = np.float32(beta), np.float32(threshold), np.float32(slope)
     u = np.zeros(n, dtype=np.float32)
     s = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
         u[:] = 0.0
         s[:] = 0.0
+        rate[m, :] = 0.0
         for t in range(n_steps):
             for i in range(n):
-                value = np.float32(beta * u[i] + current[m, t, i] - threshold * s[i])
+                value = beta * u[i] + current[m, t, i] - threshold * s[i]
                 u[i] = value
-                s[i] = 1.0 if value > threshold else 0.0
-                spikes[m, t, i] = s[i]
-                d = 1.0 + slope * abs(value - threshold)
-                slopes[m, t, i] = 1.0 / (d * d)
+                s[i] = np.float32(1.0) if value > threshold else np.float32(0.0)
+                rate[m, i] += s[i]
+                d = np.float32(1.0) + slope * abs(value - threshold)
+                slopes[m, t, i] = np.float32(1.0) / (d * d)
+            if keep:
+                spikes[m, t, :] = s
+        rate[m, :] /= n_steps
 
 
 @kernel()
-def _lif_backward(grad_spikes, slopes, beta, grad_current):  # pragma: no cover - compiled
-    """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` and the surrogate derivatives."""
+def _lif_backward(grad_spikes, grad_rate, slopes, beta, grad_current):  # pragma: no cover
+    """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
+    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives."""
     n_groups, n_steps, n = slopes.shape
+    keep = grad_spikes.size > 0
+    beta = np.float32(beta)
+    per_step = np.float32(1.0 / n_steps)
     g = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
         g[:] = 0.0
         for t in range(n_steps - 1, -1, -1):
             for i in range(n):
-                g[i] = grad_spikes[m, t, i] * slopes[m, t, i] + beta * g[i]
+                grad = grad_rate[m, i] * per_step
+                if keep:
+                    grad += grad_spikes[m, t, i]
+                g[i] = grad * slopes[m, t, i] + beta * g[i]
                 grad_current[m, t, i] = g[i]
 
 
 class LeakyLayer(torch.autograd.Function):
     """Spikes ``float32 (M, T, N)`` of ``M x N`` LIF neurons driven by ``current`` ``float32
-    (M, T, N)`` over ``T`` steps (see the module docstring); differentiable in ``current``
-    through the surrogate."""
+    (M, T, N)`` over ``T`` steps (see the module docstring), and their mean over the steps
+    ``(M, N)``; differentiable in ``current`` through the surrogate. With ``keep=False`` the
+    spikes are not kept (an empty tensor): training reads only the mean, and the time loop
+    then moves a third less memory."""
 
     @staticmethod
-    def forward(ctx, current, beta, threshold, slope):  # type: ignore[override]
+    def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
         current = current.detach().contiguous()
-        spikes = torch.empty_like(current)
+        n_groups, _, n = current.shape
+        spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
         slopes = torch.empty_like(current)
+        rate = torch.empty((n_groups, n), dtype=current.dtype)
         _lif_forward(
             current.numpy(),
             float(beta),
@@ -114,18 +131,22 @@ class LeakyLayer(torch.autograd.Function):
             float(slope),
             spikes.numpy(),
             slopes.numpy(),
+            rate.numpy(),
         )
         ctx.save_for_backward(slopes)
         ctx.beta = float(beta)
-        return spikes
+        return spikes, rate
 
     @staticmethod
-    def backward(ctx, grad_spikes):  # type: ignore[override]
+    def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
         (slopes,) = ctx.saved_tensors
         grad = torch.empty_like(slopes)
         grad_spikes = grad_spikes.detach().contiguous()
-        _lif_backward(grad_spikes.numpy(), slopes.numpy(), ctx.beta, grad.numpy())
-        return grad, None, None, None
+        grad_rate = grad_rate.detach().contiguous()
+        _lif_backward(
+            grad_spikes.numpy(), grad_rate.numpy(), slopes.numpy(), ctx.beta, grad.numpy()
+        )
+        return grad, None, None, None, None
 
 
 class FoldSNN(_FoldModel):
@@ -154,51 +175,44 @@ class FoldSNN(_FoldModel):
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
-        n_in = c * h
         self.hidden_neurons = int(hidden_neurons)
         self.beta = math.exp(-step_s / tau_mem_s)
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
-        per_fold = [
-            [
-                _uniform(g, (n_in, hidden_neurons), n_in),
-                _uniform(g, (hidden_neurons,), n_in),
-                _uniform(g, (hidden_neurons, n_classes), hidden_neurons),
-                _uniform(g, (n_classes,), hidden_neurons),
-            ]
-            for g in generators
-        ]
-        w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
-        self.w1, self.b1 = nn.Parameter(w1), nn.Parameter(b1)
-        self.w2, self.b2 = nn.Parameter(w2), nn.Parameter(b2)
+        two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
 
-    def hidden_spikes(self, x: torch.Tensor) -> torch.Tensor:
-        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``."""
+    def hidden_spikes(
+        self, x: torch.Tensor, keep: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``
+        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
         self._check(x)
         n_folds, batch, c, h, n_steps = x.shape
         steps = x.reshape(n_folds, batch, c * h, n_steps).transpose(2, 3)  # (F, B, T, C*H)
         current = torch.baddbmm(
             self.b1.unsqueeze(1), steps.reshape(n_folds, batch * n_steps, c * h), self.w1
         )  # (F, B*T, hidden): every step's input current in one product
-        spikes = LeakyLayer.apply(
+        spikes, rate = LeakyLayer.apply(
             current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
             self.beta,
             self.threshold,
             self.surrogate_slope,
+            keep,
         )
-        return spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
+        if keep:
+            spikes = spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
+        return spikes, rate.reshape(n_folds, batch, self.hidden_neurons)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step, the
         mean output current over the whole touch: what training fits."""
-        spikes = self.hidden_spikes(x)
-        rate = spikes.mean(dim=2)  # (F, B, hidden)
+        _, rate = self.hidden_spikes(x, keep=False)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
 
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step: the
         running mean of the output currents (the last step's is :meth:`forward`'s)."""
-        spikes = self.hidden_spikes(x)
+        spikes, _ = self.hidden_spikes(x)
         n_folds, batch, n_steps, hidden = spikes.shape
         out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
         out = out.reshape(n_folds, batch, n_steps, self.n_classes)

@@ -116,27 +116,21 @@ class CrossValidation:
     operations: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name, dtype in (
-            ("fold_accuracy", np.float64),
-            ("train_loss", np.float64),
-            ("predicted", np.int64),
-            ("test_fold", np.int64),
+        # (name, dtype, whether a 1-D array is one repeat's row)
+        for name, dtype, rows in (
+            ("fold_accuracy", np.float64, True),
+            ("train_loss", np.float64, True),
+            ("predicted", np.int64, True),
+            ("test_fold", np.int64, True),
+            ("decision_s", np.float64, False),
+            ("decision_predicted", np.int64, False),
+            ("decision_confidence", np.float32, False),
+            ("operations", np.float64, False),
         ):
             value = getattr(self, name)
             if value is not None:
                 value = np.array(value, dtype=dtype)
-                value = value.reshape(1, -1) if value.ndim == 1 else value
-                value.setflags(write=False)
-                object.__setattr__(self, name, value)
-        for name, dtype in (
-            ("decision_s", np.float64),
-            ("decision_predicted", np.int64),
-            ("decision_confidence", np.float32),
-            ("operations", np.float64),
-        ):
-            value = getattr(self, name)
-            if value is not None:
-                value = np.array(value, dtype=dtype)
+                value = value.reshape(1, -1) if rows and value.ndim == 1 else value
                 value.setflags(write=False)
                 object.__setattr__(self, name, value)
 
@@ -472,15 +466,9 @@ def cross_validate(
                 operations += operations_d.sum(axis=0)
         accuracy.append(np.concatenate(fold_accuracy))
         train_loss.append(np.concatenate(fold_loss_))
-    if not decide:
-        return CrossValidation(
-            model,
-            np.stack(accuracy),
-            time.perf_counter() - start,
-            np.stack(train_loss),
-            predicted,
-            test_fold,
-        )
+    operations /= training.repeats * len(y)
+    times = decision_times_s(frame_s, n_decisions) if decide else None
+    decisions = (times, decided, confidence, operations) if decide else ()
     return CrossValidation(
         model,
         np.stack(accuracy),
@@ -488,10 +476,7 @@ def cross_validate(
         np.stack(train_loss),
         predicted,
         test_fold,
-        decision_times_s(frame_s, n_decisions),
-        decided,
-        confidence,
-        operations / (training.repeats * len(y)),
+        *decisions,
     )
 
 

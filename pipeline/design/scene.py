@@ -381,14 +381,14 @@ class SNNSpec:
         1.0,
         "1",
         "firing threshold of the spiking decoder's membrane (input current units)",
-        within=Range(0, 1e6, low_open=True),
+        within=_POSITIVE,
         cost=Cost.FREE,
     )
     surrogate_slope: float = param(
         25.0,
         "1",
         "slope of the fast-sigmoid surrogate gradient of a spike (per unit of membrane)",
-        within=Range(0, 1e6, low_open=True),
+        within=_POSITIVE,
         cost=Cost.FREE,
     )
     epochs: int = param(

@@ -68,7 +68,7 @@ def test_snn_counts_events_and_spikes_as_accumulates_and_every_neuron_update():
     with torch.no_grad():
         net.w1[0, 0, 0] = 5.0  # the input drives hidden neuron 0 only
     x = torch.tensor([2.0, 0.0, 1.0, 0.0]).reshape(1, 1, 1, 1, 4)  # events per step
-    spikes = net.hidden_spikes(x)
+    spikes, _ = net.hidden_spikes(x)
     assert spikes[0, 0, :, 0].tolist() == [1.0, 0.0, 1.0, 0.0]
     assert spikes[0, 0, :, 1].tolist() == [0.0, 0.0, 0.0, 0.0]
     ops = count_operations(net, x)

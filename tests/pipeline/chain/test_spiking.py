@@ -52,13 +52,23 @@ def test_the_kernel_neuron_is_the_autograd_neuron():
     g = torch.Generator().manual_seed(0)
     current = (torch.rand(60, 25, generator=g) * 1.5).requires_grad_()
     weight = torch.randn(60, 25, generator=g)
-    spikes = LeakyLayer.apply(current.unsqueeze(0), 0.9, 1.0, 25.0)[0]
-    (grad,) = torch.autograd.grad((spikes * weight).sum(), current)
+    rate_weight = torch.randn(25, generator=g)
+    spikes, rate = LeakyLayer.apply(current.unsqueeze(0), 0.9, 1.0, 25.0)
+    loss = (spikes[0] * weight).sum() + (rate[0] * rate_weight).sum()
+    (grad,) = torch.autograd.grad(loss, current)
     expected = _reference(current, 0.9, 1.0, 25.0)
-    (expected_grad,) = torch.autograd.grad((expected * weight).sum(), current)
+    expected_loss = (expected * weight).sum() + (expected.mean(dim=0) * rate_weight).sum()
+    (expected_grad,) = torch.autograd.grad(expected_loss, current, retain_graph=True)
     assert 0.2 < float(spikes.detach().mean()) < 0.8  # both spiking and silent steps are exercised
-    assert torch.equal(spikes, expected)
+    assert torch.equal(spikes[0], expected)
+    torch.testing.assert_close(rate[0], expected.mean(dim=0).detach())
     torch.testing.assert_close(grad, expected_grad, rtol=1e-4, atol=1e-5)
+    # Without the spikes kept (training reads only the rate): the same rate and gradient.
+    _, alone = LeakyLayer.apply(current.unsqueeze(0), 0.9, 1.0, 25.0, False)
+    (grad_alone,) = torch.autograd.grad((alone[0] * rate_weight).sum(), current)
+    (expected_alone,) = torch.autograd.grad((expected.mean(dim=0) * rate_weight).sum(), current)
+    torch.testing.assert_close(alone, rate)
+    torch.testing.assert_close(grad_alone, expected_alone, rtol=1e-4, atol=1e-5)
 
 
 SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
