@@ -42,7 +42,7 @@ from torch import nn
 
 from pipeline.chain.models import CNN_CHANNELS, FoldCNN, FoldFFNN
 
-__all__ = ["OPERATIONS", "Operations", "conv3x3_fan_out", "count_operations"]
+__all__ = ["OPERATIONS", "Operations", "cnn_operations", "conv3x3_fan_out", "count_operations"]
 
 #: The kinds of operation counted, in the order of :meth:`Operations.stacked`.
 OPERATIONS = ("acs", "macs", "neuron_updates")
@@ -80,6 +80,29 @@ def conv3x3_fan_out(height: int, width: int, channels_out: int) -> np.ndarray:
     return np.outer(covered(height), covered(width)).astype(np.float64) * channels_out
 
 
+def _fanned(x: torch.Tensor, fan: np.ndarray) -> np.ndarray:
+    """float64 ``(F, B)``: the nonzero entries of ``x`` (``(F, B, C, H, W)``) weighted by the
+    fan-out of their position ``fan`` (``(H, W)``), summed."""
+    nonzero = (x != 0).sum(dim=2, dtype=torch.int32).to(torch.float64)  # (F, B, H, W)
+    return torch.einsum("fbhw,hw->fb", nonzero, torch.from_numpy(fan)).numpy()
+
+
+def cnn_operations(
+    model: FoldCNN, x: torch.Tensor, pooled: torch.Tensor, flat: torch.Tensor
+) -> Operations:
+    """:func:`count_operations` of a CNN given its features on ``x`` (:meth:`FoldCNN.features`,
+    so that a caller that needs its logits too computes them once)."""
+    c1, c2 = CNN_CHANNELS
+    n_folds, batch, _, height, width = x.shape
+    _, _, h1, w1 = pooled.shape
+    pooled = pooled.reshape(batch, n_folds, c1, h1, w1).transpose(0, 1)
+    macs = _fanned(x, conv3x3_fan_out(height, width, c1))
+    macs = macs + _fanned(pooled, conv3x3_fan_out(h1, w1, c2))
+    macs = macs + _nonzero(flat, (2,)) * model.n_classes
+    zeros = np.zeros((n_folds, batch, 1))
+    return Operations(zeros, macs[..., None], zeros)
+
+
 def _nonzero(x: torch.Tensor, dims: tuple[int, ...]) -> np.ndarray:
     return (x != 0).sum(dim=dims).to(torch.float64).numpy()
 
@@ -113,17 +136,7 @@ def count_operations(model: nn.Module, x: torch.Tensor) -> Operations:
         macs = _nonzero(flat, (2,)) * hidden + _nonzero(h, (2,)) * n_classes
         return Operations(zeros, macs[..., None], zeros)
     if isinstance(model, FoldCNN):
-        c1, c2 = CNN_CHANNELS
-        _, _, _, height, width = x.shape
-        fan1 = torch.from_numpy(conv3x3_fan_out(height, width, c1))
-        macs = ((x != 0).to(torch.float64) * fan1).sum(dim=(2, 3, 4)).numpy()
-        pooled, flat = model.features(x)
-        _, _, h1, w1 = pooled.shape
-        pooled = pooled.reshape(batch, n_folds, c1, h1, w1).transpose(0, 1)
-        fan2 = torch.from_numpy(conv3x3_fan_out(h1, w1, c2))
-        macs = macs + ((pooled != 0).to(torch.float64) * fan2).sum(dim=(2, 3, 4)).numpy()
-        macs = macs + _nonzero(flat, (2,)) * model.n_classes
-        return Operations(zeros, macs[..., None], zeros)
+        return cnn_operations(model, x, *model.features(x))
     if isinstance(model, FoldSNN):
         hidden, n_classes = model.hidden_neurons, model.n_classes
         events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step

@@ -613,7 +613,7 @@ def _decisions(
     the trained model on the frame whose columns after ``k`` are 0, the training mean of a
     standardized input: a prefix of the full-touch model, which costs no training.
     """
-    from pipeline.chain.operations import count_operations
+    from pipeline.chain.operations import cnn_operations, count_operations
 
     n_folds, batch = xt.shape[:2]
     n_columns = xt.shape[-1]
@@ -630,8 +630,14 @@ def _decisions(
             keep = (column.reshape(1, -1) <= ends.reshape(-1, 1)).to(xt.dtype)  # (L, W)
             prefixes = xt.unsqueeze(2) * keep.reshape(1, 1, len(ends), 1, 1, n_columns)
             prefixes = prefixes.reshape(n_folds, batch * len(ends), *xt.shape[2:])
-            parts_logits.append(net(prefixes).reshape(n_folds, batch, len(ends), -1))
-            counted = count_operations(net, prefixes).stacked()
+            if model is Model.CNN:  # its features once, for its logits and its count
+                features = net.features(prefixes)
+                prefix_logits = net.head(features[-1])
+                counted = cnn_operations(net, prefixes, *features).stacked()
+            else:
+                prefix_logits = net(prefixes)
+                counted = count_operations(net, prefixes).stacked()
+            parts_logits.append(prefix_logits.reshape(n_folds, batch, len(ends), -1))
             parts_operations.append(counted.reshape(n_folds, batch, len(ends), 3))
         logits = torch.cat(parts_logits, dim=2)
         operations = np.concatenate(parts_operations, axis=2)
