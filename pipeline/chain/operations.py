@@ -1,4 +1,4 @@
-"""Operations a decoder spends on one decision, counted alike for every model (NeuroBench style).
+r"""Operations a decoder spends on one decision, counted alike for every model (NeuroBench style).
 
 A layer's *effective synaptic operations* are its nonzero inputs times their fan-out (the
 outputs each input reaches); a zero input costs nothing, as on event-driven hardware, where it
@@ -14,17 +14,17 @@ are not counted.
 Per model, for one sample:
 
 FFNN
-    MACs :math:`= n_{\\ne 0}(x) \\cdot h + n_{\\ne 0}(\\mathrm{relu}(W_1^\\top x + b_1)) \\cdot K`
+    MACs :math:`= n_{\ne 0}(x) \cdot h + n_{\ne 0}(\mathrm{relu}(W_1^\top x + b_1)) \cdot K`
     (``h`` hidden units, ``K`` classes).
 CNN
     a 3x3 convolution with padding 1 (stride 1) sends input pixel :math:`(i, j)` to
-    :math:`r(i) \\cdot r'(j) \\cdot C_\\mathrm{out}` outputs, :math:`r(i)` the output rows
+    :math:`r(i) \cdot r'(j) \cdot C_\mathrm{out}` outputs, :math:`r(i)` the output rows
     within one of row :math:`i` (3 inside, 2 on an edge, 1 when the side is 1); MACs are the
     sum of that fan-out over the nonzero input pixels of both convolutions (every channel),
     plus the nonzero flattened features times ``K``.
 SNN
-    cumulative over steps :math:`1..t`: ACs :math:`= h \\sum_{t' \\le t} \\sum x_{t'} + K
-    \\sum_{t' \\le t} n(s_{t'})` (input events to the hidden layer, hidden spikes to the
+    cumulative over steps :math:`1..t`: ACs :math:`= h \sum_{t' \le t} \sum x_{t'} + K
+    \sum_{t' \le t} n(s_{t'})` (input events to the hidden layer, hidden spikes to the
     readout), neuron updates :math:`= t (h + K)`.
 
 :func:`count_operations` returns counts per decision time: the SNN's at every step; the FFNN's

@@ -1,22 +1,22 @@
-"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
+r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
 
 Input
-    A recording's spike trains counted in steps of :math:`\\Delta t` (``training.snn.step_s``),
+    A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
     per polarity and taxel: ``x`` of shape ``(C=2, H=taxels, T=steps)``, ON (+1) counts then OFF
     (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). The counts are fed
     as they are (no standardization), so every input is a number of events.
 
 Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset by subtraction)
-    With :math:`\\beta = \\exp(-\\Delta t / \\tau_\\mathrm{mem})` (``tau_mem_s``), threshold
-    :math:`\\vartheta` (``threshold``) and input current
-    :math:`I_t = W_1^\\top x_t + b_1` (one matrix product for all steps at once),
+    With :math:`\beta = \exp(-\Delta t / \tau_\mathrm{mem})` (``tau_mem_s``), threshold
+    :math:`\vartheta` (``threshold``) and input current
+    :math:`I_t = W_1^\top x_t + b_1` (one matrix product for all steps at once),
 
     .. math::
 
-        u_t = \\beta u_{t-1} + I_t - \\vartheta s_{t-1}, \\qquad
-        s_t = \\Theta(u_t - \\vartheta), \\qquad u_0 = s_0 = 0,
+        u_t = \beta u_{t-1} + I_t - \vartheta s_{t-1}, \qquad
+        s_t = \Theta(u_t - \vartheta), \qquad u_0 = s_0 = 0,
 
-    :math:`\\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
+    :math:`\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
     gradient (snnTorch's default ``reset_delay`` with a detached reset).
 
 Surrogate gradient
@@ -25,16 +25,16 @@ Surrogate gradient
 
     .. math::
 
-        \\frac{\\partial s_t}{\\partial u_t} \\approx \\frac{1}{(1 + k |u_t - \\vartheta|)^2}.
+        \frac{\partial s_t}{\partial u_t} \approx \frac{1}{(1 + k |u_t - \vartheta|)^2}.
 
     Backpropagation through time is then a linear recursion backwards in time,
-    :math:`g_t = \\frac{\\partial L}{\\partial s_t} \\frac{\\partial s_t}{\\partial u_t}
-    + \\beta g_{t+1}`, :math:`\\partial L / \\partial I_t = g_t`.
+    :math:`g_t = \frac{\partial L}{\partial s_t} \frac{\partial s_t}{\partial u_t}
+    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`.
 
 Readout and decisions
-    A non-spiking integrator sums the output currents :math:`W_2^\\top s_t + b_2` of every step;
-    the decision read at step :math:`t` (at :math:`t \\Delta t` seconds of touch) is the argmax of
-    their running mean :math:`z_t = \\frac{1}{t} \\sum_{t' \\le t} (W_2^\\top s_{t'} + b_2)`, its
+    A non-spiking integrator sums the output currents :math:`W_2^\top s_t + b_2` of every step;
+    the decision read at step :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of
+    their running mean :math:`z_t = \frac{1}{t} \sum_{t' \le t} (W_2^\top s_{t'} + b_2)`, its
     confidence the softmax probability of that class. Training minimizes the cross-entropy of
     :math:`z_T`, the decision at the end of the touch, as the FFNN and CNN are trained on the
     whole touch; an earlier decision reads the same network on the evidence so far, as theirs
