@@ -90,8 +90,9 @@ def _fanned(x: torch.Tensor, fan: np.ndarray) -> np.ndarray:
 def cnn_operations(
     model: FoldCNN, x: torch.Tensor, pooled: torch.Tensor, flat: torch.Tensor
 ) -> Operations:
-    """:func:`count_operations` of a CNN given its features on ``x`` (:meth:`FoldCNN.features`,
-    so that a caller that needs its logits too computes them once)."""
+    """:func:`count_operations` of a CNN given its features on ``x``
+    (:meth:`~pipeline.chain.models.FoldCNN.features`), so that a caller that needs its logits
+    too computes them once."""
     c1, c2 = CNN_CHANNELS
     n_folds, batch, _, height, width = x.shape
     _, _, h1, w1 = pooled.shape

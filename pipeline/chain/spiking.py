@@ -119,6 +119,7 @@ class LeakyLayer(torch.autograd.Function):
 
     @staticmethod
     def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
+        """``(spikes, rate)`` of the layer driven by ``current`` (see the class docstring)."""
         current = current.detach().contiguous()
         n_groups, _, n = current.shape
         spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
@@ -139,6 +140,7 @@ class LeakyLayer(torch.autograd.Function):
 
     @staticmethod
     def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
+        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate)."""
         (slopes,) = ctx.saved_tensors
         grad = torch.empty_like(slopes)
         grad_spikes = grad_spikes.detach().contiguous()

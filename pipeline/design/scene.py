@@ -360,7 +360,7 @@ class CodingSpec:
 
 @dataclass(frozen=True)
 class SNNSpec:
-    """The spiking decoder (:class:`~pipeline.chain.models.FoldSNN`): ON and OFF spikes of each
+    """The spiking decoder (:class:`~pipeline.chain.spiking.FoldSNN`): ON and OFF spikes of each
     taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
     neurons, a readout read at every step; trained ``epochs`` epochs through time with a
     fast-sigmoid surrogate gradient of slope ``surrogate_slope``."""

@@ -252,15 +252,15 @@ class Decisions:
 
     Attributes
     ----------
-    decision_s : float64 (D,)
-        Decision times (s of touch), increasing: the union of the models' own.
-    predicted : dict[str, int64 (repeats, D, n)]
-        Model name -> the class index each recording got from the model of its fold read at
-        each time; -1 where the model gives no decision at that time.
-    confidence : dict[str, float32 (repeats, D, n)]
-        Softmax probability of that class; NaN where no decision.
-    operations : dict[str, float64 (D, 3)]
-        Mean operations per recording of a decision at each time (accumulates,
+    decision_s : float64
+        ``(D,)``: decision times (s of touch), increasing: the union of the models' own.
+    predicted : dict[str, numpy.ndarray]
+        Model name -> int64 ``(repeats, D, n)``: the class index each recording got from the
+        model of its fold read at each time; -1 where the model gives no decision at that time.
+    confidence : dict[str, numpy.ndarray]
+        float32 ``(repeats, D, n)``: softmax probability of that class; NaN where no decision.
+    operations : dict[str, numpy.ndarray]
+        float64 ``(D, 3)``: mean operations per recording of a decision at each time (accumulates,
         multiply-accumulates, neuron updates: :data:`pipeline.chain.operations.OPERATIONS`);
         NaN where no decision.
     """
