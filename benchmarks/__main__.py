@@ -24,6 +24,7 @@ from benchmarks import (
     planning,
     scale,
     search,
+    snn,
     sweep,
     sweep_scale,
     training,
@@ -31,7 +32,7 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, planning, chips)
+QUICK = (encoder, coding, kernels, training, snn, planning, chips)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 

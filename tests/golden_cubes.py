@@ -164,6 +164,13 @@ ADDED: frozenset[str] = frozenset(
         "readout.encoder",
         "readout.decay.theta_min_v",
         "readout.decay.tau_s",
+        # The spiking decoder's hyper-parameters, new scene fields.
+        "training.snn.step_s",
+        "training.snn.hidden_neurons",
+        "training.snn.tau_mem_s",
+        "training.snn.threshold",
+        "training.snn.surrogate_slope",
+        "training.snn.epochs",
     }
 )
 # Attributes that name the software that built a cube: they change with every release.

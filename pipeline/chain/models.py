@@ -12,7 +12,9 @@ CNN
     taxel, or a single window) is not pooled, and an odd side keeps its last row/column
     (``side -> ceil(side / 2)``), so any frame of at least 1x1 is accepted.
 
-Both return logits (no softmax); the loss is cross-entropy on logits.
+Both return logits (no softmax); the loss is cross-entropy on logits. The spiking decoder
+(``snn``, :mod:`pipeline.chain.spiking`) reads spike counts per time step instead and returns
+logits at every step.
 
 Fold-batched models
 -------------------
@@ -50,7 +52,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from pipeline.design.scene import Model
+from pipeline.design.scene import Model, SNNSpec
 
 CNN_CHANNELS = (16, 32)
 """Output channels of the CNN's two convolutions (the paper's)."""
@@ -97,6 +99,30 @@ def _uniform(generator: torch.Generator, shape: tuple[int, ...], fan_in: int) ->
     return torch.rand(shape, generator=generator, dtype=torch.float32) * (2 * bound) - bound
 
 
+def two_layers(
+    module: nn.Module,
+    n_in: int,
+    hidden: int,
+    n_classes: int,
+    generators: Sequence[torch.Generator],
+) -> None:
+    """Give ``module`` the parameters of two fold-batched linear layers, float32 ``w1 (F, n_in,
+    hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden, n_classes)``, ``b2 (F, n_classes)``, drawn
+    per fold in that order from the fold's own generator (PyTorch's default bounds)."""
+    per_fold = [
+        [
+            _uniform(g, (n_in, hidden), n_in),
+            _uniform(g, (hidden,), n_in),
+            _uniform(g, (hidden, n_classes), hidden),
+            _uniform(g, (n_classes,), hidden),
+        ]
+        for g in generators
+    ]
+    w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
+    module.w1, module.b1 = nn.Parameter(w1), nn.Parameter(b1)
+    module.w2, module.b2 = nn.Parameter(w2), nn.Parameter(b2)
+
+
 class _FoldModel(nn.Module):
     """Common part: fold count, input shape, class count, and the parameter draw order."""
 
@@ -129,20 +155,7 @@ class FoldFFNN(_FoldModel):
         generators: Sequence[torch.Generator],
     ):
         super().__init__(input_shape, n_classes, len(generators))
-        n_in = math.prod(self.input_shape)
-        # Per fold, draw order: w1, b1, w2, b2 (a fold's generator is used by that fold only).
-        per_fold = [
-            [
-                _uniform(g, (n_in, hidden_units), n_in),
-                _uniform(g, (hidden_units,), n_in),
-                _uniform(g, (hidden_units, n_classes), hidden_units),
-                _uniform(g, (n_classes,), hidden_units),
-            ]
-            for g in generators
-        ]
-        w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
-        self.w1, self.b1 = nn.Parameter(w1), nn.Parameter(b1)
-        self.w2, self.b2 = nn.Parameter(w2), nn.Parameter(b2)
+        two_layers(self, math.prod(self.input_shape), hidden_units, n_classes, generators)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, n_classes)`` for ``x: float32 (F, B, C, H, W)``."""
@@ -199,6 +212,11 @@ class FoldCNN(_FoldModel):
         (``relu(maxpool(z)) == maxpool(relu(z))``, ReLU being monotone; gradients agree too):
         both are about twice as fast on CPU as the textbook order in NCHW layout.
         """
+        return self.head(self.features(x)[-1])
+
+    def features(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The inputs of the second convolution and of the linear layer: float32
+        ``(B, F*16, H', W')`` (``channels_last``) and ``(F, B, 32*H''*W'')``."""
         self._check(x)
         n_folds, batch, c, h, w = x.shape
         # Fold F into channels: (B, F*C, H, W); group f of every conv sees fold f only. Copied
@@ -217,6 +235,7 @@ class FoldCNN(_FoldModel):
             groups=n_folds,
         )
         z = torch.relu(F.max_pool2d(z, self.pool1, self.pool1, ceil_mode=True))
+        pooled = z
         z = F.conv2d(
             z,
             self.conv2_w.reshape(-1, CNN_CHANNELS[0], 3, 3),
@@ -226,6 +245,10 @@ class FoldCNN(_FoldModel):
         )
         z = torch.relu(F.max_pool2d(z, self.pool2, self.pool2, ceil_mode=True))
         z = z.reshape(batch, n_folds, -1).transpose(0, 1)  # (F, B, 32*H''*W''), (c, row, col)
+        return pooled, z
+
+    def head(self, z: torch.Tensor) -> torch.Tensor:
+        """Logits ``(F, B, n_classes)`` from the flattened features ``(F, B, 32*H''*W'')``."""
         return torch.baddbmm(self.fc_b.unsqueeze(1), z, self.fc_w)
 
 
@@ -236,15 +259,18 @@ def build_model(
     hidden_units: int,
     n_folds: int,
     generator: torch.Generator | Sequence[torch.Generator],
+    snn: SNNSpec | None = None,
 ) -> nn.Module:
     """Build ``n_folds`` independent copies of a classifier as one fold-batched module.
 
     Parameters
     ----------
     model
-        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
+        :attr:`~pipeline.design.scene.Model.FFNN`, :attr:`~pipeline.design.scene.Model.CNN` or
+        :attr:`~pipeline.design.scene.Model.SNN` (:class:`pipeline.chain.spiking.FoldSNN`).
     input_shape
-        One sample's frame ``(C, H, W)``: channels, taxels (rows), windows (columns).
+        One sample's frame ``(C, H, W)``: channels, taxels (rows), windows (columns); for the
+        SNN, polarities, taxels and steps.
     n_classes
         Number of classes (logits per sample), ``>= 2``.
     hidden_units
@@ -255,6 +281,9 @@ def build_model(
         Either one generator per fold (a sequence of length ``n_folds``; fold ``f`` draws its
         parameters from ``generator[f]`` only, so its weights do not depend on the other folds;
         use :func:`fold_generator`), or a single generator from which the folds draw in order.
+    snn
+        The SNN's hyper-parameters (required for it; its hidden neurons replace
+        ``hidden_units``).
 
     Returns
     -------
@@ -274,4 +303,19 @@ def build_model(
     model = Model(model)
     if model is Model.FFNN:
         return FoldFFNN(input_shape, n_classes, hidden_units, generators)
+    if model is Model.SNN:
+        from pipeline.chain.spiking import FoldSNN
+
+        if snn is None:
+            raise ValueError("the snn needs its hyper-parameters (snn=SNNSpec)")
+        return FoldSNN(
+            input_shape,
+            n_classes,
+            snn.hidden_neurons,
+            generators,
+            step_s=snn.step_s,
+            tau_mem_s=snn.tau_mem_s,
+            threshold=snn.threshold,
+            surrogate_slope=snn.surrogate_slope,
+        )
     return FoldCNN(input_shape, n_classes, generators)

@@ -88,6 +88,20 @@ class CrossValidation:
     test_fold
         int64 ``(repeats, n_recordings)``, read-only, or ``None``: the fold that tested each
         recording.
+    decision_s
+        float64 ``(D,)``, read-only, or ``None``: the decision times (s of touch) at which
+        decisions were read, the end of every frame column (window or step); ``None`` when
+        :func:`cross_validate` was not told the column length.
+    decision_predicted
+        int64 ``(repeats, D, n_recordings)``, read-only, or ``None``: the label each recording
+        got from its fold's model read at each decision time (the last is ``predicted``).
+    decision_confidence
+        float32 ``(repeats, D, n_recordings)``, read-only, or ``None``: the softmax probability
+        of that label.
+    operations
+        float64 ``(D, 3)``, read-only, or ``None``: mean over recordings (and repeats) of the
+        accumulates, multiply-accumulates and neuron updates a decision read at each decision
+        time cost (:func:`pipeline.chain.operations.count_operations`).
     chip_accuracy
         float64 ``(chips, repeats, folds)``, read-only, or ``None``: ``fold_accuracy`` of every
         chip of a scene that simulates chips (:mod:`pipeline.chain.deployment`);
@@ -103,22 +117,31 @@ class CrossValidation:
     train_loss: np.ndarray | None = None
     predicted: np.ndarray | None = None
     test_fold: np.ndarray | None = None
+    decision_s: np.ndarray | None = None
+    decision_predicted: np.ndarray | None = None
+    decision_confidence: np.ndarray | None = None
+    operations: np.ndarray | None = None
     chip_accuracy: np.ndarray | None = None
     chip_predicted: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name, dtype in (
-            ("fold_accuracy", np.float64),
-            ("train_loss", np.float64),
-            ("predicted", np.int64),
-            ("test_fold", np.int64),
-            ("chip_accuracy", np.float64),
-            ("chip_predicted", np.int64),
+        # (name, dtype, whether a 1-D array is one repeat's row)
+        for name, dtype, rows in (
+            ("fold_accuracy", np.float64, True),
+            ("train_loss", np.float64, True),
+            ("predicted", np.int64, True),
+            ("test_fold", np.int64, True),
+            ("decision_s", np.float64, False),
+            ("decision_predicted", np.int64, False),
+            ("decision_confidence", np.float32, False),
+            ("operations", np.float64, False),
+            ("chip_accuracy", np.float64, False),
+            ("chip_predicted", np.int64, False),
         ):
             value = getattr(self, name)
             if value is not None:
                 value = np.array(value, dtype=dtype)
-                value = value.reshape(1, -1) if value.ndim == 1 else value
+                value = value.reshape(1, -1) if rows and value.ndim == 1 else value
                 value.setflags(write=False)
                 object.__setattr__(self, name, value)
 
@@ -338,6 +361,7 @@ def cross_validate(
     *,
     class_names: Sequence[str] | None = None,
     batched: bool = True,
+    frame_s: float | None = None,
 ) -> CrossValidation:
     """Stratified k-fold cross-validated accuracy of one classifier.
 
@@ -345,7 +369,9 @@ def cross_validate(
     ----------
     frames
         ``(n_recordings, C, H, W)`` spike counts (int64 or float): C channels (polarities),
-        H taxels in raster order, W windows.
+        H taxels in raster order, W windows (for the SNN: 2 polarities, H taxels, W steps).
+        The FFNN's and CNN's are standardized (:func:`standardize`); the SNN's are fed as
+        counts.
     labels
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
@@ -358,6 +384,12 @@ def cross_validate(
     batched
         Train all folds as one batched computation (fast); ``False`` trains them one after the
         other with the same code. Both give the same result up to floating-point rounding.
+    frame_s
+        Seconds of touch per frame column (the window, or the SNN's step). When given, every
+        test recording's decision is also read at the end of every column, with its confidence
+        and its operations (:attr:`CrossValidation.decision_s`): the SNN's output at every
+        step; the FFNN's and CNN's on the frame's first ``k`` windows, the later ones set to
+        their training mean (0 once standardized), for every ``k``.
 
     Returns
     -------
@@ -385,6 +417,8 @@ def cross_validate(
         raise ValueError("frames hold non-finite values")
     model = Model(model)
     classes, y, counts = np.unique(labels, return_inverse=True, return_counts=True)
+    inputs = _as_counts if model is Model.SNN else standardize
+    decide = frame_s is not None
 
     def name(label: int) -> str:
         if class_names is not None and 0 <= label < len(class_names):
@@ -406,16 +440,18 @@ def cross_validate(
     accuracy, train_loss = [], []
     predicted = np.zeros((training.repeats, len(y)), dtype=np.int64)
     test_fold = np.zeros((training.repeats, len(y)), dtype=np.int64)
+    n_decisions = frames.shape[-1]
+    decided = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.int64)
+    confidence = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.float32)
+    operations = np.zeros((n_decisions, 3), dtype=np.float64)
     for repeat in range(training.repeats):
         seed = repeat_seed(training.seed, repeat)
         splits = stratified_folds(y, training.folds, seed)
-        train_x, test_x = zip(
-            *(standardize(frames[tr], frames[te]) for tr, te in splits), strict=True
-        )
+        train_x, test_x = zip(*(inputs(frames[tr], frames[te]) for tr, te in splits), strict=True)
         groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
-        fold_accuracy, fold_loss_, fold_predicted = [], [], []
+        fold_accuracy, fold_loss_, fold_predicted, fold_decisions = [], [], [], []
         for group in groups:
-            a, loss, guess = _train_and_evaluate(
+            a, loss, guess, decisions = _train_and_evaluate(
                 [train_x[f] for f in group],
                 [y[splits[f][0]] for f in group],
                 [test_x[f] for f in group],
@@ -425,15 +461,25 @@ def cross_validate(
                 len(classes),
                 training,
                 seed,
+                decide,
             )
             fold_accuracy.append(a)
             fold_loss_.append(loss)
             fold_predicted.extend(guess)
+            fold_decisions.extend(decisions)
         for f, (_, test) in enumerate(splits):
             predicted[repeat, test] = classes[fold_predicted[f]]
             test_fold[repeat, test] = f
+            if decide:
+                guess_d, confidence_d, operations_d = fold_decisions[f]
+                decided[repeat][:, test] = classes[guess_d]
+                confidence[repeat][:, test] = confidence_d
+                operations += operations_d.sum(axis=0)
         accuracy.append(np.concatenate(fold_accuracy))
         train_loss.append(np.concatenate(fold_loss_))
+    operations /= training.repeats * len(y)
+    times = decision_times_s(frame_s, n_decisions) if decide else None
+    decisions = (times, decided, confidence, operations) if decide else ()
     return CrossValidation(
         model,
         np.stack(accuracy),
@@ -441,7 +487,20 @@ def cross_validate(
         np.stack(train_loss),
         predicted,
         test_fold,
+        *decisions,
     )
+
+
+def decision_times_s(frame_s: float, n_columns: int) -> np.ndarray:
+    """float64 ``(n_columns,)``: the end of every frame column, ``(k + 1) * frame_s``, rounded
+    to the nanosecond so that the times of different columns that coincide (a window boundary
+    and a step's end) compare equal."""
+    return np.round((np.arange(n_columns, dtype=np.float64) + 1.0) * frame_s, 9)
+
+
+def _as_counts(train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The SNN's inputs: the counts themselves as float32 (events stay events)."""
+    return np.asarray(train, dtype=np.float32), np.asarray(test, dtype=np.float32)
 
 
 def _stack_padded(
@@ -465,8 +524,10 @@ def _train_and_evaluate(
     n_classes: int,
     training: TrainingSpec,
     seed: int,
-) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions.
+    decide: bool = False,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[tuple[np.ndarray, ...]]]:
+    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions
+    and, with ``decide``, the decisions at every frame column (:func:`_decisions`; else ``[]``).
 
     ``train_x[i]`` is float32 ``(n_i, C, H, W)``, ``train_y[i]`` int ``(n_i,)`` for fold
     ``folds[i]``, likewise the test sets; ``seed`` is the repeat's training seed. Returns float64
@@ -479,7 +540,8 @@ def _train_and_evaluate(
         [np.sum(g == np.asarray(t)) for g, t in zip(guesses, test_y, strict=True)], dtype=np.float64
     )
     n_test = np.array([len(t) for t in test_y], dtype=np.float64)
-    return correct / n_test, train_loss, guesses
+    decisions = _decisions(net, model, *_stack_padded(test_x, torch.float32)) if decide else []
+    return correct / n_test, train_loss, guesses, decisions
 
 
 def fit_folds(
@@ -509,17 +571,19 @@ def fit_folds(
         training.hidden_units,
         n_folds,
         [fold_generator(seed, f, "init") for f in folds],
+        training.snn,
     )
+    epochs = training.snn.epochs if model is Model.SNN else training.epochs
     params = [p for p in net.parameters()]
     optimizer = FoldAdam(params, training.learning_rate)
 
     # Epoch orders: per fold, a fresh permutation of its own training set per epoch from its own
     # generator, padded with row 0 of the fold (weight 0) up to n_max; as flat row indices.
-    order = torch.zeros(training.epochs, n_folds, n_max, dtype=torch.int64)
+    order = torch.zeros(epochs, n_folds, n_max, dtype=torch.int64)
     for i, fold in enumerate(folds):
         shuffle = fold_generator(seed, fold, "shuffle")
         n = int(n_train[i])
-        for epoch in range(training.epochs):
+        for epoch in range(epochs):
             order[epoch, i, :n] = torch.randperm(n, generator=shuffle)
     order += (torch.arange(n_folds) * n_max).reshape(1, n_folds, 1)
 
@@ -539,7 +603,7 @@ def fit_folds(
 
     net.train()
     last_loss = torch.zeros(n_folds, dtype=torch.float32)
-    for epoch in range(training.epochs):
+    for epoch in range(epochs):
         epoch_order = order[epoch]
         for s, stop, weights, active in batches:
             rows = epoch_order[:, s:stop].reshape(-1)
@@ -548,7 +612,7 @@ def fit_folds(
             loss = fold_loss(net(xb), yb, weights)
             grads = torch.autograd.grad(loss.sum(), params)
             optimizer.step(grads, active)
-            if epoch == training.epochs - 1:
+            if epoch == epochs - 1:
                 last_loss += loss.detach()
 
     net.eval()
@@ -562,3 +626,60 @@ def predict_folds(net: torch.nn.Module, test_x: Sequence[np.ndarray]) -> list[np
     with torch.inference_mode():
         predicted = net(xt).argmax(dim=-1)
     return [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]
+
+
+#: Most input cells (folds x samples x prefixes x frame cells) evaluated at once when reading
+#: the FFNN's and CNN's decisions on prefixes of the frames: bounds their memory (16 MB).
+_PREFIX_CELLS = 4_000_000
+
+
+@torch.inference_mode()
+def _decisions(
+    net: torch.nn.Module, model: Model, xt: torch.Tensor, n_test: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Every fold's decisions at the end of every frame column of its test inputs ``xt``
+    (float32 ``(F, B, C, H, W)``, fold ``f``'s first ``n_test[f]`` rows real).
+
+    Returns, per fold: int64 ``(W, n_test_f)`` class indices, float32 ``(W, n_test_f)`` their
+    softmax probability, float64 ``(n_test_f, W, 3)`` operations (:mod:`pipeline.chain.operations`).
+    The SNN's are its outputs at every step. The FFNN's and CNN's at column ``k`` are those of
+    the trained model on the frame whose columns after ``k`` are 0, the training mean of a
+    standardized input: a prefix of the full-touch model, which costs no training.
+    """
+    from pipeline.chain.operations import cnn_operations, count_operations
+
+    n_folds, batch = xt.shape[:2]
+    n_columns = xt.shape[-1]
+    if model is Model.SNN:
+        logits = net.decision_logits(xt)  # (F, B, W, n_classes)
+        operations = count_operations(net, xt).stacked()  # (F, B, W, 3)
+    else:
+        cells = max(1, xt[0, 0].numel() * n_folds * batch)
+        chunk = max(1, _PREFIX_CELLS // cells)
+        column = torch.arange(n_columns)
+        parts_logits, parts_operations = [], []
+        for first in range(0, n_columns, chunk):
+            ends = torch.arange(first, min(first + chunk, n_columns))
+            keep = (column.reshape(1, -1) <= ends.reshape(-1, 1)).to(xt.dtype)  # (L, W)
+            prefixes = xt.unsqueeze(2) * keep.reshape(1, 1, len(ends), 1, 1, n_columns)
+            prefixes = prefixes.reshape(n_folds, batch * len(ends), *xt.shape[2:])
+            if model is Model.CNN:  # its features once, for its logits and its count
+                features = net.features(prefixes)
+                prefix_logits = net.head(features[-1])
+                counted = cnn_operations(net, prefixes, *features).stacked()
+            else:
+                prefix_logits = net(prefixes)
+                counted = count_operations(net, prefixes).stacked()
+            parts_logits.append(prefix_logits.reshape(n_folds, batch, len(ends), -1))
+            parts_operations.append(counted.reshape(n_folds, batch, len(ends), 3))
+        logits = torch.cat(parts_logits, dim=2)
+        operations = np.concatenate(parts_operations, axis=2)
+    probability, decided = torch.softmax(logits, dim=-1).max(dim=-1)  # (F, B, W)
+    return [
+        (
+            decided[f, : int(n)].T.numpy().astype(np.int64),
+            probability[f, : int(n)].T.numpy().astype(np.float32),
+            operations[f, : int(n)],
+        )
+        for f, n in enumerate(n_test)
+    ]

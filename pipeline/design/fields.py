@@ -180,8 +180,10 @@ def part(cls: type, *, only_when: tuple[str, Any] | None = None) -> Any:
     """A dataclass field holding a nested value object of type ``cls``, read as its own table.
 
     ``only_when=(name, value)``: the part matters only while the sibling field ``name`` holds
-    ``value`` (the parameters of one option of an enum), so the canonical form leaves it out
-    otherwise, and a value that does not use it keeps the key it had before the part existed.
+    ``value`` (the parameters of one option of an enum), or holds it among others when ``name``
+    is a list of options (the parameters of one of the models trained), so the canonical form
+    leaves it out otherwise, and a value that does not use it keeps the key it had before the
+    part existed.
     """
     metadata = {} if only_when is None else {_ONLY_WHEN: only_when}
     return dataclasses.field(default_factory=cls, metadata=metadata)
@@ -448,7 +450,10 @@ def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool
         return False
     declared, only_when = slot.declared, slot.only_when
     if only_when is not None and owner is not None:
-        return getattr(owner, only_when[0]) != only_when[1]
+        chosen = getattr(owner, only_when[0])
+        if isinstance(chosen, tuple):  # a list of options (the models): is the value among them
+            return only_when[1] not in chosen
+        return chosen != only_when[1]
     return declared is not None and declared.neutral and value == slot.default
 
 
@@ -487,6 +492,8 @@ def cost_parts(value: Any) -> tuple[Any, list[Any]]:
                 declared, v = slot.declared, getattr(value, slot.name)
                 if declared is not None and (declared.label or declared.cost is Cost.FREE):
                     continue
+                if slot.only_when is not None and left_out(slot, v, True, value):
+                    continue  # the parameters of an option not chosen cost nothing
                 if declared is not None and declared.cost is Cost.SIZE:
                     sizes.append(v)
                 if v is not None:

@@ -99,6 +99,7 @@ class Model(enum.StrEnum):
 
     FFNN = "ffnn"
     CNN = "cnn"
+    SNN = "snn"  # leaky integrate-and-fire layer on the spike trains, deciding at every step
 
 
 class Encoder(enum.StrEnum):
@@ -377,6 +378,44 @@ class CodingSpec:
 
 
 @dataclass(frozen=True)
+class SNNSpec:
+    """The spiking decoder (:class:`~pipeline.chain.spiking.FoldSNN`): ON and OFF spikes of each
+    taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
+    neurons, a readout read at every step; trained ``epochs`` epochs through time with a
+    fast-sigmoid surrogate gradient of slope ``surrogate_slope``."""
+
+    step_s: float = param(
+        0.02,
+        "s",
+        "time step of the spiking decoder (spikes binned per step; divides coding.window_s)",
+        within=Range(1e-4, 3600),
+    )
+    hidden_neurons: int = param(
+        100, "1", "leaky integrate-and-fire neurons of the spiking decoder", within=Range(1, 10_000)
+    )
+    tau_mem_s: float = param(
+        0.1, "s", "membrane time constant of the spiking decoder's neurons", within=_TAU
+    )
+    threshold: float = param(
+        1.0,
+        "1",
+        "firing threshold of the spiking decoder's membrane (input current units)",
+        within=_POSITIVE,
+        cost=Cost.FREE,
+    )
+    surrogate_slope: float = param(
+        25.0,
+        "1",
+        "slope of the fast-sigmoid surrogate gradient of a spike (per unit of membrane)",
+        within=_POSITIVE,
+        cost=Cost.FREE,
+    )
+    epochs: int = param(
+        100, "1", "training epochs of the spiking decoder", within=Range(1, 100_000)
+    )
+
+
+@dataclass(frozen=True)
 class TrainingSpec:
     """Classifiers and stratified k-fold cross-validation."""
 
@@ -397,6 +436,7 @@ class TrainingSpec:
         within=Range(1, 100),
     )
     seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
+    snn: SNNSpec = part(SNNSpec, only_when=("models", Model.SNN))
 
 
 MAX_CHIPS = 1000
@@ -459,8 +499,32 @@ class Scene:
 
     def refusals(self) -> Iterator[tuple[str, str]]:
         """What the parts refuse together: a deployment of one classifier onto many chips
-        needs a readout whose chips differ (a named fixed effect)."""
+        needs a readout whose chips differ (a named fixed effect); the spiking decoder reads one
+        chip's spikes (it does not decode a population of chips yet), and its step must fit
+        whole in a rate-coding window, so that every window boundary is one of its decision
+        times."""
         yield from chip_refusals(self)
+        if Model.SNN not in self.training.models:
+            return
+        if self.chips.simulated:
+            yield (
+                "training.models",
+                f"'snn' decodes the one chip it is trained on, not chips.count = "
+                f"{self.chips.count} chips deployed {self.chips.deployment.value!r} "
+                "(train it with the default chips part)",
+            )
+        step_s, window_s = self.training.snn.step_s, self.coding.window_s
+        steps = round(window_s / step_s)
+        if step_s > window_s:
+            yield (
+                "training.snn.step_s",
+                f"{step_s!r} s is longer than coding.window_s = {window_s!r} s",
+            )
+        elif abs(steps * step_s - window_s) > 1e-9 * window_s:
+            yield (
+                "training.snn.step_s",
+                f"{step_s!r} s does not divide coding.window_s = {window_s!r} s",
+            )
 
     # -- construction ---------------------------------------------------------------------------
 
@@ -738,10 +802,13 @@ class SceneVariants:
         """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
         parts: dict[str, Any] = {}
         problems: list[str] = []
+        parts: dict[str, Any] = {}
         for top, part_indices in self._part_indices:
             parts[top], found = self._part(top, part_indices(indices), indices)
             problems += found
-        return problems + _scene_refusals(self._cls(**parts))
+        if not problems:
+            problems += _refused_together(self._cls(**parts))
+        return problems
 
     def scene(self, indices: Sequence[int]) -> Scene:
         """The scene with each field set to ``values[indices[axis]]``.
@@ -757,10 +824,12 @@ class SceneVariants:
             value, found = self._part(top, part_indices(indices), indices)
             parts[top] = value
             problems += found
-        problems += _scene_refusals(self._cls(**parts))
+        scene = None if problems else self._cls(**parts)
+        if scene is not None:
+            problems += _refused_together(scene)
         if problems:
             raise SceneError(problems, self.source)
-        return self._cls(**parts)
+        return scene
 
     def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
         found = self._parts.get((top, part_indices))
@@ -781,10 +850,10 @@ class SceneVariants:
         return part, problems
 
 
-def _scene_refusals(scene: Scene) -> list[str]:
-    """What a scene built part by part refuses across its parts (:meth:`Scene.refusals`), as
-    :func:`pipeline.design.fields.read` reports it."""
-    return [f"{name}: {text}" for name, text in scene.refusals()]
+def _refused_together(scene: Scene) -> list[str]:
+    """What a scene's parts refuse together (:meth:`Scene.refusals`), as reading says it."""
+    refusals = getattr(scene, "refusals", None)
+    return [] if refusals is None else [f"{name}: {text}" for name, text in refusals()]
 
 
 def _copy_plain(value: Any) -> Any:

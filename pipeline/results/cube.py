@@ -52,6 +52,11 @@ Data variables
 ``n_windows_used`` (axes...)
     int64 rate-coding windows the point used (``coding.n_windows`` resolved; -1 where its result
     does not say)
+``decision_correct``, ``decision_confidence`` (axes..., model, decision_s, repeat, recording)
+    and ``decoder_acs``, ``decoder_macs``, ``decoder_neuron_updates`` (axes..., model,
+    decision_s): every model's decisions read during the touch and what each cost, on the
+    ``decision_s`` coordinate (s of touch), where points kept them
+    (:mod:`pipeline.results.decision_cube`)
 
 Where some point simulates chips (``chips.count`` above 1, or a ``shared`` or ``robust``
 deployment: :mod:`pipeline.chain.chips`), the cube has a ``chip`` dimension (coordinate
@@ -132,6 +137,7 @@ from pipeline.chain.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_
 from pipeline.design import fields
 from pipeline.design.grid import Grid, GridPoint, Sweep
 from pipeline.design.scene import Model, Scene, canonical_parts, part_left_out
+from pipeline.results.decision_cube import decision_variables
 from pipeline.run.records import Charge, OutOfFold, Paid, RecordingsInfo
 from pipeline.run.stages import RESULTS, interval_generator, steps_of
 
@@ -184,6 +190,27 @@ CUBE_VARIABLES: dict[str, dict[str, str]] = {
     "yield_share": {
         "units": "1",
         "long_name": "share of the chips whose accuracy reaches chips.yield_target",
+    },
+    "decision_s": {"units": "s", "long_name": "seconds of touch at which a decision is read"},
+    "decision_correct": {
+        "units": "1",
+        "long_name": "decision read at that time correct (1, 0; -1: no decision)",
+    },
+    "decision_confidence": {
+        "units": "1",
+        "long_name": "softmax probability of the class decided at that time (NaN: none)",
+    },
+    "decoder_acs": {
+        "units": "1",
+        "long_name": "mean accumulates (spike inputs) a decision read at that time cost",
+    },
+    "decoder_macs": {
+        "units": "1",
+        "long_name": "mean multiply-accumulates (real inputs) a decision read at that time cost",
+    },
+    "decoder_neuron_updates": {
+        "units": "1",
+        "long_name": "mean neuron state updates a decision read at that time cost",
     },
 }
 #: Per-point values the results store beside accuracy and metrics, as cube variables (axes...):
@@ -333,6 +360,12 @@ def build_cube(
         data_vars.update(predictions)
         coords.update(recording_coords)
         correct, label = predictions["correct"][1], recording_coords["label"][1]
+        decided = decision_variables(
+            results, flat, models, n_repeats, dims, shape, recording_coords["recording"][1]
+        )
+        if decided is not None:
+            data_vars.update(decided[0])
+            coords.update(decided[1])
     data_vars.update(_accuracy_summary(accuracy, correct, label, dims, points, models))
     coords.update(_axis_coordinates(sweep, points))
     chip_variables = _chip_variables(results, points, flat, shape, dims, models, data_vars, coords)

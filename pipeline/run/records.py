@@ -24,7 +24,11 @@ Variables of the result entry: ``accuracy`` float64 (model, repeat, fold) with t
 ``model``; ``n_windows_used`` int64 () the number of rate-coding windows the point used (``auto``
 resolved); where the writer kept them, the out-of-fold predictions: ``predicted`` int64 (model,
 repeat, recording), ``test_fold`` int64 (repeat, recording), ``labels`` int64 (recording) and
-the strings ``recording``; and ``metrics`` as for spikes. Attributes ``dataset_name``,
+the strings ``recording``; where the writer read decisions during the touch
+(:class:`Decisions`), ``decision_s`` float64 (decision) s, ``decision_predicted`` int16 (model,
+repeat, decision, recording) (-1: no decision), ``decision_confidence`` float32 (same dims; NaN:
+none) and ``decoder_operations`` float64 (model, decision, operation); and ``metrics`` as for
+spikes. Attributes ``dataset_name``,
 ``class_names`` and ``sampling_rate_hz`` where the writer stated them.
 
 Every entry's attributes hold ``seconds`` (step name -> wall seconds of the step's work for the
@@ -54,8 +58,10 @@ from pipeline.chain.spikes import Encoded, SpikeTrains, train_starts
 __all__ = [
     "CHIP_RESULT_VARIABLES",
     "CHIP_SPIKE_VARIABLES",
+    "DECISION_VARIABLES",
     "Charge",
     "ChipResults",
+    "Decisions",
     "OutOfFold",
     "Record",
     "RecordingsInfo",
@@ -245,6 +251,92 @@ class OutOfFold:
 
 
 @dataclass(frozen=True, eq=False)
+class Decisions:
+    """Every model's decisions read during the touch at one point, on one time grid.
+
+    Attributes
+    ----------
+    decision_s : float64
+        ``(D,)``: decision times (s of touch), increasing: the union of the models' own.
+    predicted : dict[str, numpy.ndarray]
+        Model name -> int64 ``(repeats, D, n)``: the class index each recording got from the
+        model of its fold read at each time; -1 where the model gives no decision at that time.
+    confidence : dict[str, numpy.ndarray]
+        float32 ``(repeats, D, n)``: softmax probability of that class; NaN where no decision.
+    operations : dict[str, numpy.ndarray]
+        float64 ``(D, 3)``: mean operations per recording of a decision at each time (accumulates,
+        multiply-accumulates, neuron updates: :data:`pipeline.chain.operations.OPERATIONS`);
+        NaN where no decision.
+    """
+
+    decision_s: np.ndarray
+    predicted: Mapping[str, np.ndarray]
+    confidence: Mapping[str, np.ndarray]
+    operations: Mapping[str, np.ndarray]
+
+    @classmethod
+    def of(
+        cls,
+        read: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+        operations: Mapping[str, np.ndarray],
+    ) -> Decisions | None:
+        """Put each model's own decisions, ``read[model] = (decision_s (D_m,), predicted
+        (repeats, D_m, n), confidence (repeats, D_m, n))`` with ``operations[model]`` (D_m, 3),
+        on the union of their times; None when no model read any."""
+        if not read:
+            return None
+        times = np.unique(np.concatenate([np.asarray(t) for t, _, _ in read.values()]))
+        predicted, confidence, counted = {}, {}, {}
+        for model, (own, guess, probability) in read.items():
+            at = np.searchsorted(times, own)
+            guess = np.asarray(guess)
+            predicted[model] = np.full((guess.shape[0], len(times), guess.shape[2]), -1, np.int64)
+            predicted[model][:, at] = guess
+            confidence[model] = np.full(predicted[model].shape, np.nan, np.float32)
+            confidence[model][:, at] = probability
+            counted[model] = np.full((len(times), 3), np.nan)
+            counted[model][at] = operations[model]
+        return cls(times, predicted, confidence, counted)
+
+
+#: The variables a result entry holds its :class:`Decisions` in.
+DECISION_VARIABLES = (
+    Variable(
+        "decision_s",
+        ("decision",),
+        "float64",
+        "s",
+        "seconds of touch at which a decision is read",
+        optional=True,
+    ),
+    Variable(
+        "decision_predicted",
+        ("model", "repeat", "decision", "recording"),
+        "int16",
+        "1",
+        "class decided at the decision time (-1: none)",
+        optional=True,
+    ),
+    Variable(
+        "decision_confidence",
+        ("model", "repeat", "decision", "recording"),
+        "float32",
+        "1",
+        "softmax probability of the decided class",
+        optional=True,
+    ),
+    Variable(
+        "decoder_operations",
+        ("model", "decision", "operation"),
+        "float64",
+        "1",
+        "mean accumulates, multiply-accumulates and neuron updates of a decision",
+        optional=True,
+    ),
+)
+
+
+@dataclass(frozen=True, eq=False)
 class SpikeEntry:
     """Stored output of the ``spikes`` level.
 
@@ -330,6 +422,9 @@ class ResultEntry:
     chips : ChipResults or None
         Every chip's accuracy, predictions and spike metrics, for a point that simulates chips
         (``fold_accuracy``, ``out_of_fold`` and ``metrics`` are then chip 0's); else None.
+    decisions : Decisions or None
+        Every model's decisions read during the touch (models as in ``fold_accuracy``, or
+        some of them); None in entries written before they were kept.
     """
 
     fold_accuracy: dict[str, np.ndarray]
@@ -340,6 +435,7 @@ class ResultEntry:
     n_windows_used: int | None = None
     paid: Paid | None = None
     chips: ChipResults | None = None
+    decisions: Decisions | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -507,6 +603,7 @@ def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
     }
     if entry.n_windows_used is not None:
         values["n_windows_used"] = np.asarray(entry.n_windows_used)
+    values |= _decision_values(entry.decisions, models)
     attrs = {"seconds": seconds_attr(entry.seconds), **_recordings_attrs(entry.recordings)}
     if entry.paid is not None:
         attrs["paid_seconds"] = paid_attr(entry.paid)
@@ -528,6 +625,50 @@ def decode_result_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, An
         None if n_windows is None else int(n_windows),
         read_paid(attrs),
         _read_chip_results(values, models),
+        _read_decisions(values, models),
+    )
+
+
+def _decision_values(decisions: Decisions | None, models: list[str]) -> Values:
+    """The arrays of a result's decisions, every model of the entry in its order (a model that
+    read none: -1, NaN); none when it kept none."""
+    if decisions is None:
+        return {}
+    times = np.asarray(decisions.decision_s, dtype=np.float64)
+    known = [m for m in models if m in decisions.predicted]
+    if not known or set(decisions.predicted) - set(models):
+        raise ValueError(f"decisions: of {sorted(decisions.predicted)}, accuracy of {models}")
+    shape = np.shape(decisions.predicted[known[0]])
+    if len(shape) != 3 or shape[1] != len(times):
+        raise ValueError(f"decisions: predicted {shape} is not (repeats, {len(times)}, n)")
+    predicted = np.full((len(models), *shape), -1, dtype=np.int64)
+    confidence = np.full((len(models), *shape), np.nan, dtype=np.float32)
+    operations = np.full((len(models), len(times), 3), np.nan)
+    for i, model in enumerate(models):
+        if model in decisions.predicted:
+            predicted[i] = decisions.predicted[model]
+            confidence[i] = decisions.confidence[model]
+            operations[i] = decisions.operations[model]
+    return {
+        "decision_s": times,
+        "decision_predicted": predicted,
+        "decision_confidence": confidence,
+        "decoder_operations": operations,
+    }
+
+
+def _read_decisions(values: Mapping[str, np.ndarray], models: list[str]) -> Decisions | None:
+    """The decisions of a result entry; None for an entry that kept none."""
+    if "decision_s" not in values:
+        return None
+    predicted = values["decision_predicted"]
+    if predicted.shape[0] != len(models):
+        raise ValueError("model coordinate does not match decision_predicted")
+    return Decisions(
+        values["decision_s"],
+        {m: predicted[i].astype(np.int64) for i, m in enumerate(models)},
+        {m: values["decision_confidence"][i] for i, m in enumerate(models)},
+        {m: values["decoder_operations"][i] for i, m in enumerate(models)},
     )
 
 

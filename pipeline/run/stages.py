@@ -15,7 +15,8 @@ level           reads (scene parts)                        after (levels)       
                 when a named effect draws random numbers)                         ``taxels``,
                                                                                   ``readout``,
                                                                                   ``metrics``
-``rates``       ``coding``                                 spikes, recordings     ``coding``
+``rates``       ``coding`` (+ ``training.snn`` when the    spikes, recordings     ``coding``
+                scene trains the ``snn``)
 ``results``     ``training``                               rates                  ``train_<model>``
 ==============  =========================================  =====================  =================
 
@@ -98,17 +99,21 @@ from pipeline.design.scene import (
     DatasetSpec,
     Deployment,
     Model,
+    Polarity,
     ReadoutSpec,
     Scene,
+    SNNSpec,
     TrainingSpec,
 )
 from pipeline.recordings.sources import Recordings, load_recordings
 from pipeline.run.records import (
     CHIP_RESULT_VARIABLES,
     CHIP_SPIKE_VARIABLES,
+    DECISION_VARIABLES,
     METRICS_VARIABLE,
     Charge,
     ChipResults,
+    Decisions,
     OutOfFold,
     Record,
     RecordingsInfo,
@@ -256,6 +261,15 @@ class Rates:
     reference_counts : int64 or None
         The counts of the reference a ``shared`` or ``robust`` classifier trains on, shaped as
         ``counts``; else None.
+    window_s : float or None
+        Length of a window (s): a decision read after window ``k`` comes ``(k + 1) * window_s``
+        into the touch.
+    steps : int64 or None
+        The spiking decoder's input, REAL spikes per step of ``step_s``, polarities apart
+        (+1 first), shape ``(n_recordings, 2, n_taxels, n_steps)``, over the same span as the
+        windows; None unless the scene trains the ``snn``.
+    step_s : float or None
+        Length of a step (s), with ``steps``.
     """
 
     counts: np.ndarray
@@ -264,6 +278,9 @@ class Rates:
     class_names: tuple[str, ...]
     chip_counts: np.ndarray | None = None
     reference_counts: np.ndarray | None = None
+    window_s: float | None = None
+    steps: np.ndarray | None = None
+    step_s: float | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -420,9 +437,16 @@ def rate_frames(real: SpikeTrains, coding: CodingSpec) -> tuple[np.ndarray, np.n
 
 
 def code_rates(
-    *, spikes: Spikes, recordings: Recordings, coding: CodingSpec, watch: Stopwatch
+    *,
+    spikes: Spikes,
+    recordings: Recordings,
+    coding: CodingSpec,
+    snn: SNNSpec | None,
+    watch: Stopwatch,
 ) -> Rates:
-    """Rate-code the REAL trains (step ``coding``), labelled by the recordings' classes."""
+    """Rate-code the REAL trains (step ``coding``), labelled by the recordings' classes; for a
+    scene training the ``snn`` (``snn`` given), also count them per step of ``snn.step_s``,
+    ON and OFF apart, over the windows' span."""
     with watch.stage("coding"):
         counts, dropped = rate_frames(spikes.encoded.real, coding)
         chips = spikes.chips
@@ -432,8 +456,21 @@ def code_rates(
             chip_counts = chip_counts.reshape(chips.n_chips, -1, *chip_counts.shape[1:])
             if chips.reference is not None:
                 reference_counts = rate_frames(chips.reference, coding)[0]
+        steps = step_s = None
+        if snn is not None:
+            step_s = snn.step_s
+            n_steps = round(counts.shape[-1] * coding.window_s / step_s)
+            steps, _ = frames(spikes.encoded.real, step_s, n_steps, Polarity.SPLIT)
     return Rates(
-        counts, dropped, recordings.labels, recordings.class_names, chip_counts, reference_counts
+        counts,
+        dropped,
+        recordings.labels,
+        recordings.class_names,
+        chip_counts=chip_counts,
+        reference_counts=reference_counts,
+        window_s=coding.window_s,
+        steps=steps,
+        step_s=step_s,
     )
 
 
@@ -457,8 +494,14 @@ def classify(
                     class_names=rates.class_names,
                 )
                 continue
+            spiking = model is Model.SNN
             accuracy[model] = cross_validate(
-                rates.counts, rates.labels, model, training, class_names=rates.class_names
+                rates.steps if spiking else rates.counts,
+                rates.labels,
+                model,
+                training,
+                class_names=rates.class_names,
+                frame_s=rates.step_s if spiking else rates.window_s,
             )
     return accuracy
 
@@ -473,6 +516,10 @@ def _draws_random_numbers(scene: Scene) -> bool:
 
 def _simulates_chips(scene: Scene) -> bool:
     return scene.chips.simulated
+
+
+def _trains_snn(scene: Scene) -> bool:
+    return Model.SNN in scene.training.models
 
 
 @dataclass(frozen=True)
@@ -666,6 +713,18 @@ def _result_entry(
         n_windows_used=int(made(RATES.name).counts.shape[-1]),
         paid=seconds.paid,
         chips=_chip_results(accuracy, made(SPIKES.name).chips),
+        decisions=Decisions.of(
+            {
+                model.value: (cv.decision_s, cv.decision_predicted, cv.decision_confidence)
+                for model, cv in accuracy.items()
+                if cv.decision_s is not None
+            },
+            {
+                model.value: cv.operations
+                for model, cv in accuracy.items()
+                if cv.operations is not None
+            },
+        ),
     )
 
 
@@ -730,10 +789,12 @@ SPIKES = Level(
         decode=decode_spike_entry,
     ),
 )
-#: Rate-codes the REAL trains (``coding``), labelled by the recordings' classes; kept in memory.
+#: Rate-codes the REAL trains (``coding``), labelled by the recordings' classes, and for the
+#: ``snn`` counts them per step (``training.snn``, read only by scenes that train it); kept in
+#: memory.
 RATES = Level(
     name="rates",
-    reads=(Read("coding"),),
+    reads=(Read("coding"), Read("training.snn", when=_trains_snn)),
     after=(SPIKES, RECORDINGS),
     compute=code_rates,
     steps=("coding",),
@@ -773,6 +834,7 @@ RESULTS = Level(
             ),
             Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
             Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
+            *DECISION_VARIABLES,
             METRICS_VARIABLE,
             *CHIP_RESULT_VARIABLES,
         ),

@@ -326,6 +326,30 @@ CASES += [
         ),
     ]
 ]
+# The spiking decoder's fields: (id, [training] lines of the base scene, the culprit).
+_SNN = 'models = ["ffnn", "snn"]\n'
+CASES += [
+    (name, lambda t, r=training: scene_grid(t, training=r), culprit)
+    for name, training, culprit in [
+        ("scene-snn-step-longer-than-window", _SNN + "snn.step_s = 0.2", "training.snn.step_s"),
+        ("scene-snn-step-not-dividing-window", _SNN + "snn.step_s = 0.03", "training.snn.step_s"),
+        ("scene-snn-no-neurons", _SNN + "snn.hidden_neurons = 0", "training.snn.hidden_neurons"),
+        ("scene-snn-zero-tau", _SNN + "snn.tau_mem_s = 0.0", "training.snn.tau_mem_s"),
+        ("scene-snn-negative-tau", _SNN + "snn.tau_mem_s = -0.1", "training.snn.tau_mem_s"),
+        ("scene-unknown-model", 'models = ["ffnn", "lsnn"]', "training.models"),
+    ]
+]
+CASES.append(
+    (
+        "grid-snn-step-not-dividing-swept-window",
+        lambda t: sweeps_grid(
+            t,
+            '[sweeps.a]\nset = { "training.models" = ["snn"] }\n'
+            'axes = { "coding.window_s" = [0.1, 0.05] }\n',
+        ),
+        "training.snn.step_s",
+    )
+)
 CASES.append(
     (
         "grid-unknown-encoder",

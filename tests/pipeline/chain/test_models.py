@@ -12,6 +12,9 @@ from torch import nn
 from pipeline.chain.models import build_model, fold_generator, pool_kernel, pooled_size
 from pipeline.design.scene import Model
 
+#: The rate-coded classifiers (the snn has tests of its own, tests/pipeline/chain/test_spiking.py).
+RATE_MODELS = [Model.FFNN, Model.CNN]
+
 SHAPES = [
     (1, 9, 40),  # the paper: 3x3 taxels, 40 windows
     (1, 1, 3),  # a single taxel
@@ -25,7 +28,7 @@ def generators(folds, seed=0):
     return [fold_generator(seed, f, "init") for f in folds]
 
 
-@pytest.mark.parametrize("model", list(Model))
+@pytest.mark.parametrize("model", RATE_MODELS)
 @pytest.mark.parametrize("shape", SHAPES)
 def test_output_shape_and_dtype(model, shape):
     net = build_model(
@@ -47,7 +50,7 @@ def test_pool_sizes_keep_single_rows_and_odd_edges():
     assert pooled_size(1, 1) == (1, 1)
 
 
-@pytest.mark.parametrize("model", list(Model))
+@pytest.mark.parametrize("model", RATE_MODELS)
 def test_fold_init_same_in_batch_and_alone(model):
     batch = build_model(model, (1, 9, 40), 12, 100, 4, generators(range(4), seed=7))
     for fold in (0, 2, 3):
@@ -58,7 +61,7 @@ def test_fold_init_same_in_batch_and_alone(model):
             assert torch.equal(p_batch[fold], p_alone[0]), name
 
 
-@pytest.mark.parametrize("model", list(Model))
+@pytest.mark.parametrize("model", RATE_MODELS)
 def test_init_is_pytorch_default_uniform(model):
     net = build_model(model, (1, 9, 40), 12, 100, 2, generators(range(2)))
     for name, p in net.named_parameters():
@@ -84,7 +87,7 @@ def test_init_is_pytorch_default_uniform(model):
     assert not torch.equal(first, next(other.parameters()))
 
 
-@pytest.mark.parametrize("model", list(Model))
+@pytest.mark.parametrize("model", RATE_MODELS)
 def test_folds_are_independent(model):
     net = build_model(model, (1, 9, 40), 12, 10, 3, generators(range(3)))
     x = torch.randn(3, 5, 1, 9, 40, generator=torch.Generator().manual_seed(2))
@@ -101,7 +104,7 @@ def test_folds_are_independent(model):
         assert torch.count_nonzero(g[1:]) == 0
 
 
-@pytest.mark.parametrize("model", list(Model))
+@pytest.mark.parametrize("model", RATE_MODELS)
 def test_batched_forward_equals_single_fold(model):
     batch = build_model(model, (1, 9, 40), 12, 100, 4, generators(range(4)))
     alone = build_model(model, (1, 9, 40), 12, 100, 1, generators([2]))

@@ -335,14 +335,17 @@ def test_described_facts_of_a_folder_dataset_are_read(tmp_path):
 
 def keyed_dict(scene: Scene) -> dict:
     """The scene's plain form without what no key holds: its name, the fixed-threshold
-    encoder (the neutral default) with the decay of a threshold it does not decay, and the
-    chips part while all its fields hold their (neutral) defaults."""
+    encoder (the neutral default) with the decay of a threshold it does not decay, the chips
+    part while all its fields hold their (neutral) defaults, and the spiking decoder's fields of
+    a scene that does not train it."""
     data = scene.to_dict()
     data.pop("name")
     if data["readout"]["encoder"] == "lcs":
         del data["readout"]["encoder"], data["readout"]["decay"]
     if not fields.plain(scene.chips, canonical=True):
         del data["chips"]
+    if "snn" not in data["training"]["models"]:
+        del data["training"]["snn"]
     return data
 
 

@@ -190,6 +190,38 @@ def test_the_decay_is_keyed_only_for_the_decaying_encoder():
     )
 
 
+def test_the_snn_is_keyed_only_for_scenes_that_train_it():
+    paper = Scene.paper()
+    assert "snn" not in paper.canonical()  # earlier keys stay valid
+    idle = paper.replace(**{"training.snn.step_s": 0.05, "training.snn.hidden_neurons": 7})
+    spiking = paper.replace(**{"training.models": ["ffnn", "cnn", "snn"]})
+    for stage in ("recordings", "spikes", "rates", "results"):
+        assert cache_key(idle, stage) == cache_key(paper, stage)
+    for stage in ("recordings", "spikes"):
+        assert cache_key(spiking, stage) == cache_key(paper, stage)
+    for stage in ("rates", "results"):  # the rates level counts the snn's steps
+        finer = spiking.replace(**{"training.snn.step_s": 0.01})
+        assert cache_key(finer, stage) != cache_key(spiking, stage)
+    assert stage_fields(spiking, "rates")[-1] == "training.snn"
+    assert "training.snn" not in stage_fields(paper, "rates")
+
+
+@pytest.mark.parametrize(
+    ("changes", "culprit"),
+    [
+        ({"training.snn.step_s": 0.2}, "is longer than coding.window_s"),
+        ({"training.snn.step_s": 0.03}, "does not divide coding.window_s"),
+        ({"coding.window_s": 0.05}, "does not divide coding.window_s = 0.05 s"),
+    ],
+)
+def test_the_snn_step_must_divide_the_window(changes, culprit):
+    spiking = {"training.models": ["snn"]}
+    with pytest.raises(SceneError, match=f"training.snn.step_s: .*{culprit}"):
+        Scene.paper().replace(**spiking, **changes)
+    Scene.paper().replace(**changes)  # a scene without the snn does not mind its step
+    assert Scene.paper().replace(**spiking, **{"training.snn.step_s": 0.025}).training.snn
+
+
 def test_a_new_model_revision_changes_every_key(monkeypatch):
     scene = Scene.paper()
     stages = ("recordings", "spikes", "rates", "results")

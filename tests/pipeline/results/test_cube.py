@@ -24,7 +24,7 @@ from pipeline.results.cube import (
     field_coordinate,
     metric_attrs,
 )
-from pipeline.run.records import Charge, OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge, Decisions, OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.stages import RESULTS, interval_generator
 from tests import golden_cubes as golden
 
@@ -236,6 +236,57 @@ def test_out_of_fold_predictions_and_intervals():
     assert cube["accuracy_high"].sel(threshold_v=0.1, model="ffnn") == 1.0
     for name in ("predicted", "correct", "test_fold", "accuracy_mean", "recording", "label"):
         assert cube[name].attrs["long_name"]
+
+
+def test_decisions_in_time_are_on_the_union_of_the_points_times():
+    """``decision_correct``, ``decision_confidence`` and the decoder's operations on the union
+    of the decision times: -1 / NaN where a model decides nothing, and through the store's
+    codec unchanged."""
+    grid = Grid.from_dict(
+        {"base": "smoke", "sweeps": {"w": {"axes": {"coding.window_s": [0.1, 0.2]}}}}
+    )
+    sweep = grid.sweeps[0]
+    names, labels = ["r0", "r1", "r2"], [0, 1, 2]
+
+    def make(point):
+        window = point.scene.coding.window_s
+        times = np.round(window * np.arange(1, 3), 9)  # two windows
+        guess = np.array([[[1, 1, 2], [0, 1, 2]]])  # (repeat, time, recording)
+        sure = np.array([[[0.4, 0.5, 0.6], [0.7, 0.8, 0.9]]], dtype=np.float32)
+        counted = np.array([[0.0, 10.0, 0.0], [0.0, 20.0, 0.0]]) * window
+        decisions = Decisions.of({"ffnn": (times, guess, sure)}, {"ffnn": counted})
+        oof = out_of_fold({"ffnn": 3, "cnn": 3}, names, labels)
+        entry = ResultEntry(
+            {"ffnn": [0.5, 0.5], "cnn": [0.5, 0.5]}, {}, metrics(), None, oof, decisions=decisions
+        )
+        values, attrs = RESULTS.record.encode(entry)
+        return RESULTS.record.decode(values, attrs)
+
+    cube = build(grid, sweep, entries(grid, sweep, make))
+    assert cube["decision_s"].values.tolist() == [0.1, 0.2, 0.4]
+    assert cube["decision_correct"].dims == (
+        "window_s",
+        "model",
+        "decision_s",
+        "repeat",
+        "recording",
+    )
+    first = cube["decision_correct"].sel(window_s=0.1, model="ffnn", repeat=0)
+    assert first.values.tolist() == [[0, 1, 1], [1, 1, 1], [-1, -1, -1]]
+    second = cube["decision_correct"].sel(window_s=0.2, model="ffnn", repeat=0)
+    assert second.values.tolist() == [[-1, -1, -1], [0, 1, 1], [1, 1, 1]]
+    assert (cube["decision_correct"].sel(model="cnn") == -1).all()
+    confidence = cube["decision_confidence"].sel(window_s=0.2, model="ffnn", repeat=0)
+    assert np.isnan(confidence.values[0]).all()
+    assert confidence.values[2].tolist() == pytest.approx([0.7, 0.8, 0.9])
+    assert cube["decision_confidence"].dtype == np.float32
+    macs = cube["decoder_macs"].sel(model="ffnn")
+    assert macs.sel(window_s=0.1).values.tolist()[:2] == pytest.approx([1.0, 2.0])
+    assert np.isnan(macs.sel(window_s=0.1, decision_s=0.4))
+    assert (cube["decoder_acs"].sel(model="ffnn", window_s=0.2, decision_s=0.4) == 0).all()
+    for name in ("decision_s", "decision_correct", "decision_confidence", "decoder_acs"):
+        assert cube[name].attrs["long_name"] and cube[name].attrs["units"]
+    assert cube["decision_s"].attrs["units"] == "s"
 
 
 def test_repeats_are_a_dimension_and_the_interval_a_bootstrap():

@@ -1,0 +1,111 @@
+"""The spiking decoder: 10-fold cross-validation of the ``snn`` against the CNN at the paper
+point, side by side (folds batched, one torch thread, as the Dask workers train), and how the
+cost of its training step grows with the number of time steps (linear: doubling the steps
+doubles it; a time loop that indexes a tensor inside autograd would quadruple it).
+
+``run(tiny=True)`` does the same on the ``smoke`` scene with 5 epochs, once each.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from benchmarks.timing import median_seconds
+from pipeline.chain.coding import frames
+from pipeline.chain.models import build_model, fold_generator
+from pipeline.chain.training import CrossValidation, cross_validate
+from pipeline.design.scene import Model, Polarity, Scene
+from pipeline.run.simulate import encode, prepare, rate_frames
+
+
+def scene_inputs(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The CNN's frames ``(n, 1, taxels, windows)``, the SNN's step counts ``(n, 2, taxels,
+    steps)`` over the same span, and the labels, of a scene's REAL trains."""
+    recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v)
+    encoded = encode(recordings, front_end, scene)
+    counts, _ = rate_frames(encoded.real, scene)
+    step_s = scene.training.snn.step_s
+    n_steps = round(counts.shape[-1] * scene.coding.window_s / step_s)
+    steps, _ = frames(encoded.real, step_s, n_steps, Polarity.SPLIT)
+    return counts, steps, recordings.labels
+
+
+def _accuracy(cv: CrossValidation) -> str:
+    return f"acc {cv.mean:.3f} +- {cv.std:.3f}"
+
+
+def run(repeat: int = 3, tiny: bool = False) -> list[dict]:
+    """The rows; ``tiny``: the ``smoke`` scene, 5 epochs, one timing of each."""
+    scene = Scene.builtin("smoke" if tiny else "paper")
+    scene = scene.replace(**{"training.models": ["cnn", "snn"]})
+    if tiny:
+        scene = scene.replace(**{"training.snn.epochs": 5})
+        repeat = 1
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        counts, steps, labels = scene_inputs(scene)
+        results: dict[Model, CrossValidation] = {}
+
+        def train(model: Model, inputs: np.ndarray) -> None:
+            results[model] = cross_validate(inputs, labels, model, scene.training)
+
+        snn_s, cnn_s = median_seconds(
+            lambda: train(Model.SNN, steps),
+            lambda: train(Model.CNN, counts),
+            repeat=repeat,
+            warm_up=not tiny,
+        )
+        snn = scene.training.snn
+        rows = [
+            {
+                "benchmark": f"{scene.training.folds}-fold CV SNN ({snn.epochs} epochs, "
+                f"{steps.shape[-1]} steps of {snn.step_s} s, {snn.hidden_neurons} neurons) "
+                f"vs CNN ({scene.training.epochs} epochs): seconds / CNN's",
+                "ratio": snn_s / cnn_s,
+                "target": "<= 3",
+                "detail": f"1 torch thread, folds batched; SNN {snn_s:.2f} s "
+                f"({_accuracy(results[Model.SNN])}), CNN {cnn_s:.2f} s "
+                f"({_accuracy(results[Model.CNN])})",
+            }
+        ]
+        rows.append(_time_scaling_row(scene, steps.shape[2], 4 if tiny else 50, repeat))
+    finally:
+        torch.set_num_threads(threads)
+    return rows
+
+
+def _time_scaling_row(scene: Scene, taxels: int, n_steps: int, repeat: int) -> dict:
+    """Seconds of one training step (forward and backward, 10 folds x 16 recordings) at
+    ``n_steps``, twice and four times as many steps."""
+    folds, batch = scene.training.folds, scene.training.batch_size
+    generator = torch.Generator().manual_seed(0)
+    calls = []
+    for steps in (n_steps, 2 * n_steps, 4 * n_steps):
+        net = build_model(
+            Model.SNN,
+            (2, taxels, steps),
+            12,
+            0,
+            folds,
+            [fold_generator(0, f, "init") for f in range(folds)],
+            scene.training.snn,
+        )
+        x = torch.poisson(torch.full((folds, batch, 2, taxels, steps), 0.13), generator=generator)
+        params = list(net.parameters())
+
+        def step(net=net, x=x, params=params) -> None:
+            torch.autograd.grad(net(x).logsumexp(-1).sum(), params)
+
+        calls.append(step)
+    seconds = median_seconds(*calls, repeat=max(repeat, 5))
+    return {
+        "benchmark": f"SNN training step at {4 * n_steps} vs {n_steps} time steps: seconds ratio",
+        "ratio": seconds[2] / seconds[0],
+        "target": "<= 4 (linear in the steps; quadratic would be 16)",
+        "detail": f"{folds} folds x {batch} recordings, forward and backward: "
+        + ", ".join(
+            f"{k * n_steps} steps {s * 1e3:.1f} ms" for k, s in zip((1, 2, 4), seconds, strict=True)
+        ),
+    }

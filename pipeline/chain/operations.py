@@ -1,0 +1,151 @@
+r"""Operations a decoder spends on one decision, counted alike for every model (NeuroBench style).
+
+A layer's *effective synaptic operations* are its nonzero inputs times their fan-out (the
+outputs each input reaches); a zero input costs nothing, as on event-driven hardware, where it
+is never sent. They are *accumulates* (ACs) where the inputs are spike events, which add a
+weight to a target, and *multiply-accumulates* (MACs) where the inputs are real numbers. An
+input that counts :math:`c` events in one step (a spike count of the input layer of the ``snn``)
+is :math:`c` accumulates per target: each event is delivered on its own. *Neuron updates* are
+state updates of stateful neurons, one per neuron and step (a leaky membrane, the readout's
+integrator); the FFNN's and CNN's units hold no state and update none. Max-pooling
+(comparisons) and biases (one per output, part of its update) are not synaptic operations and
+are not counted.
+
+Per model, for one sample:
+
+FFNN
+    MACs :math:`= n_{\ne 0}(x) \cdot h + n_{\ne 0}(\mathrm{relu}(W_1^\top x + b_1)) \cdot K`
+    (``h`` hidden units, ``K`` classes).
+CNN
+    a 3x3 convolution with padding 1 (stride 1) sends input pixel :math:`(i, j)` to
+    :math:`r(i) \cdot r'(j) \cdot C_\mathrm{out}` outputs, :math:`r(i)` the output rows
+    within one of row :math:`i` (3 inside, 2 on an edge, 1 when the side is 1); MACs are the
+    sum of that fan-out over the nonzero input pixels of both convolutions (every channel),
+    plus the nonzero flattened features times ``K``.
+SNN
+    cumulative over steps :math:`1..t`: ACs :math:`= h \sum_{t' \le t} \sum x_{t'} + K
+    \sum_{t' \le t} n(s_{t'})` (input events to the hidden layer, hidden spikes to the
+    readout), neuron updates :math:`= t (h + K)`.
+
+:func:`count_operations` returns counts per decision time: the SNN's at every step; the FFNN's
+and CNN's for the one forward pass of the frame given (a decision at an earlier window boundary
+is that of the frame with the later windows left out, :mod:`pipeline.chain.training`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import nn
+
+from pipeline.chain.models import CNN_CHANNELS, FoldCNN, FoldFFNN
+
+__all__ = ["OPERATIONS", "Operations", "cnn_operations", "conv3x3_fan_out", "count_operations"]
+
+#: The kinds of operation counted, in the order of :meth:`Operations.stacked`.
+OPERATIONS = ("acs", "macs", "neuron_updates")
+
+
+@dataclass(frozen=True, eq=False)
+class Operations:
+    """Operations per sample and decision time.
+
+    Attributes
+    ----------
+    acs, macs, neuron_updates
+        float64 ``(F, B, D)``: accumulates, multiply-accumulates and neuron updates that a
+        decision read at each of the ``D`` decision times has cost since the touch began, for
+        sample ``b`` of fold ``f``.
+    """
+
+    acs: np.ndarray
+    macs: np.ndarray
+    neuron_updates: np.ndarray
+
+    def stacked(self) -> np.ndarray:
+        """float64 ``(F, B, D, 3)``: the three counts in :data:`OPERATIONS` order."""
+        return np.stack([self.acs, self.macs, self.neuron_updates], axis=-1)
+
+
+def conv3x3_fan_out(height: int, width: int, channels_out: int) -> np.ndarray:
+    """float64 ``(height, width)``: outputs that input pixel ``(i, j)`` of a 3x3 convolution
+    with padding 1 and stride 1 reaches (``channels_out`` per covered output position)."""
+
+    def covered(n: int) -> np.ndarray:
+        index = np.arange(n)
+        return np.minimum(index + 1, n - 1) - np.maximum(index - 1, 0) + 1
+
+    return np.outer(covered(height), covered(width)).astype(np.float64) * channels_out
+
+
+def _fanned(x: torch.Tensor, fan: np.ndarray) -> np.ndarray:
+    """float64 ``(F, B)``: the nonzero entries of ``x`` (``(F, B, C, H, W)``) weighted by the
+    fan-out of their position ``fan`` (``(H, W)``), summed."""
+    nonzero = (x != 0).sum(dim=2, dtype=torch.int32).to(torch.float64)  # (F, B, H, W)
+    return torch.einsum("fbhw,hw->fb", nonzero, torch.from_numpy(fan)).numpy()
+
+
+def cnn_operations(
+    model: FoldCNN, x: torch.Tensor, pooled: torch.Tensor, flat: torch.Tensor
+) -> Operations:
+    """:func:`count_operations` of a CNN given its features on ``x``
+    (:meth:`~pipeline.chain.models.FoldCNN.features`), so that a caller that needs its logits
+    too computes them once."""
+    c1, c2 = CNN_CHANNELS
+    n_folds, batch, _, height, width = x.shape
+    _, _, h1, w1 = pooled.shape
+    pooled = pooled.reshape(batch, n_folds, c1, h1, w1).transpose(0, 1)
+    macs = _fanned(x, conv3x3_fan_out(height, width, c1))
+    macs = macs + _fanned(pooled, conv3x3_fan_out(h1, w1, c2))
+    macs = macs + _nonzero(flat, (2,)) * model.n_classes
+    zeros = np.zeros((n_folds, batch, 1))
+    return Operations(zeros, macs[..., None], zeros)
+
+
+def _nonzero(x: torch.Tensor, dims: tuple[int, ...]) -> np.ndarray:
+    return (x != 0).sum(dim=dims).to(torch.float64).numpy()
+
+
+@torch.no_grad()
+def count_operations(model: nn.Module, x: torch.Tensor) -> Operations:
+    """Count the operations of ``model`` on inputs ``x`` (see the module docstring).
+
+    Parameters
+    ----------
+    model
+        A fold-batched :class:`~pipeline.chain.models.FoldFFNN`,
+        :class:`~pipeline.chain.models.FoldCNN` or :class:`~pipeline.chain.spiking.FoldSNN`.
+    x
+        float32 ``(F, B, C, H, W)``: the model's inputs (standardized frames; for the SNN, spike
+        counts per step, ``W = T`` steps).
+
+    Returns
+    -------
+    Operations
+        ``(F, B, D)`` counts: ``D = T`` cumulative per step for the SNN, ``D = 1`` otherwise.
+    """
+    from pipeline.chain.spiking import FoldSNN
+
+    n_folds, batch = x.shape[:2]
+    zeros = np.zeros((n_folds, batch, 1))
+    if isinstance(model, FoldFFNN):
+        hidden, n_classes = model.w2.shape[1:]
+        flat = x.reshape(n_folds, batch, -1)
+        h = torch.relu(torch.baddbmm(model.b1.unsqueeze(1), flat, model.w1))
+        macs = _nonzero(flat, (2,)) * hidden + _nonzero(h, (2,)) * n_classes
+        return Operations(zeros, macs[..., None], zeros)
+    if isinstance(model, FoldCNN):
+        return cnn_operations(model, x, *model.features(x))
+    if isinstance(model, FoldSNN):
+        hidden, n_classes = model.hidden_neurons, model.n_classes
+        events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step
+        spikes = model.hidden_spikes(x)[0].sum(dim=3).to(torch.float64)  # (F, B, T)
+        acs = torch.cumsum(events * hidden + spikes * n_classes, dim=2).numpy()
+        n_steps = x.shape[-1]
+        updates = np.broadcast_to(
+            np.arange(1, n_steps + 1, dtype=np.float64) * (hidden + n_classes), acs.shape
+        ).copy()
+        return Operations(acs, np.zeros_like(acs), updates)
+    raise TypeError(f"no operation count for {type(model).__name__}")

@@ -1,0 +1,222 @@
+r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
+
+Input
+    A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
+    per polarity and taxel: ``x`` of shape ``(C=2, H=taxels, T=steps)``, ON (+1) counts then OFF
+    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). The counts are fed
+    as they are (no standardization), so every input is a number of events.
+
+Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset by subtraction)
+    With :math:`\beta = \exp(-\Delta t / \tau_\mathrm{mem})` (``tau_mem_s``), threshold
+    :math:`\vartheta` (``threshold``) and input current
+    :math:`I_t = W_1^\top x_t + b_1` (one matrix product for all steps at once),
+
+    .. math::
+
+        u_t = \beta u_{t-1} + I_t - \vartheta s_{t-1}, \qquad
+        s_t = \Theta(u_t - \vartheta), \qquad u_0 = s_0 = 0,
+
+    :math:`\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
+    gradient (snnTorch's default ``reset_delay`` with a detached reset).
+
+Surrogate gradient
+    The spike's derivative is replaced by the fast sigmoid's (SuperSpike; snnTorch's
+    ``surrogate.fast_sigmoid``) with slope :math:`k` (``surrogate_slope``):
+
+    .. math::
+
+        \frac{\partial s_t}{\partial u_t} \approx \frac{1}{(1 + k |u_t - \vartheta|)^2}.
+
+    Backpropagation through time is then a linear recursion backwards in time,
+    :math:`g_t = \frac{\partial L}{\partial s_t} \frac{\partial s_t}{\partial u_t}
+    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`.
+
+Readout and decisions
+    A non-spiking integrator sums the output currents :math:`W_2^\top s_t + b_2` of every step;
+    the decision read at step :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of
+    their running mean :math:`z_t = \frac{1}{t} \sum_{t' \le t} (W_2^\top s_{t'} + b_2)`, its
+    confidence the softmax probability of that class. Training minimizes the cross-entropy of
+    :math:`z_T`, the decision at the end of the touch, as the FFNN and CNN are trained on the
+    whole touch; an earlier decision reads the same network on the evidence so far, as theirs
+    read the same network on the windows so far (:mod:`pipeline.chain.training`).
+
+Speed
+    The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
+    recursion above) wrapped in one :class:`torch.autograd.Function`, so that autograd sees one
+    node per layer, not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop
+    of autograd operations over the steps costs tens of microseconds per operation and step;
+    indexing a tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward
+    pass). The kernel's gradient is tested against plain autograd on the same equations.
+    Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import torch
+
+from pipeline.chain.jit import kernel
+from pipeline.chain.models import _FoldModel, two_layers
+
+
+@kernel()
+def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # pragma: no cover
+    """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
+    derivative ``ds/du``) and, unless it is empty, ``spikes`` are float32 ``(M, T, N)`` (``M``
+    independent groups, each with its ``N`` neurons contiguous); ``rate`` float32 ``(M, N)``
+    gets each neuron's mean spike count over the steps."""
+    n_groups, n_steps, n = current.shape
+    keep = spikes.size > 0
+    beta, threshold, slope = np.float32(beta), np.float32(threshold), np.float32(slope)
+    u = np.zeros(n, dtype=np.float32)
+    s = np.zeros(n, dtype=np.float32)
+    for m in range(n_groups):
+        u[:] = 0.0
+        s[:] = 0.0
+        rate[m, :] = 0.0
+        for t in range(n_steps):
+            for i in range(n):
+                value = beta * u[i] + current[m, t, i] - threshold * s[i]
+                u[i] = value
+                s[i] = np.float32(1.0) if value > threshold else np.float32(0.0)
+                rate[m, i] += s[i]
+                d = np.float32(1.0) + slope * abs(value - threshold)
+                slopes[m, t, i] = np.float32(1.0) / (d * d)
+            if keep:
+                spikes[m, t, :] = s
+        rate[m, :] /= n_steps
+
+
+@kernel()
+def _lif_backward(grad_spikes, grad_rate, slopes, beta, grad_current):  # pragma: no cover
+    """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
+    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives."""
+    n_groups, n_steps, n = slopes.shape
+    keep = grad_spikes.size > 0
+    beta = np.float32(beta)
+    per_step = np.float32(1.0 / n_steps)
+    g = np.zeros(n, dtype=np.float32)
+    for m in range(n_groups):
+        g[:] = 0.0
+        for t in range(n_steps - 1, -1, -1):
+            for i in range(n):
+                grad = grad_rate[m, i] * per_step
+                if keep:
+                    grad += grad_spikes[m, t, i]
+                g[i] = grad * slopes[m, t, i] + beta * g[i]
+                grad_current[m, t, i] = g[i]
+
+
+class LeakyLayer(torch.autograd.Function):
+    """Spikes ``float32 (M, T, N)`` of ``M x N`` LIF neurons driven by ``current`` ``float32
+    (M, T, N)`` over ``T`` steps (see the module docstring), and their mean over the steps
+    ``(M, N)``; differentiable in ``current`` through the surrogate. With ``keep=False`` the
+    spikes are not kept (an empty tensor): training reads only the mean, and the time loop
+    then moves a third less memory."""
+
+    @staticmethod
+    def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
+        """``(spikes, rate)`` of the layer driven by ``current`` (see the class docstring)."""
+        current = current.detach().contiguous()
+        n_groups, _, n = current.shape
+        spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
+        slopes = torch.empty_like(current)
+        rate = torch.empty((n_groups, n), dtype=current.dtype)
+        _lif_forward(
+            current.numpy(),
+            float(beta),
+            float(threshold),
+            float(slope),
+            spikes.numpy(),
+            slopes.numpy(),
+            rate.numpy(),
+        )
+        ctx.save_for_backward(slopes)
+        ctx.beta = float(beta)
+        return spikes, rate
+
+    @staticmethod
+    def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
+        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate)."""
+        (slopes,) = ctx.saved_tensors
+        grad = torch.empty_like(slopes)
+        grad_spikes = grad_spikes.detach().contiguous()
+        grad_rate = grad_rate.detach().contiguous()
+        _lif_backward(
+            grad_spikes.numpy(), grad_rate.numpy(), slopes.numpy(), ctx.beta, grad.numpy()
+        )
+        return grad, None, None, None, None
+
+
+class FoldSNN(_FoldModel):
+    """Spiking decoder batched over folds: ``Linear(C*H, hidden) -> LIF -> Linear(hidden,
+    n_classes) -> running mean over steps``.
+
+    Parameters (float32): ``w1 (F, C*H, hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden,
+    n_classes)``, ``b2 (F, n_classes)``, drawn per fold in that order as the FFNN's
+    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``).
+
+    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, T, n_classes)``: the logits
+    :math:`z_t` of a decision read at every step.
+    """
+
+    def __init__(
+        self,
+        input_shape: tuple[int, int, int],
+        n_classes: int,
+        hidden_neurons: int,
+        generators: Sequence[torch.Generator],
+        *,
+        step_s: float,
+        tau_mem_s: float,
+        threshold: float,
+        surrogate_slope: float,
+    ):
+        super().__init__(input_shape, n_classes, len(generators))
+        c, h, _ = self.input_shape
+        self.hidden_neurons = int(hidden_neurons)
+        self.beta = math.exp(-step_s / tau_mem_s)
+        self.threshold = float(threshold)
+        self.surrogate_slope = float(surrogate_slope)
+        two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
+
+    def hidden_spikes(
+        self, x: torch.Tensor, keep: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``
+        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
+        self._check(x)
+        n_folds, batch, c, h, n_steps = x.shape
+        steps = x.reshape(n_folds, batch, c * h, n_steps).transpose(2, 3)  # (F, B, T, C*H)
+        current = torch.baddbmm(
+            self.b1.unsqueeze(1), steps.reshape(n_folds, batch * n_steps, c * h), self.w1
+        )  # (F, B*T, hidden): every step's input current in one product
+        spikes, rate = LeakyLayer.apply(
+            current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
+            self.beta,
+            self.threshold,
+            self.surrogate_slope,
+            keep,
+        )
+        if keep:
+            spikes = spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
+        return spikes, rate.reshape(n_folds, batch, self.hidden_neurons)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step, the
+        mean output current over the whole touch: what training fits."""
+        _, rate = self.hidden_spikes(x, keep=False)
+        return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
+    def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step: the
+        running mean of the output currents (the last step's is :meth:`forward`'s)."""
+        spikes, _ = self.hidden_spikes(x)
+        n_folds, batch, n_steps, hidden = spikes.shape
+        out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
+        out = out.reshape(n_folds, batch, n_steps, self.n_classes)
+        count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
+        return out.cumsum(dim=2) / count + self.b2.reshape(n_folds, 1, 1, -1)

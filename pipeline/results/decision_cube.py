@@ -1,0 +1,89 @@
+"""The cube's decisions during the touch: accuracy and cost against decision time.
+
+From the points' :class:`~pipeline.run.records.Decisions` (and their out-of-fold recordings),
+:func:`decision_variables` builds, on the ``decision_s`` dimension (the union of every point's
+decision times, s of touch) and the cube's ``model``, ``repeat`` and ``recording`` dimensions:
+
+``decision_correct`` (axes..., model, decision_s, repeat, recording) int8
+    1 where the model's decision read at that time is the recording's class, 0 where not, -1
+    where the model gives no decision at that time (the FFNN and CNN between window
+    boundaries) or the point has none.
+``decision_confidence`` (same dims) float32
+    softmax probability of the decided class; NaN where none.
+``decoder_acs``, ``decoder_macs``, ``decoder_neuron_updates`` (axes..., model, decision_s)
+    float64: mean over the test recordings of the operations a decision read at that time has
+    cost since the touch began (:mod:`pipeline.chain.operations`); NaN where none.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from pipeline.chain.operations import OPERATIONS
+
+__all__ = ["DECODER_VARIABLES", "decision_variables"]
+
+#: The cube variable of each kind of operation, in :data:`~pipeline.chain.operations.OPERATIONS`
+#: order.
+DECODER_VARIABLES = tuple(f"decoder_{kind}" for kind in OPERATIONS)
+
+
+def decision_variables(
+    results: Sequence[Any],
+    flat: np.ndarray,
+    models: list[str],
+    n_repeats: int,
+    dims: tuple[str, ...],
+    shape: tuple[int, ...],
+    recordings: np.ndarray | None,
+) -> tuple[dict[str, Any], dict[str, Any]] | None:
+    """The decision variables and the ``decision_s`` coordinate of a sweep's cube.
+
+    ``results`` are the points' results (their ``decisions`` and ``out_of_fold``), ``flat``
+    their positions in the flattened sweep dimensions, ``recordings`` the cube's ``recording``
+    coordinate (names). None when no point kept decisions.
+    """
+    having = [
+        i
+        for i, result in enumerate(results)
+        if getattr(result, "decisions", None) is not None and result.out_of_fold is not None
+    ]
+    if not having or recordings is None:
+        return None
+    times = np.unique(np.concatenate([results[i].decisions.decision_s for i in having]))
+    column = {str(name): k for k, name in enumerate(recordings.tolist())}
+    size = int(np.prod(shape))
+    n_times, n_recordings = len(times), len(column)
+    correct = np.full((size, len(models), n_times, n_repeats, n_recordings), -1, dtype=np.int8)
+    confidence = np.full(correct.shape, np.nan, dtype=np.float32)
+    operations = np.full((size, len(models), n_times, len(OPERATIONS)), np.nan)
+    for i in having:
+        decisions, oof = results[i].decisions, results[i].out_of_fold
+        at = np.searchsorted(times, decisions.decision_s)
+        columns = np.array([column[name] for name in oof.recording_names], dtype=np.int64)
+        labels = np.asarray(oof.labels)
+        row = flat[i]
+        for m, model in enumerate(models):
+            if model not in decisions.predicted:
+                continue
+            guess = np.asarray(decisions.predicted[model])  # (repeats, D, n)
+            repeats = guess.shape[0]
+            mark = np.where(guess >= 0, (guess == labels).astype(np.int8), np.int8(-1))
+            index = (row, m, at[:, None, None], np.arange(repeats)[None, :, None], columns)
+            correct[index] = mark.transpose(1, 0, 2)
+            confidence[index] = np.asarray(decisions.confidence[model]).transpose(1, 0, 2)
+            operations[row, m, at] = decisions.operations[model]
+    along = (*dims, "model", "decision_s", "repeat", "recording")
+    variables: dict[str, Any] = {
+        "decision_correct": (along, correct.reshape(*shape, *correct.shape[1:])),
+        "decision_confidence": (along, confidence.reshape(*shape, *confidence.shape[1:])),
+    }
+    for k, name in enumerate(DECODER_VARIABLES):
+        variables[name] = (
+            (*dims, "model", "decision_s"),
+            operations[..., k].reshape(*shape, len(models), n_times),
+        )
+    return variables, {"decision_s": ("decision_s", times)}

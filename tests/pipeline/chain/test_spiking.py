@@ -1,0 +1,127 @@
+"""The spiking decoder: its neuron against plain autograd, fold batching, decisions in time."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from pipeline.chain.models import build_model, fold_generator
+from pipeline.chain.spiking import LeakyLayer
+from pipeline.chain.training import cross_validate
+from pipeline.design.scene import Model, SNNSpec, TrainingSpec
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    """One torch thread, as the workers train (several threads only contend on a busy CPU)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+class _Spike(torch.autograd.Function):
+    """Heaviside with the fast-sigmoid surrogate, as snnTorch's ``surrogate.fast_sigmoid``."""
+
+    @staticmethod
+    def forward(ctx, v, slope):
+        ctx.save_for_backward(v)
+        ctx.slope = slope
+        return (v > 0).to(v.dtype)
+
+    @staticmethod
+    def backward(ctx, grad):
+        (v,) = ctx.saved_tensors
+        return grad / (1 + ctx.slope * v.abs()) ** 2, None
+
+
+def _reference(current, beta, threshold, slope):
+    """The module docstring's equations as a plain autograd loop over ``current (T, N)``."""
+    u = torch.zeros(current.shape[1])
+    s = torch.zeros(current.shape[1])
+    out = []
+    for step in current.unbind(0):
+        u = beta * u + step - threshold * s.detach()
+        s = _Spike.apply(u - threshold, slope)
+        out.append(s)
+    return torch.stack(out)
+
+
+def test_the_kernel_neuron_is_the_autograd_neuron():
+    g = torch.Generator().manual_seed(0)
+    current = (torch.rand(60, 25, generator=g) * 1.5).requires_grad_()
+    weight = torch.randn(60, 25, generator=g)
+    rate_weight = torch.randn(25, generator=g)
+    spikes, rate = LeakyLayer.apply(current.unsqueeze(0), 0.9, 1.0, 25.0)
+    loss = (spikes[0] * weight).sum() + (rate[0] * rate_weight).sum()
+    (grad,) = torch.autograd.grad(loss, current)
+    expected = _reference(current, 0.9, 1.0, 25.0)
+    expected_loss = (expected * weight).sum() + (expected.mean(dim=0) * rate_weight).sum()
+    (expected_grad,) = torch.autograd.grad(expected_loss, current, retain_graph=True)
+    assert 0.2 < float(spikes.detach().mean()) < 0.8  # both spiking and silent steps are exercised
+    assert torch.equal(spikes[0], expected)
+    torch.testing.assert_close(rate[0], expected.mean(dim=0).detach())
+    torch.testing.assert_close(grad, expected_grad, rtol=1e-4, atol=1e-5)
+    # Without the spikes kept (training reads only the rate): the same rate and gradient.
+    _, alone = LeakyLayer.apply(current.unsqueeze(0), 0.9, 1.0, 25.0, False)
+    (grad_alone,) = torch.autograd.grad((alone[0] * rate_weight).sum(), current)
+    (expected_alone,) = torch.autograd.grad((expected.mean(dim=0) * rate_weight).sum(), current)
+    torch.testing.assert_close(alone, rate)
+    torch.testing.assert_close(grad_alone, expected_alone, rtol=1e-4, atol=1e-5)
+
+
+SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
+
+
+def test_folds_are_independent_and_the_last_decision_is_the_forward_pass():
+    x = torch.poisson(torch.full((3, 4, 2, 3, 20), 0.3), generator=torch.Generator().manual_seed(1))
+    batch = build_model(
+        "snn", (2, 3, 20), 4, 0, 3, [fold_generator(0, f, "init") for f in range(3)], SPEC
+    )
+    alone = build_model("snn", (2, 3, 20), 4, 0, 1, [fold_generator(0, 1, "init")], SPEC)
+    with torch.no_grad():
+        torch.testing.assert_close(batch(x)[1:2], alone(x[1:2]))
+        every = batch.decision_logits(x)
+        assert every.shape == (3, 4, 20, 4)
+        torch.testing.assert_close(every[:, :, -1], batch(x))
+
+
+def _two_textures(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """20 recordings of 2 classes: ON events on taxel 0 or on taxel 1, Poisson per step."""
+    labels = np.repeat([0, 1], 10)
+    rate = np.full((20, 2, 2, 30), 0.05)
+    rate[labels == 0, 0, 0] = 0.8
+    rate[labels == 1, 0, 1] = 0.8
+    return rng.poisson(rate), labels
+
+
+def test_the_snn_learns_and_decides_at_every_step():
+    counts, labels = _two_textures(np.random.default_rng(0))
+    # A larger step than the default 1e-3: 4 folds of 15 recordings take few steps per epoch.
+    training = TrainingSpec(
+        models=(Model.SNN,), folds=4, batch_size=5, learning_rate=1e-2, snn=SPEC
+    )
+    cv = cross_validate(counts, labels, Model.SNN, training, frame_s=SPEC.step_s)
+    assert cv.mean >= 0.9, cv.fold_accuracy
+    assert np.allclose(cv.decision_s, 0.01 * np.arange(1, 31))
+    assert cv.decision_predicted.shape == cv.decision_confidence.shape == (1, 30, 20)
+    assert np.array_equal(cv.decision_predicted[:, -1], cv.predicted)
+    assert np.all((cv.decision_confidence >= 0.5) & (cv.decision_confidence <= 1))
+    acs, macs, updates = cv.operations.T
+    assert np.all(np.diff(acs) >= 0) and np.all(macs == 0)
+    assert np.array_equal(updates, np.arange(1, 31) * (8 + 2))
+
+
+def test_rate_models_decide_on_prefixes_at_window_ends():
+    counts, labels = _two_textures(np.random.default_rng(1))
+    frames = counts.reshape(20, 2, 2, 6, 5).sum(axis=-1)  # 6 windows of 5 steps
+    training = TrainingSpec(folds=4, epochs=30, batch_size=5, hidden_units=8)
+    for model in (Model.FFNN, Model.CNN):
+        cv = cross_validate(frames, labels, model, training, frame_s=0.05)
+        plain = cross_validate(frames, labels, model, training)
+        assert np.array_equal(cv.predicted, plain.predicted)  # reading decisions changes nothing
+        assert np.allclose(cv.decision_s, 0.05 * np.arange(1, 7))
+        assert np.array_equal(cv.decision_predicted[:, -1], cv.predicted)
+        assert np.all(cv.operations[:, 0] == 0) and np.all(cv.operations[:, 1] > 0)
+        assert np.all(np.diff(cv.operations[:, 1]) >= 0) or model is Model.CNN
