@@ -87,8 +87,8 @@ def validate_chips(
             first.train_loss,
             first.predicted,
             first.test_fold,
-            np.stack([cv.fold_accuracy for cv in per_chip]),
-            np.stack([cv.predicted for cv in per_chip]),
+            chip_accuracy=np.stack([cv.fold_accuracy for cv in per_chip]),
+            chip_predicted=np.stack([cv.predicted for cv in per_chip]),
         )
     return _deployed(chip_frames, np.asarray(reference_frames), labels, model, training, start)
 
@@ -143,6 +143,6 @@ def _deployed(
         np.stack(losses),
         predicted[0],
         test_fold,
-        accuracy,
-        predicted,
+        chip_accuracy=accuracy,
+        chip_predicted=predicted,
     )

@@ -52,6 +52,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from pipeline.chain.folded import FoldModel, two_layers, uniform
 from pipeline.design.scene import Model, SNNSpec
 
 CNN_CHANNELS = (16, 32)
@@ -93,53 +94,7 @@ def pooled_size(height: int, width: int) -> tuple[int, int]:
     return -(-height // kh), -(-width // kw)
 
 
-def _uniform(generator: torch.Generator, shape: tuple[int, ...], fan_in: int) -> torch.Tensor:
-    """One float32 draw of ``U(-1/sqrt(fan_in), 1/sqrt(fan_in))`` of the given shape."""
-    bound = 1.0 / math.sqrt(fan_in)
-    return torch.rand(shape, generator=generator, dtype=torch.float32) * (2 * bound) - bound
-
-
-def two_layers(
-    module: nn.Module,
-    n_in: int,
-    hidden: int,
-    n_classes: int,
-    generators: Sequence[torch.Generator],
-) -> None:
-    """Give ``module`` the parameters of two fold-batched linear layers, float32 ``w1 (F, n_in,
-    hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden, n_classes)``, ``b2 (F, n_classes)``, drawn
-    per fold in that order from the fold's own generator (PyTorch's default bounds)."""
-    per_fold = [
-        [
-            _uniform(g, (n_in, hidden), n_in),
-            _uniform(g, (hidden,), n_in),
-            _uniform(g, (hidden, n_classes), hidden),
-            _uniform(g, (n_classes,), hidden),
-        ]
-        for g in generators
-    ]
-    w1, b1, w2, b2 = (torch.stack(p) for p in zip(*per_fold, strict=True))
-    module.w1, module.b1 = nn.Parameter(w1), nn.Parameter(b1)
-    module.w2, module.b2 = nn.Parameter(w2), nn.Parameter(b2)
-
-
-class _FoldModel(nn.Module):
-    """Common part: fold count, input shape, class count, and the parameter draw order."""
-
-    def __init__(self, input_shape: tuple[int, int, int], n_classes: int, n_folds: int):
-        super().__init__()
-        self.input_shape = tuple(int(s) for s in input_shape)
-        self.n_classes = int(n_classes)
-        self.n_folds = int(n_folds)
-
-    def _check(self, x: torch.Tensor) -> None:
-        if x.dim() != 5 or x.shape[0] != self.n_folds or tuple(x.shape[2:]) != self.input_shape:
-            raise ValueError(
-                f"expected input (F={self.n_folds}, B, *{self.input_shape}), got {tuple(x.shape)}"
-            )
-
-
-class FoldFFNN(_FoldModel):
+class FoldFFNN(FoldModel):
     """FFNN batched over folds: ``Linear(C*H*W, hidden) -> ReLU -> Linear(hidden, n_classes)``.
 
     Parameters (float32): ``w1 (F, C*H*W, hidden)``, ``b1 (F, hidden)``,
@@ -165,7 +120,7 @@ class FoldFFNN(_FoldModel):
         return torch.baddbmm(self.b2.unsqueeze(1), h, self.w2)
 
 
-class FoldCNN(_FoldModel):
+class FoldCNN(FoldModel):
     """CNN batched over folds with grouped convolutions (``groups=F``).
 
     Parameters (float32): ``conv1_w (F, 16, C, 3, 3)``, ``conv1_b (F, 16)``,
@@ -191,12 +146,12 @@ class FoldCNN(_FoldModel):
         n_flat = c2 * h2 * w2
         per_fold = [
             [
-                _uniform(g, (c1, c, 3, 3), c * 9),
-                _uniform(g, (c1,), c * 9),
-                _uniform(g, (c2, c1, 3, 3), c1 * 9),
-                _uniform(g, (c2,), c1 * 9),
-                _uniform(g, (n_flat, n_classes), n_flat),
-                _uniform(g, (n_classes,), n_flat),
+                uniform(g, (c1, c, 3, 3), c * 9),
+                uniform(g, (c1,), c * 9),
+                uniform(g, (c2, c1, 3, 3), c1 * 9),
+                uniform(g, (c2,), c1 * 9),
+                uniform(g, (n_flat, n_classes), n_flat),
+                uniform(g, (n_classes,), n_flat),
             ]
             for g in generators
         ]

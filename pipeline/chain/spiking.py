@@ -58,8 +58,8 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
+from pipeline.chain.folded import FoldModel, two_layers
 from pipeline.chain.jit import kernel
-from pipeline.chain.models import _FoldModel, two_layers
 
 
 @kernel()
@@ -151,7 +151,7 @@ class LeakyLayer(torch.autograd.Function):
         return grad, None, None, None, None
 
 
-class FoldSNN(_FoldModel):
+class FoldSNN(FoldModel):
     """Spiking decoder batched over folds: ``Linear(C*H, hidden) -> LIF -> Linear(hidden,
     n_classes) -> running mean over steps``.
 
