@@ -14,8 +14,9 @@ What an object root costs beyond a folder is round trips: a loopback server answ
 milliseconds, a remote one in tens, so the ratio here is the floor of what a user sees.
 
 ``run(tiny=True)`` does the same on :data:`benchmarks.sweep.TINY_GRID`, one counted round and
-no uncounted one. ``python -m benchmarks.object_root [--grid smoke] [--repeat N]`` runs this
-suite alone and prints its row.
+no uncounted one, on the local server ``$ESKIN_SERVER_DIR`` names if set (the test suite's).
+``python -m benchmarks.object_root [--grid smoke] [--repeat N]`` runs this suite alone and prints
+its row.
 """
 
 from __future__ import annotations
@@ -27,8 +28,7 @@ import tempfile
 import uuid
 from pathlib import Path
 
-from benchmarks.sweep import eskin, hermetic_env, local_sweep, tiny_grid
-from flows.server import stop as stop_server
+from benchmarks.sweep import local_server, local_sweep, tiny_grid
 
 DEFAULT_GRID = "smoke"
 WORKERS = 2
@@ -68,13 +68,10 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT, tiny: bool = False) -> l
             if tiny:
                 grid, repeat = tiny_grid(tmp), 1
             s3 = {**S3_KEYS, "AWS_ENDPOINT_URL": endpoint, "AWS_ALLOW_HTTP": "true"}
-            # An object root keeps the tool's own state in the user's cache: here, in tmp.
-            env = hermetic_env(tmp) | s3 | {"XDG_CACHE_HOME": str(tmp / "cache")}
             roots = {"folder": tmp / "folder", "s3": f"s3://{bucket}/{Path(grid).stem}"}
-            try:
-                started = eskin("server", "start", "--quiet", "--json", env=env)
-                if started.status != 0:
-                    raise RuntimeError(f"eskin server start failed, {started.failure()}")
+            with local_server(tmp, shared=tiny) as server_env:
+                # An object root keeps the tool's own state in the user's cache: here, in tmp.
+                env = server_env | s3 | {"XDG_CACHE_HOME": str(tmp / "cache")}
                 for root in roots.values():
                     local_sweep(grid, root, WORKERS, env)  # fills it
                     if not tiny:
@@ -86,8 +83,6 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT, tiny: bool = False) -> l
                         if warm.summary()["computed"]:
                             raise RuntimeError(f"a warm re-run of {root} computed points")
                         times[kind].append(warm.wall_s)
-            finally:
-                stop_server(tmp / "server")
     finally:
         server.stop()
     folder_s, s3_s = (statistics.median(times[kind]) for kind in ("folder", "s3"))

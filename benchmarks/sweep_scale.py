@@ -72,7 +72,7 @@ from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Rates, Spikes, Stopwatc
 from storage import SweepStore
 
 SIZES = (1_000, 10_000, 100_000)
-TINY_SIZES = (10, 100)
+TINY_SIZES = (10, 20)
 SIZES_ENV = "ESKIN_BENCH_SCALE_SIZES"
 WORKERS = 2
 OVERHEAD_TARGET_MS = 5.0
