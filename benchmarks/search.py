@@ -102,8 +102,9 @@ SPACES: dict[str, dict[str, Any]] = {
         "base": BASE_LARGE,
         "space": {
             "readout.encoder": {"choices": ["lcs", "decaying"]},
-            # At or above the decaying encoder's lowest threshold (0.03 V).
-            "readout.threshold_v": {"choices": THRESHOLDS[1:7]},
+            # Above the decaying encoder's lowest threshold (0.03 V): at 0.03 V, with mismatch,
+            # the decaying encoder refused its own taxels' thresholds (36 points failed).
+            "readout.threshold_v": {"choices": THRESHOLDS[2:]},
             "coding.window_s": {"choices": [0.05, 0.1, 0.2]},
             "array.rows": {"low": 1, "high": 4},
             "readout.effects.threshold_mismatch.sigma_rel": {"low": 0.0, "high": 0.3, "step": 0.1},

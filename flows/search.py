@@ -40,6 +40,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -134,7 +135,8 @@ class Search:
         """Plan the trials' points and compute those not in the store (``client_for()`` gives
         the Dask client, called only then); the plan, and why points failed by key."""
         params = [self.journal.params[n] for n in numbers]
-        plan = plan_sweep(self.space.trial_grid(params), self.root)
+        # Other trials' points may be being written: their partial batches are not leftovers.
+        plan = plan_sweep(self.space.trial_grid(params), self.root, tidy=False)
         if not plan.missing:
             return plan, {}
         client = client_for()
@@ -327,11 +329,13 @@ def lazy_client(
     compute."""
     with contextlib.ExitStack() as stack:
         made: list[Any] = [client] if client is not None else []
+        making = threading.Lock()  # the threads of running trials ask for it at once
 
         def get() -> Any:
-            if not made:
-                hermetic_environment(Path(root), prefect=False)
-                made.append(stack.enter_context(dask_client(workers, address)))
+            with making:
+                if not made:
+                    hermetic_environment(Path(root), prefect=False)
+                    made.append(stack.enter_context(dask_client(workers, address)))
             return made[0]
 
         yield get
