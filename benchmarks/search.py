@@ -60,6 +60,7 @@ import numpy as np
 from benchmarks.sweep import REPO
 from flows.refill import refill
 from flows.samplers import Proposer, resolve_sampler, seed_for
+from flows.search import MAX_REPEATS_IN_ROW
 from pipeline.design.space import Sampler, Space
 from pipeline.report.trials import hypervolume
 
@@ -261,6 +262,8 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     trials: dict[int, Any] = {}
     started_trains: dict[int, float] = {}  # train -> when the first trial on it ends
     paid: set[int] = set()  # points tried
+    told_points: set[int] = set()
+    repeats = [0]  # trials in a row at points told before
     clock = [0.0]
     events: list[tuple[float, int]] = []
     spent = [0.0]
@@ -270,6 +273,8 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         expected = running * spent[0] / told if told else 0.0
         if spent[0] + expected >= budget_s or len(paid) == len(own):
             return None  # the budget is spent, or every point was tried
+        if repeats[0] >= MAX_REPEATS_IN_ROW:
+            return None  # as flows.search: the sampler proposes only designs told before
         tick = time.perf_counter()
         trial, params = proposer.ask()
         out.ask_s += time.perf_counter() - tick
@@ -291,6 +296,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         if number < WORKERS:
             seconds += shared_per_worker
         out.seconds.append(seconds)
+        print(".", end="", file=sys.stderr, flush=True)
         if ends is None:
             started_trains[int(train[point])] = clock[0] + seconds
         token = (clock[0] + seconds, number)
@@ -303,6 +309,9 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         return {first}, set(tokens) - {first}
 
     def finish(number: int, token: Any) -> None:
+        point = out.points[number]
+        repeats[0] = repeats[0] + 1 if point in told_points else 0
+        told_points.add(point)
         spent[0] += out.seconds[number]
         proposer.tell(trials.pop(number), arrays["values"][out.points[number]].tolist())
 
@@ -351,6 +360,12 @@ def measure(
                 share = hypervolume(scaled_costs(told, low, high), reference) / full
                 spent = sum(run.seconds[t] for t in trials) / cost
                 found.setdefault((sampler.value, fraction), []).append((share, spent, len(trials)))
+                print(
+                    f"\n{name} {sampler.value} seed {seed} at {fraction}: {share:.3f} "
+                    f"({len(trials)} trials, {100 * spent:.1f} %)",
+                    file=sys.stderr,
+                    flush=True,
+                )
         asks = {
             k.value: sum(r.ask_s for (kk, _), r in replays.items() if kk is k)
             for k in kinds.values()

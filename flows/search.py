@@ -66,6 +66,9 @@ from storage.search_log import SearchJournal, search_cube_name
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
+#: Trials in a row at designs already told after which a search ends: its sampler has nothing
+#: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent.
+MAX_REPEATS_IN_ROW = 10
 FRONT = "front"
 
 
@@ -436,16 +439,20 @@ def _run_trials(
     | None,
 ) -> tuple[int, int, dict[int, str]]:
     """Ask, compute and tell trials, ``slots`` running at once, until the budget is spent
-    (:func:`wants_trial`) or ``slots`` trials in a row failed (the next would too, spending
-    nothing); (cache hits, points computed, failures by trial)."""
+    (:func:`wants_trial`), ``slots`` trials in a row failed (the next would too, spending
+    nothing) or :data:`MAX_REPEATS_IN_ROW` trials in a row were of designs told before;
+    (cache hits, points computed, failures by trial)."""
     compute = compute or Search.compute
     pool = concurrent.futures.ThreadPoolExecutor(slots, thread_name_prefix="eskin-trial")
     seen: set[str] = set()
-    cache_hits = computed = failures_in_row = 0
+    told = set() if search.cube is None else {str(k) for k in search.cube["result_key"].values}
+    cache_hits = computed = failures_in_row = repeats_in_row = 0
     failed: dict[int, str] = {}
 
     def ask(running: int) -> int | None:
-        if failures_in_row >= slots or not wants_trial(search, budget, budget_s, running):
+        if failures_in_row >= slots or repeats_in_row >= MAX_REPEATS_IN_ROW:
+            return None
+        if not wants_trial(search, budget, budget_s, running):
             return None
         return search.ask(1)[0]
 
@@ -455,8 +462,11 @@ def _run_trials(
         return pool.submit(run, compute, search, [number], client_for)
 
     def finish(number: int, future: concurrent.futures.Future) -> None:
-        nonlocal cache_hits, computed, failures_in_row
+        nonlocal cache_hits, computed, failures_in_row, repeats_in_row
         plan, failed_keys = future.result()
+        keys = {point.key for point in plan.grid.points()}
+        repeats_in_row = repeats_in_row + 1 if keys <= told else 0
+        told.update(keys)
         outcome = search.tell([number], plan, failed_keys)
         # Two trials of one design, running together, computed their point once (Dask holds
         # one task per key): it counts once.
