@@ -148,7 +148,7 @@ def exhaustive_arrays(space: Space, root: Path) -> dict[str, np.ndarray]:
     order): ``values`` (accuracy, data rate), ``accuracy_low``/``accuracy_high`` (95 %),
     ``own_s`` (seconds the point paid itself, spike stages apart), ``train_s`` (spike stages'
     seconds it paid, 0 when another point paid its train), ``train`` (its spike train's
-    index), ``shared_s`` (the one-off load and set-up the run paid, in all)."""
+    index), ``shared_s`` (the one-off load and set-up it paid: a worker's first point)."""
     from flows.run import run_sweep
     from flows.search import trials_cube
     from pipeline.results.cube import CHARGE_DIM, paid_seconds
@@ -175,7 +175,7 @@ def exhaustive_arrays(space: Space, root: Path) -> dict[str, np.ndarray]:
         "own_s": own.drop_sel(stage=spike).sum("stage").values,
         "train_s": own.sel(stage=spike).sum("stage").values,
         "train": np.array([index[k] for k in trains], dtype=np.int32),
-        "shared_s": np.array(float(shared.sum())),
+        "shared_s": shared.sum("stage").values,
         "labels": np.array([point_label(p) for p in params]),
     }
 
@@ -234,7 +234,7 @@ def noise(arrays: dict[str, np.ndarray]) -> dict[str, float]:
 
 def grid_cost(arrays: dict[str, np.ndarray]) -> float:
     """The seconds the exhaustive run paid: every point's own, and the shared ones."""
-    return float(arrays["own_s"].sum() + arrays["train_s"].sum() + arrays["shared_s"])
+    return float(arrays["own_s"].sum() + arrays["train_s"].sum() + arrays["shared_s"].sum())
 
 
 @dataclasses.dataclass
@@ -257,7 +257,12 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     own, train_s, train = arrays["own_s"], arrays["train_s"], arrays["train"]
     # Each train's stages cost what the point that paid them paid.
     train_cost = np.bincount(train, weights=train_s)
-    shared_per_worker = float(arrays["shared_s"]) / WORKERS
+    # What a fresh worker paid once, on average over the exhaustive run's: the one-off seconds in
+    # all over the points that paid a worker's start (a tenth of the largest or more; others
+    # pay milliseconds of shared book-keeping).
+    shared = arrays["shared_s"]
+    starts = max(1, int((shared >= 0.1 * shared.max()).sum())) if shared.size else 1
+    shared_per_worker = float(shared.sum()) / starts
     out = Replay()
     trials: dict[int, Any] = {}
     started_trains: dict[int, float] = {}  # train -> when the first trial on it ends

@@ -50,7 +50,7 @@ def test_a_replayed_search_pays_each_train_once_and_the_one_off_costs_per_worker
         "own_s": np.full(6, 1.0),
         "train_s": np.where(np.arange(6) % 3 == 0, 4.0, 0.0),  # the first point of each pays
         "train": train,
-        "shared_s": np.array(6.0),
+        "shared_s": np.array([3.0, 0, 0, 3.0, 0, 0]),  # each worker's first point
         "labels": np.array([point_label(p) for p in params]),
     }
     found = replay(dataclasses.replace(space, sampler=Sampler.RANDOM), arrays, budget_s=1e9)
