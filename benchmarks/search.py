@@ -269,6 +269,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     paid: set[int] = set()  # points tried
     told_points: set[int] = set()
     repeats = [0]  # trials in a row at points told before
+    stopped: list[bool] = []
     clock = [0.0]
     events: list[tuple[float, int]] = []
     spent = [0.0]
@@ -276,10 +277,14 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     def ask(running: int) -> int | None:
         told = len(out.points) - running
         expected = running * spent[0] / told if told else 0.0
-        if spent[0] + expected >= budget_s or len(paid) == len(own):
-            return None  # the budget is spent, or every point was tried
+        # As flows.search: the budget is spent, or the sampler proposes only designs told
+        # before; and once refused, never again. (Every point tried also ends a replay.)
+        if stopped or spent[0] + expected >= budget_s or len(paid) == len(own):
+            stopped.append(True)
+            return None
         if repeats[0] >= MAX_REPEATS_IN_ROW:
-            return None  # as flows.search: the sampler proposes only designs told before
+            stopped.append(True)
+            return None
         tick = time.perf_counter()
         trial, params = proposer.ask()
         out.ask_s += time.perf_counter() - tick
@@ -326,7 +331,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
 
 def at_budget(found: Replay, budget_s: float) -> list[int]:
     """The trials a search with ``budget_s`` (at most the replay's) asks: those asked before
-    the first ask it refuses."""
+    the first ask it refuses (a search asks nothing once it refused)."""
     refused = next((i for i, w in enumerate(found.weighed) if w >= budget_s), len(found.points))
     return list(range(refused))
 

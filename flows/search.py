@@ -32,7 +32,7 @@ seconds the workers paid computing each distinct point, once
 trials share was paid by one of them and counts once, so a trial that shares the spike train of
 an earlier one costs only its coding and training. A new trial is started while the seconds of
 the trials told, plus those the running ones are expected to cost (the mean of the trials told
-so far), stay below the budget.
+so far), stay below the budget; once one is refused, none is started again.
 """
 
 from __future__ import annotations
@@ -448,13 +448,18 @@ def _run_trials(
     told = set() if search.cube is None else {str(k) for k in search.cube["result_key"].values}
     cache_hits = computed = failures_in_row = repeats_in_row = 0
     failed: dict[int, str] = {}
+    stopped: list[bool] = []
 
     def ask(running: int) -> int | None:
-        if failures_in_row >= slots or repeats_in_row >= MAX_REPEATS_IN_ROW:
-            return None
-        if not wants_trial(search, budget, budget_s, running):
-            return None
-        return search.ask(1)[0]
+        # Once refused, never again: the trials still running finish and the search ends, even
+        # if they cost less than expected (so a search with a smaller budget asks exactly the
+        # trials a larger one asks up to that point).
+        if not stopped:
+            if failures_in_row >= slots or repeats_in_row >= MAX_REPEATS_IN_ROW:
+                stopped.append(True)
+            elif not wants_trial(search, budget, budget_s, running):
+                stopped.append(True)
+        return None if stopped else search.ask(1)[0]
 
     def start(number: int) -> concurrent.futures.Future:
         # The copied context carries the Prefect flow run to a task the hook calls.
