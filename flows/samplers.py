@@ -27,7 +27,7 @@ space is mostly ordered; TPE otherwise.
   objectives vary along each. Replayed on the benchmark's spaces (``benchmarks/search.py``,
   the performance page), it found more of the exhaustive front than TPE and random search at
   10 % of the grid's paid seconds (0.967 against 0.931 and 0.882 of the hypervolume on 3
-  dimensions; 0.883 against 0.843 and 0.853 on 5) and at 5 % on 3 dimensions (at 5 % on 5,
+  dimensions; 0.879 against 0.843 and 0.853 on 5) and at 5 % on 3 dimensions (at 5 % on 5,
   8 trials, all three were their random start), while TPE was ahead at 25 % on 3
   dimensions (0.990 against 0.978, 62-80 trials). Its ask costs seconds (1-3 s at 30-60 trials
   on a busy 2-core machine; TPE's milliseconds) and grows with the cube of the trials told
