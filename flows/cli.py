@@ -222,8 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
         parents=[common],
         help="search a design space (ranges over scene fields, two or three objectives) on the "
         "sweep's cache and cluster, and write its trials and front as cubes",
-        description="Run the Prefect flow 'optimize': a multi-objective search (Optuna's TPE, "
-        "ask-and-tell) whose trials are computed as sweep points, on Dask workers, through the "
+        description="Run the Prefect flow 'optimize': a multi-objective search (Optuna's GP or "
+        "TPE, ask-and-tell, a trial started as each worker frees) whose trials are computed as "
+        "sweep points, on Dask workers, through the "
         "root's cache. The search is kept in the root: run it again to resume or to continue "
         "it with a larger budget.",
         epilog=_scene_fields_epilog(),

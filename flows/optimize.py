@@ -1,10 +1,10 @@
-"""The ``optimize`` Prefect flow: a design-space search with one task per batch of trials.
+"""The ``optimize`` Prefect flow: a design-space search with one task per trial.
 
-The flow runs :func:`flows.search.run_optimize` and makes it visible: each batch of trials is a
-task (``trials-<first>-<last>``) that submits the batch's missing points to Dask, waits for them
-and tells the trials; after each batch the current front is a table artifact
-(``<space>-front``), the trials told so far a progress artifact against the budget, and a
-run-logger line says what the batch computed and found cached. Prefect runs only in this
+The flow runs :func:`flows.search.run_optimize` and makes it visible: each trial is a task
+(``trial-<number>``, as many running at once as the cluster has worker threads) that submits
+the trial's point to Dask if it is missing and waits for it; after each trial is told the
+current front is a table artifact (``<space>-front``), the budget spent a progress artifact,
+and a run-logger line says what the trial computed or found cached. Prefect runs only in this
 process; the Dask workers run the plain functions of :mod:`flows.work`, as in a sweep. As a
 sweep's, the search's artifacts and log lines go through the run's record
 (:mod:`flows.record`): a Prefect server that stops answering does not stop the search.
@@ -19,16 +19,17 @@ from typing import Any
 from prefect import flow, get_run_logger, task
 from prefect.cache_policies import NO_CACHE
 
+from flows.planning import SweepPlan
 from flows.record import Record, run_recorded
 from flows.search import BatchOutcome, Search, check_budget, default_search_root, run_optimize
 from flows.sweep import artifact_key, flow_run_url
 from pipeline.design.space import Space
 
 
-@task(name="trials", cache_policy=NO_CACHE, task_run_name="trials-{first}-{last}")
-def batch_task(search: Search, numbers: list[int], client_for: Any, first: int, last: int) -> Any:
-    """Evaluate one batch of trials (:meth:`flows.search.Search.evaluate`)."""
-    return search.evaluate(numbers, client_for)
+@task(name="trial", cache_policy=NO_CACHE, task_run_name="trial-{number}")
+def trial_task(search: Search, numbers: list[int], client_for: Any, number: int) -> Any:
+    """Compute one trial's point if it is missing (:meth:`flows.search.Search.compute`)."""
+    return search.compute(numbers, client_for)
 
 
 @flow(name="optimize", log_prints=False)
@@ -54,11 +55,12 @@ def optimize(
     if show_progress and url:
         print(f"Prefect flow run: {url}", file=sys.stderr)
 
-    def evaluate(search: Search, numbers: list[int], client_for: Any) -> BatchOutcome:
+    def compute(
+        search: Search, numbers: list[int], client_for: Any
+    ) -> tuple[SweepPlan, dict[str, str]]:
         from prefect.utilities.annotations import quote
 
-        run = batch_task.submit(quote(search), numbers, quote(client_for), numbers[0], numbers[-1])
-        return run.result()
+        return trial_task(quote(search), numbers, quote(client_for), numbers[0])
 
     def on_batch(record: Record, search: Search, outcome: BatchOutcome) -> None:
         name = search.space.name
@@ -84,10 +86,8 @@ def optimize(
             "(on_front false: off the front, but a paired test cannot tell it from it).",
         )
         logger.info(
-            "trials %d-%d: %d points computed, %d found in the store, %d failed; %d told, "
-            "front of %d",
+            "trial %d: %d point computed, %d found in the store, %d failed; %d told, front of %d",
             outcome.trials[0],
-            outcome.trials[-1],
             outcome.computed,
             outcome.cache_hits,
             len(outcome.failed),
@@ -104,7 +104,7 @@ def optimize(
             workers=workers,
             address=address,
             on_batch=lambda search, outcome: on_batch(record, search, outcome),
-            evaluate=evaluate,
+            compute=compute,
         )
         summary["flow_run_url"] = url
         if report:

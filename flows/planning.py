@@ -169,17 +169,20 @@ def open_root(grid: Grid, root: str | Path | None, dataset: str | Path | None = 
     return SweepStore.open_or_create(root or default_root(grid, data))
 
 
-def plan_sweep(grid: Grid, root: str | Path) -> SweepPlan:
+def plan_sweep(grid: Grid, root: str | Path, tidy: bool = True) -> SweepPlan:
     """Tidy the store at ``root``, find which of the (checked) grid's points are cached and
     which stored cubes are current.
 
     Call it holding the root's lock (:meth:`storage.store.SweepStore.lock`): no other sweep writes
-    to the root then, so every partial entry is a leftover of a killed run and is removed. A
+    to the root then, so every partial entry is a leftover of a killed run and is removed
+    (``tidy``; a search planning one trial while its other trials' points are being written
+    passes False, having tidied once at its start). A
     cached result that fails its checksum is discarded (with a warning) and planned again, and
     the cubes built from its batch are no longer current.
     """
     store = SweepStore.open(root)
-    store.clean_partials()
+    if tidy:
+        store.clean_partials()
     scenes = grid.unique_points()
     keys = sweep_keys(grid)
     records: dict[str, ResultEntry] = {}

@@ -8,56 +8,55 @@ started again on the root replays it, told trials back into the sampler, asked o
 told (a killed search's) asked again with their own values, and any point of a told trial the
 store lost (a corrupt batch discarded) computed again. A larger budget continues it.
 
-Each batch of trials (as many as the cluster has worker threads, so parallel trials fill the
-workers) is a grid of one zipped sweep (:meth:`pipeline.design.space.Space.trial_grid`), planned
-and scheduled as any sweep (:func:`flows.planning.plan_sweep`,
-:func:`flows.scheduling.submit_missing`): the same store, cache keys, batching and workers; a
-point already in the store, from any sweep or search, costs nothing. Once its points are done,
-the trial cube of every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`,
-along ``trial``; each result read from the store once) and the batch's objective values are read
+Trials are refilled as workers free (:func:`flows.refill.refill`): as many run at once as the
+cluster has worker threads, and the moment one finishes it is told and a new one asked, the
+running ones pending in the sampler. Each trial is a grid of one point
+(:meth:`pipeline.design.space.Space.trial_grid`), planned and scheduled as any sweep
+(:func:`flows.planning.plan_sweep`, :func:`flows.scheduling.submit_missing`) from a thread of
+the coordinator that waits for it: the same store, cache keys and workers; a point already in
+the store, from any sweep or search, costs nothing. Once its point is done, the trial cube of
+every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`, along
+``trial``; each result read from the store once) and the trial's objective values are read
 from it and told. The search's cubes ``<space>.trials`` and ``<space>.front``
 (:func:`pipeline.report.trials.front_cube`; named by :func:`storage.search_log.search_cube_name`,
 so a root keeps every search made in it) are written when the search ends or is stopped.
 
-Sampler: the space's (:class:`pipeline.design.space.Sampler`), by default multi-objective TPE
-(``TPESampler(multivariate=True, constant_liar=True)``; the constant liar keeps the trials of one
-batch apart), NSGA-II or random search, seeded from the space's seed and the trials already
-asked. TPE is the default because it was measured best (``benchmarks/search.py``, medians of 10
-seeds on a 192-point space): 0.84 and 0.98 of the exhaustive hypervolume at 10 % and 25 % of the
-grid's cost, against 0.81 and 0.92 for NSGA-II (whose first generation is random at these
-budgets) and 0.81 and 0.91 for random search. Cost accounting: a
-budget in seconds (``budget_s``) is spent in the stage seconds the workers paid computing each
-distinct point, once (:func:`pipeline.report.trials.search_seconds`): a spike train, a load or a
-kernel compile that trials share was paid by one of them and counts once, so a trial that
-shares the spike train of an earlier one costs only its coding and training.
+Sampler: the space's (:class:`pipeline.design.space.Sampler`; :mod:`flows.samplers` makes it
+and says what it is told): by default ``auto``, a Gaussian process for a search of at most a
+few hundred trials over mostly ordered dimensions and multi-objective TPE otherwise
+(:func:`flows.samplers.resolve_sampler`), seeded from the space's seed and the trials already
+asked. Numeric choices are told as ordered positions and objectives through their declared
+monotone transforms. Cost accounting: a budget in seconds (``budget_s``) is spent in the
+seconds the workers paid computing each distinct point, once
+(:func:`pipeline.report.trials.search_seconds`): a spike train, a load or a worker's set-up that
+trials share was paid by one of them and counts once, so a trial that shares the spike train of
+an earlier one costs only its coding and training. A new trial is started while the seconds of
+the trials told, plus those the running ones are expected to cost (the mean of the trials told
+so far), stay below the budget; once one is refused, none is started again.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
-import math
+import contextvars
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import xarray as xr
 
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import DEFAULT_RUNS_DIR, SweepPlan, check_grid, plan_sweep
 from flows.progress import SweepFailed, completed_points, failure_message
+from flows.refill import refill
+from flows.samplers import Proposer, seed_for
 from flows.scheduling import submit_missing
-from pipeline.design.space import (
-    TRIALS,
-    DimensionKind,
-    Sampler,
-    Space,
-    load_space,
-    objective_values,
-)
+from pipeline.design.space import TRIALS, Space, load_space, objective_values
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import RESULTS, SPIKES
@@ -67,6 +66,9 @@ from storage.search_log import SearchJournal, search_cube_name
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
+#: Trials in a row at designs already told after which a search ends: its sampler has nothing
+#: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent.
+MAX_REPEATS_IN_ROW = 10
 FRONT = "front"
 
 
@@ -85,89 +87,30 @@ class BatchOutcome:
     failed: dict[int, str] = field(default_factory=dict)
 
 
-def distributions(space: Space) -> dict[str, Any]:
-    """Optuna's distribution of each dimension, by field."""
-    from optuna.distributions import (
-        CategoricalDistribution,
-        FloatDistribution,
-        IntDistribution,
-    )
-
-    found: dict[str, Any] = {}
-    for d in space.dimensions:
-        if d.kind is DimensionKind.CATEGORICAL:
-            found[d.field] = CategoricalDistribution(d.choices)
-        elif d.kind is DimensionKind.INT:
-            found[d.field] = IntDistribution(int(d.low), int(d.high), step=int(d.step), log=d.log)
-        else:
-            found[d.field] = FloatDistribution(d.low, d.high, step=d.step, log=d.log)
-    return found
-
-
-def make_sampler(kind: Sampler, seed: int) -> Any:
-    """The Optuna sampler of ``kind``, seeded."""
-    import optuna
-
-    match kind:
-        case Sampler.TPE:
-            return optuna.samplers.TPESampler(multivariate=True, constant_liar=True, seed=seed)
-        case Sampler.NSGA2:
-            return optuna.samplers.NSGAIISampler(seed=seed)
-        case Sampler.RANDOM:
-            return optuna.samplers.RandomSampler(seed=seed)
-    raise ValueError(f"unknown sampler {kind}")
-
-
 class Search:
     """One search of ``space`` in the store at ``root``: its study, journal and trials.
 
     Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`).
     """
 
-    def __init__(self, space: Space, root: str | Path):
-        import optuna
-
-        optuna.logging.set_verbosity(optuna.logging.WARNING)
+    def __init__(self, space: Space, root: str | Path, budget: int | None = None):
         self.space = space
         self.root = str(root)
-        self.distributions = distributions(space)
         self.journal = SearchJournal.open(root, space.name, space.fingerprint())
-        # Seeded from the space's seed and the trials already asked: a resumed search samples
-        # afresh rather than repeating the first run's random start-up trials.
-        seed = int(
-            np.random.SeedSequence([space.seed, len(self.journal.params)]).generate_state(1)[0]
-        )
-        sampler = make_sampler(space.sampler, seed)
-        self.study = optuna.create_study(
-            directions=[o.direction.verb for o in space.objectives],
-            sampler=sampler,
-        )
+        # ``budget`` (trials in all; None for seconds) picks ``auto``'s sampler and the start-up.
+        self.proposer = Proposer(space, seed_for(space.seed, len(self.journal.params)), budget)
         for number in sorted(self.journal.params):
             params = self.journal.params[number]
             if number in self.journal.values:
-                self._add(params, values=self.journal.values[number])
+                self.proposer.add(params, self.journal.values[number])
             elif number in self.journal.failed:
-                self._add(params, values=None)
+                self.proposer.add(params, None)
             else:
-                self.study.enqueue_trial(params, skip_if_exists=False)
+                self.proposer.enqueue(params)
         self._asked: dict[int, Any] = {}
         # The results of the trials' points as read from the store, each once.
         self.records: dict[str, Any] = {}
         self.cube: xr.Dataset | None = None  # see restore()
-
-    def _add(self, params: dict[str, Any], values: list[float] | None) -> None:
-        """Replay a told trial: finished with finite ``values``, or failed."""
-        import optuna
-
-        finite = values is not None and all(math.isfinite(v) for v in values)
-        self.study.add_trial(
-            optuna.trial.create_trial(
-                params=params,
-                distributions=self.distributions,
-                values=values if finite else None,
-                state=optuna.trial.TrialState.COMPLETE if finite else _failed_state(),
-            )
-        )
 
     @property
     def told(self) -> int:
@@ -179,12 +122,12 @@ class Search:
         numbers = []
         pending = [p for p in self.journal.pending if p not in self._asked]
         for _ in range(n):
-            trial = self.study.ask(self.distributions)
+            trial, params = self.proposer.ask()
             if pending:
                 number = pending.pop(0)
             else:
                 number = max(self.journal.params, default=-1) + 1
-                self.journal.asked(number, trial.params)
+                self.journal.asked(number, params)
             self._asked[number] = trial
             numbers.append(number)
         return numbers
@@ -195,7 +138,8 @@ class Search:
         """Plan the trials' points and compute those not in the store (``client_for()`` gives
         the Dask client, called only then); the plan, and why points failed by key."""
         params = [self.journal.params[n] for n in numbers]
-        plan = plan_sweep(self.space.trial_grid(params), self.root)
+        # Other trials' points may be being written: their partial batches are not leftovers.
+        plan = plan_sweep(self.space.trial_grid(params), self.root, tidy=False)
         if not plan.missing:
             return plan, {}
         client = client_for()
@@ -211,31 +155,40 @@ class Search:
         return computed
 
     def evaluate(self, numbers: list[int], client_for: Callable[[], Any]) -> BatchOutcome:
-        """Compute the trials' points (those not in the store), tell the trials, write cubes.
+        """Compute the trials' points (those not in the store) and tell the trials
+        (:meth:`compute`, :meth:`tell`). ``client_for()`` gives the Dask client, called only if
+        a point is missing."""
+        return self.tell(numbers, *self.compute(numbers, client_for))
 
-        ``client_for()`` gives the Dask client, called only if a point is missing.
-        """
+    def tell(
+        self, numbers: list[int], plan: SweepPlan, failed_keys: Mapping[str, str]
+    ) -> BatchOutcome:
+        """Tell the trials ``numbers``, whose points ``plan`` computed (:meth:`compute`; those
+        in ``failed_keys`` failed), from the cube of every trial so far."""
         outcome = BatchOutcome(numbers)
-        plan, failed_keys = self.compute(numbers, client_for)
         outcome.cache_hits, outcome.computed = len(plan.cached), len(plan.missing)
         keys = [point.key for point in plan.grid.points()]
         for number, key in zip(numbers, keys, strict=True):
             if key in failed_keys:
                 outcome.failed[number] = failed_keys[key]
-                self.study.tell(self._asked.pop(number), state=_failed_state())
+                self.proposer.tell(self._asked.pop(number), None)
                 self.journal.told_failed(number, failed_keys[key])
         done = [n for n in numbers if n not in outcome.failed]
+        if not done:
+            return outcome
         self.cube = self.build_cube(done)
         found = objective_values(self.cube.sel(trial=done), self.space.objectives)
         for number, row in zip(done, found, strict=True):
             values = [float(v) for v in row]
-            trial = self._asked.pop(number)
-            if all(math.isfinite(v) for v in values):
-                self.study.tell(trial, values)
-            else:
-                self.study.tell(trial, state=_failed_state())
+            self.proposer.tell(self._asked.pop(number), values)
             self.journal.told(number, values)
         return outcome
+
+    def mean_trial_seconds(self) -> float:
+        """The seconds a told trial cost on average (0 before any): what a running trial is
+        expected to cost."""
+        told = len(self.journal.values)
+        return self.seconds_spent() / told if told else 0.0
 
     def build_cube(self, finished: Sequence[int] = ()) -> xr.Dataset | None:
         """The cube of every told trial and of the ``finished`` ones (whose points are in the
@@ -325,12 +278,6 @@ def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Da
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models))
 
 
-def _failed_state() -> Any:
-    import optuna
-
-    return optuna.trial.TrialState.FAIL
-
-
 def default_search_root(space: Space) -> Path:
     """``runs/<space name>``: the run root of a search given no ``--root``."""
     return DEFAULT_RUNS_DIR / space.name
@@ -385,11 +332,13 @@ def lazy_client(
     compute."""
     with contextlib.ExitStack() as stack:
         made: list[Any] = [client] if client is not None else []
+        making = threading.Lock()  # the threads of running trials ask for it at once
 
         def get() -> Any:
-            if not made:
-                hermetic_environment(Path(root), prefect=False)
-                made.append(stack.enter_context(dask_client(workers, address)))
+            with making:
+                if not made:
+                    hermetic_environment(Path(root), prefect=False)
+                    made.append(stack.enter_context(dask_client(workers, address)))
             return made[0]
 
         yield get
@@ -404,22 +353,14 @@ def batch_size(client: Any, workers: int | None) -> int:
     return workers or available_cores()
 
 
-def search_batches(
-    search: Search,
-    budget: int | None,
-    budget_s: float | None,
-    size: int,
-) -> Iterator[list[int]]:
-    """The batches a search asks, until its budget is spent: trials told (``budget``) or stage
-    seconds (``budget_s``, :meth:`Search.seconds_spent`)."""
-    while True:
-        if budget is not None:
-            n = min(size, budget - search.told)
-        else:
-            n = size if search.seconds_spent() < budget_s else 0
-        if n <= 0:
-            return
-        yield search.ask(n)
+def wants_trial(search: Search, budget: int | None, budget_s: float | None, running: int) -> bool:
+    """Whether a search with ``running`` trials under way starts another: fewer than
+    ``budget`` trials told and running, or the seconds spent (:meth:`Search.seconds_spent`)
+    plus those the running trials are expected to cost (:meth:`Search.mean_trial_seconds`
+    each) below ``budget_s``."""
+    if budget is not None:
+        return search.told + running < budget
+    return search.seconds_spent() + running * search.mean_trial_seconds() < budget_s
 
 
 def run_optimize(
@@ -432,17 +373,20 @@ def run_optimize(
     workers: int | None = None,
     address: str | None = None,
     on_batch: Callable[[Search, BatchOutcome], None] | None = None,
-    evaluate: Callable[[Search, list[int], Callable[[], Any]], BatchOutcome] | None = None,
+    compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
+    | None = None,
 ) -> dict[str, Any]:
     """Search ``space`` (a file or a :class:`~pipeline.design.space.Space`) into the store at
     ``root``, without Prefect.
 
     Holds the root's lock, replays the root's journal of this space, asks batches of trials
     until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds
-    are spent, and returns :func:`search_summary`. ``client`` (left open), or a local cluster
-    of ``workers`` processes, or the scheduler at ``address``, made only if a point is missing.
-    ``on_batch`` is called after each batch; ``evaluate`` replaces :meth:`Search.evaluate`
-    (the Prefect flow runs it as a task).
+    are spent, keeping one trial running per worker thread (:func:`flows.refill.refill`), and
+    returns :func:`search_summary`. ``client`` (left open), or a local cluster of ``workers``
+    processes, or the scheduler at ``address``, made only if a point is missing.
+    ``on_batch`` is called after each trial is told (with its outcome); ``compute`` replaces
+    :meth:`Search.compute` (the Prefect flow runs it as a task), called from a thread per
+    running trial.
 
     Raises
     ------
@@ -461,23 +405,16 @@ def run_optimize(
     failed: dict[int, str] = {}
     with store.lock():
         store.clean_partials()
-        search = Search(space, store.root)
+        search = Search(space, store.root, budget)
         told_before = len(search.journal.values)
         # The cubes are written at the end, or when the search is stopped; the journal, written
         # as trials are told, is what a killed search resumes from.
         try:
             with lazy_client(store.root, client, workers, address) as client_for:
-                size = batch_size(client_for() if address else client, workers)
+                slots = batch_size(client_for() if address else client, workers)
                 computed += search.restore(client_for)
-                for numbers in search_batches(search, budget, budget_s, size):
-                    outcome = (evaluate or Search.evaluate)(search, numbers, client_for)
-                    cache_hits += outcome.cache_hits
-                    computed += outcome.computed
-                    failed |= outcome.failed
-                    if on_batch is not None:
-                        on_batch(search, outcome)
-                    if len(outcome.failed) == len(outcome.trials):
-                        break  # a whole batch failed: the next would too, and spend nothing
+                counts = _run_trials(search, budget, budget_s, slots, client_for, on_batch, compute)
+                cache_hits, computed, failed = counts[0], computed + counts[1], counts[2]
         finally:
             search.write_cubes()
     if failed:
@@ -489,6 +426,72 @@ def run_optimize(
         computed=computed,
         seconds=time.perf_counter() - start,
     )
+
+
+def _run_trials(
+    search: Search,
+    budget: int | None,
+    budget_s: float | None,
+    slots: int,
+    client_for: Callable[[], Any],
+    on_batch: Callable[[Search, BatchOutcome], None] | None,
+    compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
+    | None,
+) -> tuple[int, int, dict[int, str]]:
+    """Ask, compute and tell trials, ``slots`` running at once, until the budget is spent
+    (:func:`wants_trial`), ``slots`` trials in a row failed (the next would too, spending
+    nothing) or :data:`MAX_REPEATS_IN_ROW` trials in a row were of designs told before;
+    (cache hits, points computed, failures by trial)."""
+    compute = compute or Search.compute
+    pool = concurrent.futures.ThreadPoolExecutor(slots, thread_name_prefix="eskin-trial")
+    seen: set[str] = set()
+    told = set() if search.cube is None else {str(k) for k in search.cube["result_key"].values}
+    cache_hits = computed = failures_in_row = repeats_in_row = 0
+    failed: dict[int, str] = {}
+    stopped: list[bool] = []
+
+    def ask(running: int) -> int | None:
+        # Once refused, never again: the trials still running finish and the search ends, even
+        # if they cost less than expected (so a search with a smaller budget asks exactly the
+        # trials a larger one asks up to that point).
+        if not stopped:
+            if failures_in_row >= slots or repeats_in_row >= MAX_REPEATS_IN_ROW:
+                stopped.append(True)
+            elif not wants_trial(search, budget, budget_s, running):
+                stopped.append(True)
+        return None if stopped else search.ask(1)[0]
+
+    def start(number: int) -> concurrent.futures.Future:
+        # The copied context carries the Prefect flow run to a task the hook calls.
+        run = contextvars.copy_context().run
+        return pool.submit(run, compute, search, [number], client_for)
+
+    def finish(number: int, future: concurrent.futures.Future) -> None:
+        nonlocal cache_hits, computed, failures_in_row, repeats_in_row
+        plan, failed_keys = future.result()
+        keys = {point.key for point in plan.grid.points()}
+        repeats_in_row = repeats_in_row + 1 if keys <= told else 0
+        told.update(keys)
+        outcome = search.tell([number], plan, failed_keys)
+        # Two trials of one design, running together, computed their point once (Dask holds
+        # one task per key): it counts once.
+        outcome.computed = len(set(plan.missing) - seen)
+        seen.update(plan.missing)
+        outcome.cache_hits = len(plan.cached)
+        cache_hits += outcome.cache_hits
+        computed += outcome.computed
+        failed.update(outcome.failed)
+        failures_in_row = failures_in_row + 1 if outcome.failed else 0
+        if on_batch is not None:
+            on_batch(search, outcome)
+
+    try:
+        refill(slots, ask, start, finish)
+    finally:
+        # Stopped (an error, an interrupt): running trials are not waited for; their points
+        # are stored as they finish and a resumed search finds them.
+        pool.shutdown(wait=False, cancel_futures=True)
+    return cache_hits, computed, failed
 
 
 def search_summary(

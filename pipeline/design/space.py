@@ -10,7 +10,7 @@ TOML layout::
     name = "design"
     base = "paper"                     # a built-in scene, a scene file, or a [base] table
     seed = 0                           # the search's seed (default 0)
-    sampler = "tpe"                    # "tpe" (default), "nsga2" or "random"
+    sampler = "auto"                   # "auto" (default), "gp", "tpe", "nsga2" or "random"
 
     [space]
     "readout.threshold_v" = { low = 0.02, high = 0.3, log = true }   # continuous, log-scaled
@@ -61,6 +61,11 @@ Objectives (:class:`Metric`), read per trial from its result cube:
 A point simulated as several chips (``chips.count`` > 1) states its accuracy and rates per chip:
 ``accuracy.<model>`` is then the mean over chips (``accuracy_chip_mean``) and the rates are
 their means over chips.
+
+Each metric declares the monotone transform its values go through before a sampler is told
+them (:data:`TRANSFORMS`, :mod:`pipeline.design.transforms`): logarithmic for rates, power and
+seconds, energy and area, linear for accuracy and yield. Stored and reported values are never
+transformed.
 """
 
 from __future__ import annotations
@@ -92,6 +97,7 @@ from pipeline.design.grid import (
     _valid_name,
 )
 from pipeline.design.scene import Model, Scene, SceneVariants
+from pipeline.design.transforms import Transform
 from pipeline.errors import SceneError
 from pipeline.results.hardware import array_area_m2, event_power_w
 from pipeline.results.latency import exit_objectives
@@ -144,13 +150,32 @@ CHIPS_COUNT_FIELD = "chips.count"
 CHIP_DIM = "chip"
 
 
+#: The transform each metric's values go through before a sampler is told them (the floor of a
+#: logarithmic one in the metric's unit: 1 bit/s, 1 nW, 1 ms, 1 pJ, 1 um^2). Every metric declares
+#: one.
+TRANSFORMS: dict[Metric, Transform] = {
+    Metric.ACCURACY: Transform.linear(),
+    Metric.DATA_RATE: Transform.log(1.0),
+    Metric.POWER: Transform.log(1e-9),
+    Metric.COMPUTE: Transform.log(1e-3),
+    Metric.DECISION_TIME: Transform.log(1e-3),
+    Metric.DECODER_ENERGY: Transform.log(1e-12),
+    Metric.AREA: Transform.log(1e-12),
+    Metric.YIELD: Transform.linear(),
+}
+
+
 class Sampler(enum.StrEnum):
-    """How trials are proposed: multi-objective TPE (the default: multivariate, a constant liar
-    for parallel trials), NSGA-II, or uniformly at random (a baseline)."""
+    """How trials are proposed: ``auto`` (the default) picks GP or TPE by the budget and the
+    kinds of dimensions (:func:`flows.samplers.resolve_sampler`); a Gaussian process (log
+    expected hypervolume improvement), multi-objective TPE (multivariate, a constant liar for
+    running trials), NSGA-II, or uniformly at random (a baseline)."""
 
     TPE = "tpe"
     NSGA2 = "nsga2"
     RANDOM = "random"
+    GP = "gp"
+    AUTO = "auto"
 
 
 class DimensionKind(enum.StrEnum):
@@ -214,6 +239,11 @@ class Objective:
         return self.metric.value + (f".{self.model}" if self.model else "")
 
     @property
+    def transform(self) -> Transform:
+        """What the sampler is told instead of a value (:data:`TRANSFORMS`)."""
+        return TRANSFORMS[self.metric]
+
+    @property
     def sign(self) -> float:
         """+1 for a minimised objective and -1 for a maximised one, so that ``sign * value`` is
         minimised."""
@@ -229,7 +259,7 @@ class Space:
     dimensions: tuple[Dimension, ...]
     objectives: tuple[Objective, ...]
     seed: int = 0
-    sampler: Sampler = Sampler.TPE
+    sampler: Sampler = Sampler.AUTO
 
     @classmethod
     def from_dict(
@@ -406,11 +436,11 @@ def _read_space(data: Any, base_dir: Path, problems: list[str]) -> Space:
         problems.append(f"seed: expected an integer in [0, 2**32), got {seed!r}")
         seed = 0
     try:
-        sampler = Sampler(data.get("sampler", Sampler.TPE.value))
+        sampler = Sampler(data.get("sampler", Sampler.AUTO.value))
     except ValueError:
         known_samplers = ", ".join(repr(s.value) for s in Sampler)
         problems.append(f"sampler: {data.get('sampler')!r} is not one of {known_samplers}")
-        sampler = Sampler.TPE
+        sampler = Sampler.AUTO
     base = _read_base(data.get("base", "paper"), base_dir, problems)
     dims_data = data.get("space")
     if not isinstance(dims_data, Mapping) or not dims_data:

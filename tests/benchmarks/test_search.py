@@ -1,21 +1,29 @@
-"""The search benchmark's space and its scaling of objectives, without running it."""
+"""The search benchmark's spaces, its scaling of objectives and its replay of a search against
+kept exhaustive results, without the benchmark's data."""
+
+import dataclasses
 
 import numpy as np
 
-from benchmarks.search import SPACE, grid_params, scaled_costs
-from pipeline.design.space import Space
+from benchmarks.search import (
+    SPACES,
+    WORKERS,
+    at_budget,
+    grid_params,
+    point_label,
+    replay,
+    scaled_costs,
+)
+from pipeline.design.space import Sampler, Space
 
 
-def test_the_benchmark_space_grids_into_192_distinct_points():
-    space = Space.from_dict(SPACE)
-    params = grid_params(space)
-    assert len(params) == 192 == len(space.exhaustive_grid(10).unique_points())
-    assert params[0] == {
-        "readout.threshold_v": 0.02,
-        "coding.window_s": 0.05,
-        "array.rows": 1,
-        "array.cols": 1,
-    }
+def test_the_benchmark_spaces_grid_into_192_and_576_distinct_points():
+    rows, encoder = (Space.from_dict(SPACES[n]) for n in ("rows", "encoder"))
+    assert len(rows.dimensions) == 3 and len(encoder.dimensions) == 5
+    for space, n in ((rows, 192), (encoder, 576)):
+        params = grid_params(space)
+        assert len(params) == n == len(space.exhaustive_grid(10).unique_points())
+        assert len({point_label(p) for p in params}) == n
 
 
 def test_objectives_are_scaled_to_the_grid_range():
@@ -23,3 +31,40 @@ def test_objectives_are_scaled_to_the_grid_range():
     raw = np.column_stack([-values[:, 0], np.log10(1 + values[:, 1])])
     scaled = scaled_costs(values, raw.min(axis=0), raw.max(axis=0))
     np.testing.assert_allclose(scaled, [[0.5, 0.0], [1.0, 1.0], [0.0, 0.5]])
+
+
+def test_a_replayed_search_pays_each_train_once_and_the_one_off_costs_per_worker():
+    space = Space.from_dict(
+        {
+            **SPACES["rows"],
+            "space": {
+                "readout.threshold_v": {"choices": [0.045, 0.13]},
+                "array.rows": {"low": 1, "high": 3},
+            },
+        }
+    )
+    params = grid_params(space)  # 6 points; trains by threshold (3 points each)
+    train = np.array([0 if p["readout.threshold_v"] == 0.045 else 1 for p in params])
+    arrays = {
+        "values": np.column_stack([np.linspace(0.2, 0.7, 6), np.geomspace(10, 1e4, 6)]),
+        "own_s": np.full(6, 1.0),
+        "train_s": np.where(np.arange(6) % 3 == 0, 4.0, 0.0),  # the first point of each pays
+        "train": train,
+        "shared_s": np.array([3.0, 0, 0, 3.0, 0, 0]),  # each worker's first point
+        "labels": np.array([point_label(p) for p in params]),
+    }
+    found = replay(dataclasses.replace(space, sampler=Sampler.RANDOM), arrays, budget_s=1e9)
+    assert set(found.points) == set(range(6))  # a budget never spent: until every point is tried
+    for number, point in enumerate(found.points):
+        first = found.points.index(point)
+        first_on_train = first == min(
+            i for i, p in enumerate(found.points) if train[p] == train[point]
+        )
+        expected = 1.0 + (4.0 if first_on_train else 0.0) + (3.0 if number < WORKERS else 0.0)
+        if number > first:  # a point tried before is in the store
+            assert found.seconds[number] == (3.0 if number < WORKERS else 0.0)
+        else:  # a train still being computed by a running trial is computed again
+            assert found.seconds[number] >= expected
+    small = replay(dataclasses.replace(space, sampler=Sampler.RANDOM), arrays, budget_s=10.0)
+    assert sum(small.seconds[t] for t in at_budget(small, 10.0)) < 10.0 + 2 * 8.0
+    assert at_budget(found, 10.0) == at_budget(small, 10.0) == list(range(len(small.points)))

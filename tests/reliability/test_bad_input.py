@@ -653,6 +653,22 @@ def test_run_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_path)
     assert tree(data) == before
 
 
+def test_optimize_refuses_an_unknown_sampler(capsys, tmp_path):
+    space = write(
+        tmp_path / "space.toml",
+        'base = "smoke"\nsampler = "bayes"\n[space]\n"array.rows" = { low = 1, high = 2 }\n'
+        '[objectives]\n"accuracy.ffnn" = "max"\n"data_rate_bps" = "min"\n',
+    )
+    code = run_cli(["optimize", "--space", str(space), "--root", str(tmp_path / "root")])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("eskin: error: "), err
+    for expected in ("space.toml", "sampler: 'bayes' is not one of", "'gp', 'auto'"):
+        assert expected in lines[0], lines[0]
+    assert not (tmp_path / "root").exists()
+
+
 def test_sweep_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_path):
     line = assert_refused(capsys, short_class_grid(tmp_path), tmp_path / "root", "sweeps.t[0]")
     for expected in SHORT_CLASS_MESSAGE:

@@ -80,7 +80,7 @@ def test_every_problem_is_reported_at_once():
     expected = [
         "extra: unknown key",
         "seed: expected an integer",
-        "sampler: 'cmaes' is not one of 'tpe', 'nsga2', 'random'",
+        "sampler: 'cmaes' is not one of 'tpe', 'nsga2', 'random', 'gp', 'auto'",
         "'readout.nope' is not a scene field",
         "space.array.rows.low: expected an integer, got 0.5",
         "space.readout.threshold_v: low (0.3) must be below high (0.1)",
