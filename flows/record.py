@@ -146,6 +146,9 @@ class Record:
 
     def log(self, entry: dict[str, Any]) -> None:
         """Keep a run-logger line (Prefect's API log sink)."""
+        # Prefect's handler sizes each line for its own batching in a "__payload_size__" key,
+        # which its log worker drops before sending and the API refuses (422).
+        entry = {key: value for key, value in entry.items() if key != "__payload_size__"}
         with self._cond:
             self._logs.append(entry)
             if len(self._logs) > MAX_HELD_LOGS:

@@ -45,6 +45,13 @@ class _Client:
             self.server.taken.append((what, payload))
 
     def create_logs(self, logs):
+        from prefect.client.schemas.actions import LogCreate
+
+        for log in logs:  # what the API takes, or a 422 as the real server gives
+            try:
+                LogCreate.model_validate(log)
+            except ValueError as error:
+                raise httpx.HTTPStatusError("422", request=None, response=None) from error
         self._take("logs", [log["message"] for log in logs])
 
     def create_artifact(self, artifact):
@@ -74,6 +81,17 @@ def fake(monkeypatch):
     return server
 
 
+def line(message):
+    """A run-logger line as Prefect's API log handler gives the log sink."""
+    import logging
+
+    from prefect.logging.handlers import APILogHandler
+
+    entry = logging.LogRecord("prefect.flow_runs", logging.INFO, __file__, 1, message, None, None)
+    entry.flow_run_id = "8a6f6a2e-5c1e-4a43-9d2f-2f1f5b9e0c11"
+    return APILogHandler().prepare(entry)
+
+
 def settle(condition, timeout_s=10.0):
     deadline = time.monotonic() + timeout_s
     while not condition():
@@ -90,12 +108,12 @@ def test_what_a_gone_server_could_not_take_is_sent_when_it_answers_again(fake):
     settle(lambda: ("create:p", 10.0) in fake.taken)
 
     fake.answers = False
-    record.log({"message": "1 of 4 points done"})
+    record.log(line("1 of 4 points done"))
     settle(lambda: record.down_since is not None)
     record.progress("p", 50.0, "points done")
     record.progress("p", 75.0, "points done")  # only the newest goes
     record.table("best", [{"model": "ffnn", "accuracy": 0.5}], "best point")
-    record.log({"message": "3 of 4 points done"})
+    record.log(line("3 of 4 points done"))
     record.final_state(Completed())
     time.sleep(0.3)
     assert fake.taken == [("create:p", 10.0)], "sent while the server did not answer"
@@ -115,7 +133,7 @@ def test_what_a_gone_server_could_not_take_is_sent_when_it_answers_again(fake):
 def test_a_server_that_never_answers_again_is_not_waited_for(fake):
     record = records.Record("http://127.0.0.1:9/api")
     fake.answers = False
-    record.log({"message": "held"})
+    record.log(line("held"))
     settle(lambda: record.down_since is not None)
     start = time.monotonic()
     assert not record.close(timeout_s=30)
@@ -145,3 +163,13 @@ def test_a_server_too_busy_to_take_it_all_before_the_end_is_named_so(fake):
     note = record.incomplete_note()
     assert "had not taken all of it when the run ended" in note, note
     assert "refused" not in note
+
+
+def test_run_logger_lines_as_prefect_prepares_them_are_taken(fake):
+    entry = line("Dask dashboard: http://127.0.0.1:8787/status")
+    assert "__payload_size__" in entry  # what made the API refuse every batch
+    record = records.Record("http://127.0.0.1:9/api")
+    record.log(entry)
+    assert record.close(timeout_s=10)
+    assert fake.taken == [("logs", ["Dask dashboard: http://127.0.0.1:8787/status"])]
+    assert record.lost == 0
