@@ -185,7 +185,7 @@ def make_exhaustive(root: Path, names: tuple[str, ...] = tuple(SPACES), path: Pa
     (beside those of other spaces kept there)."""
     arrays: dict[str, np.ndarray] = {}
     if path.is_file():
-        with np.load(path) as kept:
+        with np.load(path, allow_pickle=False) as kept:
             arrays = {k: kept[k] for k in kept.files if k.split("/")[0] not in (*names, "about")}
     for name in names:
         spec = SPACES[name]
@@ -204,7 +204,7 @@ def make_exhaustive(root: Path, names: tuple[str, ...] = tuple(SPACES), path: Pa
 def load_exhaustive(name: str, path: Path = DATA) -> dict[str, np.ndarray]:
     """The kept arrays of space ``name`` (:func:`exhaustive_arrays`), checked against the
     space as the code declares it today."""
-    with np.load(path) as data:
+    with np.load(path, allow_pickle=False) as data:
         about = json.loads(str(data["about"]))
         arrays = {k.split("/", 1)[1]: data[k] for k in data.files if k.startswith(f"{name}/")}
     if about["spaces"][name] != json.loads(json.dumps(SPACES[name])):

@@ -66,8 +66,8 @@ from storage.search_log import SearchJournal, search_cube_name
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
-#: Trials in a row at designs already told after which a search ends: its sampler has nothing
-#: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent.
+#: Trials in a row at designs already told after which a search ends (its sampler has nothing
+#: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent).
 MAX_REPEATS_IN_ROW = 10
 FRONT = "front"
 

@@ -126,13 +126,13 @@ def encode_chips(
     Parameters
     ----------
     recordings, front_end, array, readout, seed
-        As for the scene's own encoding (:func:`pipeline.run.stages.encode_trains`).
+        As for the scene's own encoding (``encode_trains`` of :mod:`pipeline.run.stages`).
     count, deployment
         ``chips.count`` and ``chips.deployment``.
     encoded
         The scene's TRUE trains and chip 0's REAL trains.
     measure
-        The spike metrics of TRUE and REAL trains (:func:`pipeline.run.stages.spike_metrics`).
+        The spike metrics of TRUE and REAL trains (``spike_metrics`` of :mod:`pipeline.run.stages`).
     stage
         ``stage(step)`` a context manager timing ``step`` (``taxels``, ``readout``, ``metrics``).
     """

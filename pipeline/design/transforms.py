@@ -38,10 +38,12 @@ class Transform:
 
     @classmethod
     def linear(cls) -> Transform:
+        """The identity, ``y = x``."""
         return cls(None)
 
     @classmethod
     def log(cls, floor: float) -> Transform:
+        """``y = log10(floor + x)``, ``floor > 0`` in the objective's unit."""
         return cls(float(floor))
 
     def apply(self, values: np.ndarray | float) -> np.ndarray:

@@ -30,7 +30,7 @@ With fewer chips the lower bound is NaN and only the upper bound stands (one-sid
 ``u`` with ``F(u - 1) >= 0.95``). With 59 chips the interval is ``[X_(1), X_(10)]``
 (coverage 0.951), with 100 chips ``[X_(1), X_(10)]`` (0.966), with 200 chips ``[X_(4), X_(17)]``
 (0.967): from 107 chips on the lower bound moves off the single worst chip, so one outlier no
-longer sets it (:data:`RANKS_EXAMPLES` is checked against these).
+longer sets it (``RANKS_EXAMPLES`` is checked against these).
 
 Yield share
 -----------

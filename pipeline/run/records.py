@@ -465,16 +465,16 @@ def train_variables(
 _CHIP_METRICS = Variable(
     "chips_metrics", ("chip", "metric"), "float64", "1", "each chip's spike metrics", True
 )
-#: The spike entry's variables of a scene that simulates chips: every chip's REAL trains, rows
-#: chip-major ``(chip, recording)`` pairs (:class:`~pipeline.chain.chips.ChipTrains`), the
-#: reference a deployed classifier trains on, and each chip's metrics.
+#: The spike entry's variables of a scene that simulates chips (every chip's REAL trains, rows
+#: chip-major ``(chip, recording)`` pairs as in :class:`~pipeline.chain.chips.ChipTrains`, the
+#: reference a deployed classifier trains on, and each chip's metrics).
 CHIP_SPIKE_VARIABLES = (
     *train_variables("chips", optional=True, grid=("chip_recording", "taxel")),
     *train_variables("reference", optional=True),
     _CHIP_METRICS,
 )
-#: The result entry's variables of a point that simulates chips: every chip's accuracy and
-#: out-of-fold predictions, and each chip's metrics.
+#: The result entry's variables of a point that simulates chips (every chip's accuracy and
+#: out-of-fold predictions, and each chip's metrics).
 CHIP_RESULT_VARIABLES = (
     Variable(
         "chip_accuracy", ("model", "chip", "repeat", "fold"), "float64", "1",

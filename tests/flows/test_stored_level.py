@@ -71,6 +71,8 @@ def classify_quickly(*, rates, counts, training, watch):
             fold_accuracy=np.full((1, training.folds), 1.0),
             predicted=labels[np.newaxis],
             test_fold=(np.arange(labels.size) % training.folds)[np.newaxis],
+            decision_s=None,  # it reads no decisions during the touch
+            operations=None,
         )
     # The new level's output (or its entry, as read back) reaches the level after it.
     assert counts.per_recording.shape == (labels.size,)
