@@ -556,8 +556,10 @@ def fit_folds(
     seed: int,
 ) -> tuple[torch.nn.Module, np.ndarray]:
     """Train the given folds as one batch (``F = len(folds)``): the trained fold-batched net
-    (in eval mode) and float64 ``(F,)`` mean training loss of the last epoch; arguments as
-    for :func:`_train_and_evaluate`."""
+    (in eval mode) and float64 ``(F,)`` mean training loss of the last epoch.
+
+    ``train_x[i]`` is float32 ``(n_i, C, H, W)`` and ``train_y[i]`` int ``(n_i,)`` for fold
+    ``folds[i]``; ``seed`` is the repeat's training seed."""
     n_folds = len(folds)
     sample_shape = tuple(train_x[0].shape[1:])
     x, n_train = _stack_padded(train_x, torch.float32)
