@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 import scipy.optimize
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
@@ -293,6 +293,61 @@ def test_mismatch_is_floored_relative_to_theta_min():
     expected = decaying_crossings(v, FS, *curve, 0.01)
     assert_same_train(real_train(v, FS, readout, seed=0, taxel=0, recording=0), expected, atol=0)
     assert THRESHOLD_FLOOR_REL == 0.1  # the floor without mismatch, as for the fixed encoder
+
+
+def _above(theta_v, ulps):
+    for _ in range(ulps):
+        theta_v = math.nextafter(theta_v, math.inf)
+    return theta_v
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    v=SIGNALS,
+    theta_min=st.sampled_from([0.03, 0.0937, 0.1731]),
+    above=st.sampled_from([("ulps", 0), ("ulps", 1), ("ulps", 2), ("ratio", 1.7)]),
+    sigma_rel=st.floats(0.0, 3.0),
+    floor_rel=st.sampled_from([0.1, 0.5, 1.0]),
+    seed=st.integers(0, 2**32),
+    chip_pool=st.sampled_from([(0, 0), (None, 0), (3, 0), (2, 1)]),
+)
+@example(  # the default lowest threshold as the first one: the fixed encoder, scaled per taxel
+    v=np.array([0.0, 1.0, -0.5]),
+    theta_min=0.03,
+    above=("ulps", 0),
+    sigma_rel=0.3,
+    floor_rel=0.1,
+    seed=0,
+    chip_pool=(0, 0),
+)
+def test_every_taxel_curve_is_one_its_encoder_accepts(
+    v, theta_min, above, sigma_rel, floor_rel, seed, chip_pool
+):
+    # threshold_v at or above decay.theta_min_v (equal, one or two ulps above, well above):
+    # whatever a taxel's mismatch draw, its floored curve keeps theta_0 >= theta_min, so the
+    # REAL train is the ideal decaying encoder's at that curve, which refuses any other order.
+    # 16 taxels per example: a curve computed with other rounding than theta * scale would
+    # come out inverted by an ulp for about one draw in 13 at theta_0 == theta_min.
+    kind, amount = above
+    theta0 = _above(theta_min, amount) if kind == "ulps" else theta_min * amount
+    readout = decaying_readout(
+        theta0=theta0,
+        theta_min=theta_min,
+        tau_s=0.01,
+        threshold_mismatch={"sigma_rel": sigma_rel, "floor_rel": floor_rel},
+    )
+    chip, pool = chip_pool
+    floor = floor_rel * theta_min
+    for taxel in range(16):
+        z = 0.0  # the nominal chip draws no fixed effect
+        if chip is not None:
+            rng = effect_rng(seed, Effect.THRESHOLD_MISMATCH, taxel, chip=chip, pool=pool)
+            z = rng.standard_normal()
+        scale = 1.0 + sigma_rel * z
+        curve = (max(theta0 * scale, floor), max(theta_min * scale, floor))
+        assert curve[1] <= curve[0]
+        got = real_train(v, FS, readout, seed=seed, taxel=taxel, recording=0, chip=chip, pool=pool)
+        assert_same_train(got, decaying_crossings(v, FS, *curve, 0.01), atol=0)
 
 
 def test_silent_comparator_effects_give_the_ideal_train():
