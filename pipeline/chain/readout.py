@@ -736,6 +736,8 @@ def real_train(
         scale = 1.0 + mismatch.sigma_rel * draw(Effect.THRESHOLD_MISMATCH, True).standard_normal()
     curve = nominal
     if mismatch is not None:
+        # Both ends by the same product: rounding is monotone, so theta_0 >= theta_min holds for
+        # the taxel too (equal when threshold_v is theta_min_v), with the floor as well.
         curve = (max(theta * scale, floor_v), max(theta_min * scale, floor_v))
 
     comparator_offset = effects.get(Effect.COMPARATOR_OFFSET)

@@ -190,7 +190,10 @@ class ThresholdMismatch:
     """Fixed-pattern threshold per taxel, ``threshold_v * (1 + sigma_rel * z)``, ``z ~ N(0, 1)``.
 
     A draw that would push a threshold below ``floor_rel * threshold_v`` (zero or negative
-    included) is clipped to that floor: a comparator cannot resolve a smaller step.
+    included) is clipped to that floor: a comparator cannot resolve a smaller step. For the
+    decaying encoder one draw scales its whole curve, ``threshold_v`` and ``decay.theta_min_v``
+    alike, and the floor is ``floor_rel * decay.theta_min_v``, so a taxel's first threshold is
+    never below its lowest (equal when ``threshold_v`` is ``decay.theta_min_v``).
     """
 
     sigma_rel: float = param(
