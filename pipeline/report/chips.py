@@ -32,7 +32,8 @@ Deployment (``chips.deployment``) is an ordinary swept field: ``per_chip`` (each
 its own classifier), ``shared`` (one classifier loaded into every chip) or ``robust`` (one
 classifier trained across chips). Fig. 10 sets them side by side: a sweep of the mismatch and the
 deployment together is split into one curve per deployment (:func:`deployment_of`), as are
-several mismatch sweeps that differ only in their deployment.
+several mismatch sweeps that differ only in their deployment, in the order the deployments are
+declared (:func:`fill_groups`).
 """
 
 from __future__ import annotations
@@ -345,11 +346,18 @@ def chip_curves(
 
 def fill_groups(curves: Sequence[Curve]) -> tuple[Curve, ...]:
     """Curves of one figure where some state their deployment: those that do not are of the
-    default one (:data:`DEFAULT_DEPLOYMENT`); curves none of which states one are returned as
-    they are."""
+    default one (:data:`DEFAULT_DEPLOYMENT`), and the deployments come in their declared order
+    (:class:`~pipeline.design.scene.Deployment`), each one's curves in the order given, whatever
+    the order of the sweeps (cubes by name) or of a swept deployment's values; curves none of
+    which states one are returned as they are."""
     if not any(c.group for c in curves):
         return tuple(curves)
-    return tuple(c if c.group else dataclasses.replace(c, group=DEFAULT_DEPLOYMENT) for c in curves)
+    filled = [c if c.group else dataclasses.replace(c, group=DEFAULT_DEPLOYMENT) for c in curves]
+    return tuple(sorted(filled, key=lambda c: _DECLARED_ORDER.get(c.group, len(_DECLARED_ORDER))))
+
+
+# Where each deployment comes in a figure's curves (a group that is none goes last).
+_DECLARED_ORDER = {deployment.value: rank for rank, deployment in enumerate(Deployment)}
 
 
 def method_sentence() -> str:

@@ -2,13 +2,17 @@
 chips, the mismatch claim on ``shared``, the answer by yield (hand-made cubes of the contract's
 layout, :func:`tests.report_helpers.with_chips`)."""
 
+import functools
+
 import numpy as np
 import pytest
 
+from pipeline.design.scene import Deployment
 from pipeline.report import Panel, build_report
 from pipeline.report.answer import yield_sentence
-from pipeline.report.chips import PER_CHIP, pooled
+from pipeline.report.chips import PER_CHIP, chip_curves, fill_groups, pooled
 from pipeline.report.claims import Verdict
+from pipeline.report.cubes import panel_x
 from pipeline.report.document import report_blocks
 from pipeline.report.evidence import gather_evidence
 from pipeline.report.figures import draw_report
@@ -95,6 +99,21 @@ def test_fig10_sets_the_deployments_side_by_side_with_their_spread(report):
     for ax in figure.axes:  # a band per model beside its error bars
         bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
         assert len(bands) == 2
+
+
+def test_fig10_draws_the_deployments_in_their_declared_order(plain):
+    # Sweeps whose names put their cubes in alphabetical order (per_chip, robust, shared), and a
+    # swept deployment listed backwards: the panels follow the declaration all the same.
+    declared = [d.value for d in Deployment]
+    found = build_report({f"mismatch_{d}": with_chips(plain, d) for d in sorted(declared)})
+    groups = [c.group for c in found.curves[Panel.MISMATCH]]
+    assert list(dict.fromkeys(groups)) == declared
+    figure = draw_report(found)[Panel.MISMATCH.value]
+    assert [ax.get_title() for ax in figure.axes] == declared
+    backwards = pooled(deployment_sweep(plain, tuple(reversed(declared))))
+    x_of = functools.partial(panel_x, Panel.MISMATCH)
+    groups = [c.group for c in fill_groups(chip_curves("mismatch", backwards, x_of))]
+    assert list(dict.fromkeys(groups)) == declared
 
 
 def deployment_sweep_p05(report, curve):
