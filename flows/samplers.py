@@ -16,7 +16,10 @@ What the sampler sees (:class:`Proposer`):
 
 The samplers (:func:`make_sampler`): a Gaussian process (``GPSampler``: Matern 5/2 kernel with a
 length scale per dimension, log expected hypervolume improvement for two or three objectives,
-the running trials conditioned on as pending), multi-objective TPE (multivariate, with a
+the running trials conditioned on as pending; told that the objectives are deterministic, as a
+design's are: its scene seeds every draw and the store computes it once, so a design told
+again costs nothing and teaches nothing, and a GP with a noise term kept proposing its best
+corner again until the search ended on repeats), multi-objective TPE (multivariate, with a
 constant liar for the running trials), NSGA-II and random search. Both model-based samplers
 start with :func:`startup_trials` trials spread over the space (:class:`SpaceFillingStart`).
 
@@ -44,6 +47,7 @@ categorical; ``tpe`` otherwise.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -81,7 +85,8 @@ def resolve_sampler(space: Space, budget: int | None = None) -> Sampler:
 
 
 def startup_trials(n_dimensions: int, budget: int | None = None) -> int:
-    """Random trials before a model-based sampler proposes: ``n_dimensions + 1`` (as few
+    """Start-up trials (:class:`SpaceFillingStart`) before a model-based sampler proposes:
+    ``n_dimensions + 1`` (as few
     points as span the space, one length scale per dimension to fit), at most a quarter of a
     budget in trials, at least 2."""
     wanted = n_dimensions + 1
@@ -102,6 +107,12 @@ def make_sampler(kind: Sampler, seed: int, n_dimensions: int, budget: int | None
             # The coordinator fits the GP while the workers compute: one thread, as a worker
             # has (two threads on a busy 2-core machine made each ask several times slower).
             torch.set_num_threads(1)
+            # Optuna marks the argument experimental; the warning would reach the user each search.
+            warnings.filterwarnings(
+                "ignore",
+                "Argument ``deterministic_objective``",
+                optuna.exceptions.ExperimentalWarning,
+            )
             return optuna.samplers.GPSampler(
                 seed=seed,
                 n_startup_trials=startup,
