@@ -87,8 +87,7 @@ def resolve_sampler(space: Space, budget: int | None = None) -> Sampler:
 def startup_trials(n_dimensions: int, budget: int | None = None) -> int:
     """Start-up trials (:class:`SpaceFillingStart`) before a model-based sampler proposes:
     ``n_dimensions + 1`` (as few points as span the space, one length scale per dimension to
-    fit), at most a quarter of a
-    budget in trials, at least 2."""
+    fit), at most a quarter of a budget in trials, at least 2."""
     wanted = n_dimensions + 1
     if budget is not None:
         wanted = min(wanted, budget // 4)
