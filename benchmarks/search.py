@@ -273,10 +273,11 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     clock = [0.0]
     events: list[tuple[float, int]] = []
     spent = [0.0]
+    spent_own = [0.0]  # beyond the workers' one-off seconds (Search.mean_trial_seconds)
 
     def ask(running: int) -> int | None:
         told = len(out.points) - running
-        expected = running * spent[0] / told if told else 0.0
+        expected = running * spent_own[0] / told if told else 0.0
         # As flows.search: the budget is spent, or the sampler proposes only designs told
         # before; and once refused, never again. (Every point tried also ends a replay.)
         if stopped or spent[0] + expected >= budget_s or len(paid) == len(own):
@@ -323,6 +324,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         repeats[0] = repeats[0] + 1 if point in told_points else 0
         told_points.add(point)
         spent[0] += out.seconds[number]
+        spent_own[0] += out.seconds[number] - (shared_per_worker if number < WORKERS else 0.0)
         proposer.tell(trials.pop(number), arrays["values"][out.points[number]].tolist())
 
     refill(WORKERS, ask, start, finish, wait)

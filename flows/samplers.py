@@ -16,9 +16,12 @@ What the sampler sees (:class:`Proposer`):
 
 The samplers (:func:`make_sampler`): a Gaussian process (``GPSampler``: Matern 5/2 kernel with a
 length scale per dimension, log expected hypervolume improvement for two or three objectives,
-the running trials conditioned on as pending), multi-objective TPE (multivariate, with a
+the running trials conditioned on as pending; told that the objectives are deterministic, as a
+design's are: its scene seeds every draw and the store computes it once, so a design told
+again costs nothing and teaches nothing, and a GP with a noise term kept proposing its best
+corner again until the search ended on repeats), multi-objective TPE (multivariate, with a
 constant liar for the running trials), NSGA-II and random search. Both model-based samplers
-start with :func:`startup_trials` random trials.
+start with :func:`startup_trials` trials spread over the space (:class:`SpaceFillingStart`).
 
 The auto rule (:func:`resolve_sampler`): GP when the search is expected to be short and the
 space is mostly ordered; TPE otherwise.
@@ -44,6 +47,7 @@ categorical; ``tpe`` otherwise.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -81,9 +85,9 @@ def resolve_sampler(space: Space, budget: int | None = None) -> Sampler:
 
 
 def startup_trials(n_dimensions: int, budget: int | None = None) -> int:
-    """Random trials before a model-based sampler proposes: ``n_dimensions + 1`` (as few
-    points as span the space, one length scale per dimension to fit), at most a quarter of a
-    budget in trials, at least 2."""
+    """Start-up trials (:class:`SpaceFillingStart`) before a model-based sampler proposes:
+    ``n_dimensions + 1`` (as few points as span the space, one length scale per dimension to
+    fit), at most a quarter of a budget in trials, at least 2."""
     wanted = n_dimensions + 1
     if budget is not None:
         wanted = min(wanted, budget // 4)
@@ -102,8 +106,17 @@ def make_sampler(kind: Sampler, seed: int, n_dimensions: int, budget: int | None
             # The coordinator fits the GP while the workers compute: one thread, as a worker
             # has (two threads on a busy 2-core machine made each ask several times slower).
             torch.set_num_threads(1)
+            # Optuna marks the argument experimental; the warning would reach the user each search.
+            warnings.filterwarnings(
+                "ignore",
+                "Argument ``deterministic_objective``",
+                optuna.exceptions.ExperimentalWarning,
+            )
             return optuna.samplers.GPSampler(
-                seed=seed, n_startup_trials=startup, warn_independent_sampling=False
+                seed=seed,
+                n_startup_trials=startup,
+                deterministic_objective=True,
+                warn_independent_sampling=False,
             )
         case Sampler.TPE:
             return optuna.samplers.TPESampler(
@@ -184,6 +197,66 @@ def told_values(objectives: Sequence[Objective], values: Sequence[float]) -> lis
     return told if all(math.isfinite(v) for v in told) else None
 
 
+class SpaceFillingStart:
+    """The start-up trials of a model-based sampler: a scrambled Sobol' sequence over the
+    space as the sampler sees it (:func:`distributions`), point after point.
+
+    Independent random start-up trials clump and leave gaps: with six trials over five
+    dimensions, a dimension of three ordered values is left untried at one of them once in six
+    searches, and pairs of dimensions much more often. The first ``2**k`` points of a Sobol'
+    sequence put one point in each of ``2**k`` equal slices of every dimension (and of many
+    pairs), and any prefix of it is nearly as even, so the start spans the space whatever
+    the number of start-up trials; its scrambling (seeded) keeps searches of different seeds
+    apart. A unit coordinate ``u`` becomes the value in the ``floor(u * n)``-th of a
+    dimension's ``n`` values (choices, positions, integers or float steps), or
+    ``low + u * (high - low)`` for a continuous float (in logarithms for a log range).
+    """
+
+    #: Points drawn at once: a power of two (a Sobol' sequence's balanced size), more than any
+    #: start-up needs; the next 64 are drawn if ever needed.
+    BLOCK = 64
+
+    def __init__(self, distributions: Mapping[str, Any], seed: int):
+        from scipy.stats import qmc
+
+        self.distributions = dict(distributions)
+        self.sequence = qmc.Sobol(len(self.distributions), scramble=True, seed=seed)
+        self.points: list[np.ndarray] = []
+
+    def next(self) -> dict[str, Any]:
+        """The next start-up point, as the sampler's values by field."""
+        if not self.points:
+            self.points = list(self.sequence.random(self.BLOCK))
+        unit = self.points.pop(0)
+        return {
+            name: unit_value(d, float(u))
+            for (name, d), u in zip(self.distributions.items(), unit, strict=True)
+        }
+
+
+def unit_value(distribution: Any, u: float) -> Any:
+    """The value of an Optuna ``distribution`` at unit coordinate ``u`` in [0, 1)
+    (:class:`SpaceFillingStart`)."""
+    from optuna.distributions import CategoricalDistribution, IntDistribution
+
+    def nth(n: int) -> int:
+        return min(int(u * n), n - 1)
+
+    if isinstance(distribution, CategoricalDistribution):
+        return distribution.choices[nth(len(distribution.choices))]
+    low, high, step = distribution.low, distribution.high, distribution.step
+    if distribution.log:
+        value = math.exp(math.log(low) + u * (math.log(high) - math.log(low)))
+        if isinstance(distribution, IntDistribution):
+            return min(max(round(value), low), high)
+        return min(max(value, low), high)
+    if isinstance(distribution, IntDistribution):
+        return low + step * nth((high - low) // step + 1)
+    if step is not None:
+        return min(low + step * nth(round((high - low) / step) + 1), high)
+    return low + u * (high - low)
+
+
 class Proposer:
     """An in-memory Optuna study of a space: asks trials as scene values and is told raw
     objective values (:class:`Encoding`, :func:`told_values`).
@@ -205,6 +278,9 @@ class Proposer:
             directions=[o.direction.verb for o in space.objectives],
             sampler=make_sampler(self.kind, seed, len(space.dimensions), budget),
         )
+        self.startup = startup_trials(len(space.dimensions), budget)
+        modelled = self.kind in (Sampler.GP, Sampler.TPE)
+        self.start = SpaceFillingStart(self.distributions, seed) if modelled else None
 
     def add(self, params: Mapping[str, Any], values: Sequence[float] | None) -> None:
         """Replay a trial told before: finished with ``values`` (raw), or failed (None)."""
@@ -225,7 +301,17 @@ class Proposer:
         self.study.enqueue_trial(self.encoding.encode(params), skip_if_exists=False)
 
     def ask(self) -> tuple[Any, dict[str, Any]]:
-        """A new trial: Optuna's trial (to tell) and its scene values."""
+        """A new trial: Optuna's trial (to tell) and its scene values. While a model-based
+        sampler has too few trials told to model, the trial is the next point of the
+        space-filling start (:class:`SpaceFillingStart`)."""
+        import optuna
+
+        if self.start is not None and not self.study.get_trials(
+            deepcopy=False, states=(optuna.trial.TrialState.WAITING,)
+        ):
+            told = self.study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
+            if len(told) < self.startup:
+                self.study.enqueue_trial(self.start.next(), skip_if_exists=False)
         trial = self.study.ask(self.distributions)
         return trial, self.encoding.decode(trial.params)
 

@@ -31,6 +31,7 @@ import xarray as xr
 from pipeline.design.space import TRIAL_DIM, Metric, Objective, objective_values
 from pipeline.report.evidence import ALPHA, gather_evidence
 from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
+from pipeline.run.records import Charge
 
 OBJECTIVE_ATTRS = {"units": "1", "long_name": "objective"}
 VALUE_ATTRS = {"units": "1", "long_name": "value of the objective (its own units)"}
@@ -122,12 +123,17 @@ def trial_cube(cube: xr.Dataset, numbers: Sequence[int], space_name: str) -> xr.
 
 
 def search_seconds(
-    cube: xr.Dataset, spike_keys: Sequence[str], spike_stages: Sequence[str]
+    cube: xr.Dataset,
+    spike_keys: Sequence[str],
+    spike_stages: Sequence[str],
+    *,
+    shared: bool = True,
 ) -> float:
     """The stage seconds a search's trials cost: the seconds paid computing each distinct point,
     once (the cube's paid ``seconds``, both charges: a spike train, a load or a kernel compile
     that trials share was paid by one point and counts once), as paid when each point was
-    computed, whether this search or an earlier run computed it.
+    computed, whether this search or an earlier run computed it. ``shared=False``: the ``own``
+    charge alone, what the points cost beyond the one-off load and set-up their workers paid.
 
     A point stored before paid seconds were kept counts its work seconds, with the
     ``spike_stages`` of each spike train (``spike_keys``, per trial) once, so that a trial
@@ -138,6 +144,7 @@ def search_seconds(
     paid, work = paid_seconds(cube), work_seconds(cube)
     paid_rows = None if paid is None else paid.transpose(TRIAL_DIM, "stage", CHARGE_DIM).values
     work_rows = None if work is None else work.transpose(TRIAL_DIM, "stage").values
+    own = None if paid is None else [str(c) for c in paid[CHARGE_DIM].values].index(Charge.OWN)
     seen_points: set[str] = set()
     seen_trains: set[str] = set()
     total = 0.0
@@ -146,7 +153,7 @@ def search_seconds(
             continue
         seen_points.add(key)
         if paid_rows is not None and np.isfinite(paid_rows[i]).all():
-            total += float(paid_rows[i].sum())
+            total += float(paid_rows[i].sum() if shared else paid_rows[i][:, own].sum())
             if paid_rows[i][spike].sum() > 0:
                 seen_trains.add(spike_keys[i])
             continue

@@ -12,9 +12,11 @@ from flows.samplers import (
     GP_MAX_TRIALS,
     Encoding,
     Proposer,
+    SpaceFillingStart,
     distributions,
     resolve_sampler,
     startup_trials,
+    unit_value,
 )
 from pipeline.design.space import TRANSFORMS, Metric, Sampler, Space
 from pipeline.design.transforms import Transform
@@ -112,3 +114,67 @@ def test_transforms_are_strictly_increasing(transform: Transform, values: list[f
     # Strictly increasing wherever float64 can tell the values apart after the floor is added.
     apart = np.diff(x) > 1e-9 * (x[:-1] + (transform.floor or 0.0))
     assert (np.diff(y)[apart] > 0).all()
+
+
+def _distributions() -> list:
+    from optuna.distributions import (
+        CategoricalDistribution,
+        FloatDistribution,
+        IntDistribution,
+    )
+
+    return [
+        CategoricalDistribution(["lcs", "decaying"]),
+        IntDistribution(0, 2),
+        IntDistribution(1, 8),
+        IntDistribution(2, 64, log=True),
+        IntDistribution(1, 9, step=4),
+        FloatDistribution(0.0, 0.3, step=0.1),
+        FloatDistribution(0.01, 0.5, log=True),
+        FloatDistribution(0.05, 0.2),
+    ]
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from(_distributions()), st.floats(0.0, 1.0, exclude_max=True))
+def test_a_unit_coordinate_becomes_a_value_the_sampler_may_ask(distribution, u: float):
+    value = unit_value(distribution, u)
+    assert distribution._contains(distribution.to_internal_repr(value))
+
+
+def test_the_start_puts_equal_shares_of_trials_in_equal_slices_of_every_dimension():
+    s = space(
+        **{
+            "readout.encoder": {"choices": ["lcs", "decaying"]},
+            "array.rows": {"low": 1, "high": 4},
+            "readout.threshold_v": {"choices": [0.02, 0.03, 0.045, 0.065, 0.09, 0.13, 0.19, 0.28]},
+        }
+    )
+    for seed in range(5):
+        start = SpaceFillingStart(distributions(s), seed)
+        points = [start.next() for _ in range(8)]
+        # A scrambled Sobol' sequence's first 2**3 points: one in each eighth of every axis.
+        assert sorted(p["readout.threshold_v"] for p in points) == list(range(8))
+        assert sorted(p["array.rows"] for p in points) == [1, 1, 2, 2, 3, 3, 4, 4]
+        assert sorted(p["readout.encoder"] for p in points) == ["decaying"] * 4 + ["lcs"] * 4
+    firsts = {
+        SpaceFillingStart(distributions(s), seed).next()["readout.threshold_v"] for seed in range(5)
+    }
+    assert len(firsts) > 1  # seeded scrambles differ
+
+
+def test_a_model_based_sampler_asks_the_start_until_enough_trials_are_told():
+    s = space("gp")
+    proposer = Proposer(s, seed=3)
+    expected = SpaceFillingStart(distributions(s), 3)
+    for i in range(proposer.startup):
+        trial, params = proposer.ask()
+        assert proposer.encoding.encode(params) == expected.next()
+        proposer.tell(trial, [0.1 * i, 10.0 + i])
+    # Resumed with enough told trials, the sampler models from the first ask.
+    resumed = Proposer(s, seed=4)
+    for t in proposer.study.trials:
+        resumed.add(proposer.encoding.decode(t.params), [0.5, 20.0])
+    resumed.ask()
+    assert resumed.start.points == []  # no start-up point was drawn
+    assert Proposer(space("random"), seed=0).start is None

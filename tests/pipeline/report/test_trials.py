@@ -66,6 +66,9 @@ def test_search_seconds_count_the_paid_seconds_of_each_point_once():
     )
     total = search_seconds(cube, ["a", "a", "a", "b"], ("setup", "readout"))
     assert total == pytest.approx(6.6 + 4.2 + 4.6)
+    # Beyond the one-off load and compile: what a further trial is expected to cost.
+    own = search_seconds(cube, ["a", "a", "a", "b"], ("setup", "readout"), shared=False)
+    assert own == pytest.approx(4.1 + 4.2 + 4.6)
 
 
 def test_search_seconds_of_older_points_count_each_point_and_each_spike_train_once():
