@@ -52,6 +52,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -339,14 +340,15 @@ def at_budget(found: Replay, budget_s: float) -> list[int]:
 
 
 def measure(
-    seeds: int = SEEDS,
+    seeds: int | Sequence[int] = SEEDS,
     names: tuple[str, ...] = tuple(SPACES),
     fractions: tuple[float, ...] = FRACTIONS,
     samplers: tuple[Sampler, ...] = SAMPLERS,
     path: Path = DATA,
 ) -> dict[str, Any]:
     """Replays of every space, sampler and seed; the share of the exhaustive hypervolume and
-    of the grid's cost at each budget."""
+    of the grid's cost at each budget. ``seeds``: how many (0 to n - 1), or which."""
+    seeds = range(seeds) if isinstance(seeds, int) else seeds
     results: dict[str, Any] = {}
     for name in names:
         arrays = load_exhaustive(name, path)
@@ -360,7 +362,7 @@ def measure(
         kinds = {s: resolve_sampler(dataclasses.replace(space, sampler=s)) for s in samplers}
         replays: dict[tuple[Sampler, int], Replay] = {}
         found: dict[tuple[str, float], list[tuple[float, float, int]]] = {}
-        for sampler, seed in itertools.product(samplers, range(seeds)):
+        for sampler, seed in itertools.product(samplers, seeds):
             kind = kinds[sampler]
             if (kind, seed) not in replays:
                 searched = dataclasses.replace(space, seed=seed, sampler=kind)
