@@ -14,7 +14,10 @@ running ones pending in the sampler. Each trial is a grid of one point
 (:meth:`pipeline.design.space.Space.trial_grid`), planned and scheduled as any sweep
 (:func:`flows.planning.plan_sweep`, :func:`flows.scheduling.submit_missing`) from a thread of
 the coordinator that waits for it: the same store, cache keys and workers; a point already in
-the store, from any sweep or search, costs nothing. Once its point is done, the trial cube of
+the store, from any sweep or search, costs nothing. A trial's missing spike train is a task of
+its own, keyed by the train (``train_tasks`` of :func:`flows.scheduling.submit_missing`): a
+trial that shares it with a running one (another window, other training) waits for that task
+instead of computing the train again. Once its point is done, the trial cube of
 every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`, along
 ``trial``; each result read from the store once) and the trial's objective values are read
 from it and told. The search's cubes ``<space>.trials`` and ``<space>.front``
@@ -143,7 +146,8 @@ class Search:
         if not plan.missing:
             return plan, {}
         client = client_for()
-        futures = submit_missing(plan, client)
+        # A train that another running trial is computing is waited for, not computed again.
+        futures = submit_missing(plan, client, train_tasks=True)
         return plan, {k: why for k, why in completed_points(client, futures) if why}
 
     def restore(self, client_for: Callable[[], Any]) -> int:
