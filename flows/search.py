@@ -43,6 +43,8 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import dataclasses
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -59,13 +61,18 @@ from flows.progress import SweepFailed, completed_points, failure_message
 from flows.refill import refill
 from flows.samplers import Proposer, seed_for
 from flows.scheduling import submit_missing
-from pipeline.design.space import TRIALS, Space, load_space, objective_values
+from pipeline.design.space import TRIALS, Sampler, Space, load_space, objective_values
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 from storage.objects import is_object_url, run_root
-from storage.search_log import SearchJournal, search_cube_name
+from storage.search_log import (
+    SearchJournal,
+    journal_fingerprint,
+    journal_path,
+    search_cube_name,
+)
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
@@ -73,6 +80,9 @@ DEFAULT_BUDGET = 50
 #: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent).
 MAX_REPEATS_IN_ROW = 10
 FRONT = "front"
+#: The sampler of a space that names none before the default became ``auto``
+#: (:func:`resumed_space`).
+FORMER_DEFAULT_SAMPLER = Sampler.TPE
 
 
 class BudgetError(EskinError):
@@ -282,6 +292,39 @@ def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Da
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models))
 
 
+def resumed_space(space: Space, root: str | Path) -> tuple[Space, str | None]:
+    """The space the search of ``space`` in ``root`` continues: ``space``, or ``space`` with the
+    sampler its journal was begun with; and a note for the user when that differs.
+
+    The rule: a search is one study, so its journal is replayed only into the space it was
+    begun in, sampler included (:meth:`pipeline.design.space.Space.fingerprint`): another
+    sampler would propose the remaining trials from another model, and a budget extended in
+    steps would no longer ask the trials one larger budget asks. But a space that names no
+    sampler, or names ``auto`` (which leaves the choice to the tool: the same space), had
+    :data:`FORMER_DEFAULT_SAMPLER` before the default became ``auto``, and the searches of such
+    spaces were journalled under its fingerprint with that sampler. Such a space whose journal
+    holds that fingerprint is that search: it continues with the sampler it began with (one
+    note says so) rather than being refused, or switched to another sampler mid-way. A space
+    that names another sampler, or differs in anything else, is another search: it is left as
+    it is, and the journal refuses it (:meth:`storage.search_log.SearchJournal.open`).
+    """
+    found = journal_fingerprint(root, space.name)
+    if (
+        found is None
+        or found == space.fingerprint()
+        or space.sampler is not Sampler.AUTO
+        or found != space.fingerprint(FORMER_DEFAULT_SAMPLER)
+    ):
+        return space, None
+    former = FORMER_DEFAULT_SAMPLER.value
+    note = (
+        f"eskin: note: {journal_path(root, space.name)} was begun with sampler {former!r}, the "
+        f"default before 'auto': the search continues with {former!r} (name a sampler in the "
+        "space file and give another --root to start a new search)"
+    )
+    return dataclasses.replace(space, sampler=FORMER_DEFAULT_SAMPLER), note
+
+
 def default_search_root(space: Space) -> Path:
     """``runs/<space name>``: the run root of a search given no ``--root``."""
     return DEFAULT_RUNS_DIR / space.name
@@ -379,18 +422,21 @@ def run_optimize(
     on_batch: Callable[[Search, BatchOutcome], None] | None = None,
     compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
     | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Search ``space`` (a file or a :class:`~pipeline.design.space.Space`) into the store at
     ``root``, without Prefect.
 
-    Holds the root's lock, replays the root's journal of this space, asks batches of trials
+    Holds the root's lock, replays the root's journal of this space (with the sampler it was
+    begun with, :func:`resumed_space`), asks batches of trials
     until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds
     are spent, keeping one trial running per worker thread (:func:`flows.refill.refill`), and
     returns :func:`search_summary`. ``client`` (left open), or a local cluster of ``workers``
     processes, or the scheduler at ``address``, made only if a point is missing.
     ``on_batch`` is called after each trial is told (with its outcome); ``compute`` replaces
     :meth:`Search.compute` (the Prefect flow runs it as a task), called from a thread per
-    running trial.
+    running trial. ``on_note`` is given each note for the user (one line); by default they are
+    printed on stderr.
 
     Raises
     ------
@@ -409,6 +455,9 @@ def run_optimize(
     failed: dict[int, str] = {}
     with store.lock():
         store.clean_partials()
+        space, note = resumed_space(space, store.root)
+        if note is not None:
+            (on_note or _print_note)(note)
         search = Search(space, store.root, budget)
         told_before = len(search.journal.values)
         # The cubes are written at the end, or when the search is stopped; the journal, written
@@ -430,6 +479,10 @@ def run_optimize(
         computed=computed,
         seconds=time.perf_counter() - start,
     )
+
+
+def _print_note(note: str) -> None:
+    print(note, file=sys.stderr)
 
 
 def _run_trials(

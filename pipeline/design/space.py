@@ -273,14 +273,16 @@ class Space:
             raise SceneError(problems, source, kind="space")
         return space
 
-    def fingerprint(self) -> str:
-        """A hash of everything that shapes the search: base, dimensions, objectives, seed."""
+    def fingerprint(self, sampler: Sampler | None = None) -> str:
+        """A hash of everything that shapes the search: base, dimensions, objectives, seed and
+        sampler (``sampler``, when given, in place of the space's: the fingerprint this space
+        had with it)."""
         described = {
             "base": self.base.to_dict(),
             "dimensions": [fields.plain(dataclasses.asdict(d)) for d in self.dimensions],
             "objectives": [[o.name, o.direction.value] for o in self.objectives],
             "seed": self.seed,
-            "sampler": self.sampler.value,
+            "sampler": (sampler or self.sampler).value,
         }
         text = json.dumps(described, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
