@@ -325,6 +325,18 @@ def resumed_space(space: Space, root: str | Path) -> tuple[Space, str | None]:
     return dataclasses.replace(space, sampler=FORMER_DEFAULT_SAMPLER), note
 
 
+def check_journal(space: Space, root: str | Path) -> None:
+    """Refuse, before any work, a root whose journal of ``space``'s name holds another search
+    (:func:`resumed_space`); the search checks it again, holding the root's lock.
+
+    Raises
+    ------
+    StoreError
+        As :meth:`storage.search_log.SearchJournal.open`.
+    """
+    SearchJournal.open(root, space.name, resumed_space(space, root)[0].fingerprint())
+
+
 def default_search_root(space: Space) -> Path:
     """``runs/<space name>``: the run root of a search given no ``--root``."""
     return DEFAULT_RUNS_DIR / space.name
