@@ -14,6 +14,7 @@ from flows.search import Search, spent_seconds, trials_cube
 from pipeline.run import stages
 from pipeline.run.records import Charge
 from storage import SweepStore
+from tests.flows.helpers import in_process_client
 from tests.flows.test_optimize import SPACE
 
 pytestmark = pytest.mark.slow
@@ -23,14 +24,7 @@ pytestmark = pytest.mark.slow
 def two_threads():
     """A Dask client on an in-process cluster of one worker with two threads: two trials run
     at once."""
-    from distributed import Client, LocalCluster
-
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client(threads=2) as client:
         yield client
 
 
