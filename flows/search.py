@@ -24,13 +24,14 @@ from it and told. The search's cubes ``<space>.trials`` and ``<space>.front``
 (:func:`pipeline.report.trials.front_cube`; named by :func:`storage.search_log.search_cube_name`,
 so a root keeps every search made in it) are written when the search ends or is stopped.
 
-Sampler: the space's (:class:`pipeline.design.space.Sampler`; :mod:`flows.samplers` makes it
-and says what it is told): by default ``auto``, a Gaussian process for a search of at most a
-few hundred trials over mostly ordered dimensions and multi-objective TPE otherwise
+Sampler: the space's (:class:`pipeline.design.space.Sampler`; :mod:`flows.samplers` makes it and
+says what it is told): by default ``auto``, a Gaussian process for a search of at most a few
+hundred trials over mostly ordered dimensions and multi-objective TPE otherwise
 (:func:`flows.samplers.resolve_sampler`), seeded from the space's seed and the trials already
-asked. Numeric choices are told as ordered positions and objectives through their declared
-monotone transforms. Cost accounting: a budget in seconds (``budget_s``) is spent in the
-seconds the workers paid computing each distinct point, once
+asked. A search goes on with the sampler it began with: one begun before ``auto`` was the
+default keeps ``tpe`` (:func:`resumed_space`). Numeric choices are told as ordered positions and
+objectives through their declared monotone transforms. Cost accounting: a budget in seconds
+(``budget_s``) is spent in the seconds the workers paid computing each distinct point, once
 (:func:`pipeline.report.trials.search_seconds`): a spike train, a load or a worker's set-up that
 trials share was paid by one of them and counts once, so a trial that shares the spike train of
 an earlier one costs only its coding and training. A new trial is started while the seconds of
