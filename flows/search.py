@@ -104,13 +104,20 @@ class BatchOutcome:
 class Search:
     """One search of ``space`` in the store at ``root``: its study, journal and trials.
 
-    Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`).
+    Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`). ``fingerprint``:
+    the one its journal holds (:func:`resumed_space`), by default the space's.
     """
 
-    def __init__(self, space: Space, root: str | Path, budget: int | None = None):
+    def __init__(
+        self,
+        space: Space,
+        root: str | Path,
+        budget: int | None = None,
+        fingerprint: str | None = None,
+    ):
         self.space = space
         self.root = str(root)
-        self.journal = SearchJournal.open(root, space.name, space.fingerprint())
+        self.journal = SearchJournal.open(root, space.name, fingerprint or space.fingerprint())
         # ``budget`` (trials in all; None for seconds) picks ``auto``'s sampler and the start-up.
         self.proposer = Proposer(space, seed_for(space.seed, len(self.journal.params)), budget)
         for number in sorted(self.journal.params):
@@ -293,37 +300,44 @@ def spent_seconds(space: Space, params: Sequence[Mapping[str, Any]], cube: xr.Da
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models))
 
 
-def resumed_space(space: Space, root: str | Path) -> tuple[Space, str | None]:
-    """The space the search of ``space`` in ``root`` continues: ``space``, or ``space`` with the
-    sampler its journal was begun with; and a note for the user when that differs.
+def resumed_space(space: Space, root: str | Path) -> tuple[Space, str, str | None]:
+    """The search of ``space`` that ``root`` holds: the space it goes on with (``space``, or
+    ``space`` with the sampler its journal was begun with), the fingerprint its journal holds
+    (the space's if it has none yet) and a note for the user when the sampler differs.
 
     The rule: a search is one study, so its journal is replayed only into the space it was
     begun in, sampler included (:meth:`pipeline.design.space.Space.fingerprint`): another
     sampler would propose the remaining trials from another model, and a budget extended in
     steps would no longer ask the trials one larger budget asks. But a space that names no
     sampler, or names ``auto`` (which leaves the choice to the tool: the same space), had
-    :data:`FORMER_DEFAULT_SAMPLER` before the default became ``auto``, and the searches of such
-    spaces were journalled under its fingerprint with that sampler. Such a space whose journal
-    holds that fingerprint is that search: it continues with the sampler it began with (one
-    note says so) rather than being refused, or switched to another sampler mid-way. A space
-    that names another sampler, or differs in anything else, is another search: it is left as
-    it is, and the journal refuses it (:meth:`storage.search_log.SearchJournal.open`).
+    ``tpe`` (``FORMER_DEFAULT_SAMPLER``) before the default became ``auto``, and the searches
+    of such spaces were journalled under its fingerprint with ``tpe``. Such a space whose
+    journal holds that fingerprint is that search: it goes on with the sampler it began with
+    (one note says so) rather than being refused, or switched to another sampler mid-way.
+    Journals written before fingerprints took the base's canonical form hold it with every
+    field of the base (``every_field``): they are the same search, and go on under the
+    fingerprint they hold. A space that names another sampler, or differs in anything else, is
+    another search: it is left as it is, and the journal refuses it
+    (:meth:`storage.search_log.SearchJournal.open`).
     """
     found = journal_fingerprint(root, space.name)
-    if (
-        found is None
-        or found == space.fingerprint()
-        or space.sampler is not Sampler.AUTO
-        or found != space.fingerprint(FORMER_DEFAULT_SAMPLER)
-    ):
-        return space, None
-    former = FORMER_DEFAULT_SAMPLER.value
-    note = (
-        f"eskin: note: {journal_path(root, space.name)} was begun with sampler {former!r}, the "
-        f"default before 'auto': the search continues with {former!r} (name a sampler in the "
-        "space file and give another --root to start a new search)"
-    )
-    return dataclasses.replace(space, sampler=FORMER_DEFAULT_SAMPLER), note
+    samplers = [space.sampler]
+    if space.sampler is Sampler.AUTO:
+        samplers.append(FORMER_DEFAULT_SAMPLER)
+    for sampler in samplers if found is not None else ():
+        for every_field in (False, True):
+            if found != space.fingerprint(sampler, every_field=every_field):
+                continue
+            if sampler is space.sampler:
+                return space, found, None
+            note = (
+                f"eskin: note: {journal_path(root, space.name)} was begun with sampler "
+                f"{sampler.value!r}, the default before 'auto': the search goes on with "
+                f"{sampler.value!r} (name a sampler in the space file and give another --root "
+                "to start a new search)"
+            )
+            return dataclasses.replace(space, sampler=sampler), found, note
+    return space, space.fingerprint(), None
 
 
 def check_journal(space: Space, root: str | Path) -> None:
@@ -335,7 +349,7 @@ def check_journal(space: Space, root: str | Path) -> None:
     StoreError
         As :meth:`storage.search_log.SearchJournal.open`.
     """
-    SearchJournal.open(root, space.name, resumed_space(space, root)[0].fingerprint())
+    SearchJournal.open(root, space.name, resumed_space(space, root)[1])
 
 
 def default_search_root(space: Space) -> Path:
@@ -468,10 +482,10 @@ def run_optimize(
     failed: dict[int, str] = {}
     with store.lock():
         store.clean_partials()
-        space, note = resumed_space(space, store.root)
+        space, fingerprint, note = resumed_space(space, store.root)
         if note is not None:
             (on_note or _print_note)(note)
-        search = Search(space, store.root, budget)
+        search = Search(space, store.root, budget, fingerprint)
         told_before = len(search.journal.values)
         # The cubes are written at the end, or when the search is stopped; the journal, written
         # as trials are told, is what a killed search resumes from.
