@@ -75,3 +75,18 @@ def test_two_running_trials_that_share_a_train_compute_it_once(two_threads, tmp_
     paid = sum(v for key in keys for steps in entries[key].paid.values() for v in steps.values())
     cube = trials_cube(space, root, params, [0, 1])
     assert spent_seconds(space, params, cube) == pytest.approx(paid, rel=1e-9)
+
+
+def test_a_trial_whose_train_fails_is_failed_with_the_reason(two_threads, tmp_path, monkeypatch):
+    space = Space.from_dict(tomllib.loads(SPACE))
+    root = SweepStore.open_or_create(tmp_path / "run").root
+    search = Search(space, root)
+    search.journal.asked(0, {"readout.threshold_v": 0.07, "coding.window_s": 0.1, "array.rows": 1})
+
+    def failing(*args, **kwargs):
+        raise MemoryError("no room for the trains")
+
+    monkeypatch.setattr(stages, "encode_trains", failing)
+    plan, failed = search.compute([0], lambda: two_threads)
+    assert list(failed) == plan.missing and len(failed) == 1
+    assert "MemoryError: no room for the trains" in failed[plan.missing[0]]
