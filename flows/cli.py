@@ -645,7 +645,7 @@ def _outcome(record: Any, run: Callable[[SweepStore], Any], store: SweepStore) -
 
 def _optimize_checked(args: argparse.Namespace) -> int:
     from flows.cluster import probe_scheduler
-    from flows.search import check_search_root, check_space, default_search_root
+    from flows.search import check_journal, check_search_root, check_space, default_search_root
     from flows.summaries import format_search_summary
     from pipeline.design.space import load_space
     from storage import SweepStore
@@ -671,6 +671,7 @@ def _optimize_checked(args: argparse.Namespace) -> int:
         )
 
     root = check_search_root(args.root) if args.root else default_search_root(space)
+    check_journal(space, root)  # another search's journal, refused before Prefect starts
     return _run_flow(args, SweepStore.open_or_create(root), run, format_search_summary)
 
 

@@ -95,6 +95,13 @@ def optimize(
             sum(r["on_front"] for r in rows),
         )
 
+    def on_note(note: str) -> None:
+        # On the command line's stderr; a deployment's run has only its logger.
+        if show_progress:
+            print(note, file=sys.stderr)
+        else:
+            logger.info(note)
+
     def body(record: Record) -> dict[str, Any]:
         summary = run_optimize(
             space,
@@ -105,6 +112,7 @@ def optimize(
             address=address,
             on_batch=lambda search, outcome: on_batch(record, search, outcome),
             compute=compute,
+            on_note=on_note,
         )
         summary["flow_run_url"] = url
         if report:

@@ -177,12 +177,20 @@ def completed_points(client: Any, futures: dict[str, Any]) -> Iterator[tuple[str
 
 
 def point_failures(future: Any, keys: list[str]) -> dict[str, str]:
-    """Why each of ``keys`` failed in the finished task ``future``; empty if none failed."""
+    """Why each of ``keys`` failed in the finished task ``future``; empty if none failed.
+
+    A task that failed some of its own points names them (:class:`flows.work.PointsFailed`);
+    one whose error names none of its points never ran: a task it waited for (a spike train
+    its points share with other tasks) failed, and so did every one of its points.
+    """
     if future.status != "error":
         return {}
     from flows.work import PointsFailed
 
     error = future.exception()
     if isinstance(error, PointsFailed):
-        return {key: f"point {key}: {why}" for key, why in error.failures.items() if key in keys}
+        mine = {key: f"point {key}: {why}" for key, why in error.failures.items() if key in keys}
+        if mine:
+            return mine
+        return dict.fromkeys(keys, f"{future.key}: the spike train it needs failed: {error}")
     return dict.fromkeys(keys, f"{future.key}: {error}")

@@ -64,7 +64,11 @@ def sweep_client(
 
 
 def submit_missing(
-    plan: SweepPlan, client: Any, points_per_task: int | None = None
+    plan: SweepPlan,
+    client: Any,
+    points_per_task: int | None = None,
+    *,
+    train_tasks: bool = False,
 ) -> dict[str, Any]:
     """Submit every missing point in batches; return each point's future by result key.
 
@@ -84,6 +88,12 @@ def submit_missing(
     points_per_task
         Points per task; default :func:`default_points_per_task` of the missing points and the
         cluster's worker threads.
+    train_tasks
+        Give every missing spike train a task of its own, keyed by that train and the root, not
+        only the trains that several of this plan's tasks share. For plans submitted while
+        others run on the same cluster (a search's trials, each a plan of one point): two that
+        share a train under way submit one key, and Dask, holding one task per key, computes
+        the train once, for the point that submitted it first (which is charged for it).
     """
     from flows import work
 
@@ -99,7 +109,11 @@ def submit_missing(
     batches = _batches(by_train, size)
     stored = store.complete_keys(SPIKES.name)
     spread = collections.Counter(train for batch in batches for train in {t for t, _ in batch})
-    shared = [train for train, n in spread.items() if n > 1 and train not in stored]
+    shared = [
+        train for train, n in spread.items() if (n > 1 or train_tasks) and train not in stored
+    ]
+    # A train of its own task is keyed by it alone, so that other plans find it.
+    trains_per_task = 1 if train_tasks else size
 
     def submit(level: Level, points: list[str], name: str, priority: int, *after: Any) -> Any:
         # One task of ensure_entries, keyed by the work it does and the root.
@@ -115,8 +129,8 @@ def submit_missing(
         )
 
     train_futures: dict[str, Any] = {}
-    for start in range(0, len(shared), size):
-        trains = shared[start : start + size]
+    for start in range(0, len(shared), trains_per_task):
+        trains = shared[start : start + trains_per_task]
         firsts = [by_train[t][0] for t in trains]
         name = f"spikes-{_digest_keys(trains)}"
         future = submit(SPIKES, firsts, name, max(cost.values()) + 1)

@@ -14,20 +14,24 @@ running ones pending in the sampler. Each trial is a grid of one point
 (:meth:`pipeline.design.space.Space.trial_grid`), planned and scheduled as any sweep
 (:func:`flows.planning.plan_sweep`, :func:`flows.scheduling.submit_missing`) from a thread of
 the coordinator that waits for it: the same store, cache keys and workers; a point already in
-the store, from any sweep or search, costs nothing. Once its point is done, the trial cube of
+the store, from any sweep or search, costs nothing. A trial's missing spike train is a task of
+its own, keyed by the train (``train_tasks`` of :func:`flows.scheduling.submit_missing`): a
+trial that shares it with a running one (another window, other training) waits for that task
+instead of computing the train again. Once its point is done, the trial cube of
 every trial so far is built in memory (:func:`pipeline.results.cube.build_cube`, along
 ``trial``; each result read from the store once) and the trial's objective values are read
 from it and told. The search's cubes ``<space>.trials`` and ``<space>.front``
 (:func:`pipeline.report.trials.front_cube`; named by :func:`storage.search_log.search_cube_name`,
 so a root keeps every search made in it) are written when the search ends or is stopped.
 
-Sampler: the space's (:class:`pipeline.design.space.Sampler`; :mod:`flows.samplers` makes it
-and says what it is told): by default ``auto``, a Gaussian process for a search of at most a
-few hundred trials over mostly ordered dimensions and multi-objective TPE otherwise
+Sampler: the space's (:class:`pipeline.design.space.Sampler`; :mod:`flows.samplers` makes it and
+says what it is told): by default ``auto``, a Gaussian process for a search of at most a few
+hundred trials over mostly ordered dimensions and multi-objective TPE otherwise
 (:func:`flows.samplers.resolve_sampler`), seeded from the space's seed and the trials already
-asked. Numeric choices are told as ordered positions and objectives through their declared
-monotone transforms. Cost accounting: a budget in seconds (``budget_s``) is spent in the
-seconds the workers paid computing each distinct point, once
+asked. A search goes on with the sampler it began with: one begun before ``auto`` was the
+default keeps ``tpe`` (:func:`resumed_space`). Numeric choices are told as ordered positions and
+objectives through their declared monotone transforms. Cost accounting: a budget in seconds
+(``budget_s``) is spent in the seconds the workers paid computing each distinct point, once
 (:func:`pipeline.report.trials.search_seconds`): a spike train, a load or a worker's set-up that
 trials share was paid by one of them and counts once, so a trial that shares the spike train of
 an earlier one costs only its coding and training. A new trial is started while the seconds of
@@ -41,6 +45,8 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import dataclasses
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -57,13 +63,18 @@ from flows.progress import SweepFailed, completed_points, failure_message
 from flows.refill import refill
 from flows.samplers import Proposer, seed_for
 from flows.scheduling import submit_missing
-from pipeline.design.space import TRIALS, Space, load_space, objective_values
+from pipeline.design.space import TRIALS, Sampler, Space, load_space, objective_values
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 from storage.objects import is_object_url, run_root
-from storage.search_log import SearchJournal, search_cube_name
+from storage.search_log import (
+    SearchJournal,
+    journal_fingerprint,
+    journal_path,
+    search_cube_name,
+)
 
 #: Trials of a search without a budget.
 DEFAULT_BUDGET = 50
@@ -71,6 +82,9 @@ DEFAULT_BUDGET = 50
 #: new to propose, and such trials cost no seconds, so a budget in seconds would never be spent).
 MAX_REPEATS_IN_ROW = 10
 FRONT = "front"
+#: The sampler of a space that names none before the default became ``auto``
+#: (:func:`resumed_space`).
+FORMER_DEFAULT_SAMPLER = Sampler.TPE
 
 
 class BudgetError(EskinError):
@@ -91,13 +105,20 @@ class BatchOutcome:
 class Search:
     """One search of ``space`` in the store at ``root``: its study, journal and trials.
 
-    Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`).
+    Open it holding the root's lock (:meth:`storage.store.SweepStore.lock`). ``fingerprint``:
+    the one its journal holds (:func:`resumed_space`), by default the space's.
     """
 
-    def __init__(self, space: Space, root: str | Path, budget: int | None = None):
+    def __init__(
+        self,
+        space: Space,
+        root: str | Path,
+        budget: int | None = None,
+        fingerprint: str | None = None,
+    ):
         self.space = space
         self.root = str(root)
-        self.journal = SearchJournal.open(root, space.name, space.fingerprint())
+        self.journal = SearchJournal.open(root, space.name, fingerprint or space.fingerprint())
         # ``budget`` (trials in all; None for seconds) picks ``auto``'s sampler and the start-up.
         self.proposer = Proposer(space, seed_for(space.seed, len(self.journal.params)), budget)
         for number in sorted(self.journal.params):
@@ -144,7 +165,8 @@ class Search:
         if not plan.missing:
             return plan, {}
         client = client_for()
-        futures = submit_missing(plan, client)
+        # A train that another running trial is computing is waited for, not computed again.
+        futures = submit_missing(plan, client, train_tasks=True)
         return plan, {k: why for k, why in completed_points(client, futures) if why}
 
     def restore(self, client_for: Callable[[], Any]) -> int:
@@ -287,6 +309,58 @@ def spent_seconds(
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models), shared=shared)
 
 
+def resumed_space(space: Space, root: str | Path) -> tuple[Space, str, str | None]:
+    """The search of ``space`` that ``root`` holds: the space it goes on with (``space``, or
+    ``space`` with the sampler its journal was begun with), the fingerprint its journal holds
+    (the space's if it has none yet) and a note for the user when the sampler differs.
+
+    The rule: a search is one study, so its journal is replayed only into the space it was
+    begun in, sampler included (:meth:`pipeline.design.space.Space.fingerprint`): another
+    sampler would propose the remaining trials from another model, and a budget extended in
+    steps would no longer ask the trials one larger budget asks. But a space that names no
+    sampler, or names ``auto`` (which leaves the choice to the tool: the same space), had
+    ``tpe`` (``FORMER_DEFAULT_SAMPLER``) before the default became ``auto``, and the searches
+    of such spaces were journalled under its fingerprint with ``tpe``. Such a space whose
+    journal holds that fingerprint is that search: it goes on with the sampler it began with
+    (one note says so) rather than being refused, or switched to another sampler mid-way.
+    Journals written before fingerprints took the base's canonical form hold it with every
+    field of the base (``every_field``): they are the same search, and go on under the
+    fingerprint they hold. A space that names another sampler, or differs in anything else, is
+    another search: it is left as it is, and the journal refuses it
+    (:meth:`storage.search_log.SearchJournal.open`).
+    """
+    found = journal_fingerprint(root, space.name)
+    samplers = [space.sampler]
+    if space.sampler is Sampler.AUTO:
+        samplers.append(FORMER_DEFAULT_SAMPLER)
+    for sampler in samplers if found is not None else ():
+        for every_field in (False, True):
+            if found != space.fingerprint(sampler, every_field=every_field):
+                continue
+            if sampler is space.sampler:
+                return space, found, None
+            note = (
+                f"eskin: note: {journal_path(root, space.name)} was begun with sampler "
+                f"{sampler.value!r}, the default before 'auto': the search goes on with "
+                f"{sampler.value!r} (name a sampler in the space file and give another --root "
+                "to start a new search)"
+            )
+            return dataclasses.replace(space, sampler=sampler), found, note
+    return space, space.fingerprint(), None
+
+
+def check_journal(space: Space, root: str | Path) -> None:
+    """Refuse, before any work, a root whose journal of ``space``'s name holds another search
+    (:func:`resumed_space`); the search checks it again, holding the root's lock.
+
+    Raises
+    ------
+    StoreError
+        As :meth:`storage.search_log.SearchJournal.open`.
+    """
+    SearchJournal.open(root, space.name, resumed_space(space, root)[1])
+
+
 def default_search_root(space: Space) -> Path:
     """``runs/<space name>``: the run root of a search given no ``--root``."""
     return DEFAULT_RUNS_DIR / space.name
@@ -384,18 +458,21 @@ def run_optimize(
     on_batch: Callable[[Search, BatchOutcome], None] | None = None,
     compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
     | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Search ``space`` (a file or a :class:`~pipeline.design.space.Space`) into the store at
     ``root``, without Prefect.
 
-    Holds the root's lock, replays the root's journal of this space, asks batches of trials
+    Holds the root's lock, replays the root's journal of this space (with the sampler it was
+    begun with, :func:`resumed_space`), asks batches of trials
     until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds
     are spent, keeping one trial running per worker thread (:func:`flows.refill.refill`), and
     returns :func:`search_summary`. ``client`` (left open), or a local cluster of ``workers``
     processes, or the scheduler at ``address``, made only if a point is missing.
     ``on_batch`` is called after each trial is told (with its outcome); ``compute`` replaces
     :meth:`Search.compute` (the Prefect flow runs it as a task), called from a thread per
-    running trial.
+    running trial. ``on_note`` is given each note for the user (one line); by default they are
+    printed on stderr.
 
     Raises
     ------
@@ -414,7 +491,10 @@ def run_optimize(
     failed: dict[int, str] = {}
     with store.lock():
         store.clean_partials()
-        search = Search(space, store.root, budget)
+        space, fingerprint, note = resumed_space(space, store.root)
+        if note is not None:
+            (on_note or _print_note)(note)
+        search = Search(space, store.root, budget, fingerprint)
         told_before = len(search.journal.values)
         # The cubes are written at the end, or when the search is stopped; the journal, written
         # as trials are told, is what a killed search resumes from.
@@ -435,6 +515,10 @@ def run_optimize(
         computed=computed,
         seconds=time.perf_counter() - start,
     )
+
+
+def _print_note(note: str) -> None:
+    print(note, file=sys.stderr)
 
 
 def _run_trials(

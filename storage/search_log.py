@@ -59,6 +59,27 @@ def named_search_cubes(cubes: Mapping[str, Any]) -> dict[str, Any]:
     return dict(sorted({**old, **named}.items()))
 
 
+def journal_path(root: str | Path, name: str) -> Path:
+    """``<root>/search-<name>.jsonl``: the journal of the search of space ``name`` in ``root``."""
+    return Path(root) / f"search-{name}.jsonl"
+
+
+def journal_fingerprint(root: str | Path, name: str) -> str | None:
+    """The fingerprint of the space whose trials the journal of space ``name`` under ``root``
+    holds (its first readable line's), or None when there is no such line."""
+    path = journal_path(root, name)
+    if not path.is_file():
+        return None
+    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+        try:
+            record = json.loads(line)
+            int(record["trial"])
+            return str(record["space"])
+        except (ValueError, KeyError, TypeError):
+            continue
+    return None
+
+
 @dataclass
 class SearchJournal:
     """The trials of one search read from its journal, in trial order.
@@ -83,7 +104,7 @@ class SearchJournal:
             The journal holds trials of another space of that name (other ranges or
             objectives): continuing it would mix them.
         """
-        journal = cls(Path(root) / f"search-{name}.jsonl", fingerprint)
+        journal = cls(journal_path(root, name), fingerprint)
         if not journal.path.is_file():
             return journal
         for line in journal.path.read_text(encoding="utf-8", errors="replace").splitlines():
@@ -95,8 +116,8 @@ class SearchJournal:
                 continue
             if space != fingerprint:
                 raise StoreError(
-                    f"{journal.path} holds a search of another space named {name!r} "
-                    "(its ranges or objectives differ): give another --root or name"
+                    f"{journal.path} holds a search of another space named {name!r} (its "
+                    "base, ranges, objectives, seed or sampler differ): give another --root or name"
                 )
             try:
                 if "params" in record:

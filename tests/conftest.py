@@ -6,7 +6,7 @@ import os
 import pytest
 
 from flows import server
-from tests.flows.helpers import eskin, hermetic_env
+from tests.flows.helpers import eskin, hermetic_env, in_process_client
 
 #: A backstop: the session's server stops by itself if the suite dies before its teardown.
 SUITE_SERVER_IDLE_S = "600"
@@ -46,12 +46,5 @@ def smoke_sweep(tmp_path_factory):
 @pytest.fixture(scope="module")
 def client():
     """A Dask client on an in-process cluster of one single-thread worker."""
-    from distributed import Client, LocalCluster
-
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client() as client:
         yield client

@@ -273,14 +273,24 @@ class Space:
             raise SceneError(problems, source, kind="space")
         return space
 
-    def fingerprint(self) -> str:
-        """A hash of everything that shapes the search: base, dimensions, objectives, seed."""
+    def fingerprint(self, sampler: Sampler | None = None, *, every_field: bool = False) -> str:
+        """A hash of everything that shapes the search: base, dimensions, objectives, seed and
+        sampler (``sampler``, when given, in place of the space's: the fingerprint this space
+        had with it).
+
+        The base enters in its canonical form (:meth:`pipeline.design.scene.Scene.canonical`),
+        so that a scene field added later at a neutral default changes no fingerprint, as it
+        changes no cache key, and the journals of searches begun before it are still theirs.
+        ``every_field``: the base as every one of its fields instead
+        (:meth:`~pipeline.design.scene.Scene.to_dict`), the form of the journals written before
+        the canonical one, which any field added since changes.
+        """
         described = {
-            "base": self.base.to_dict(),
+            "base": self.base.to_dict() if every_field else self.base.canonical(),
             "dimensions": [fields.plain(dataclasses.asdict(d)) for d in self.dimensions],
             "objectives": [[o.name, o.direction.value] for o in self.objectives],
             "seed": self.seed,
-            "sampler": self.sampler.value,
+            "sampler": (sampler or self.sampler).value,
         }
         text = json.dumps(described, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]

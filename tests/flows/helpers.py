@@ -1,12 +1,15 @@
 """End-to-end test helpers: run the real command line and servers in a hermetic environment."""
 
 import base64
+import contextlib
 import math
 import os
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import xarray as xr
 
@@ -62,6 +65,20 @@ def count_grid_loads(patch) -> dict[str, int]:
     patch(planning, "load_grid", counted_load)
     patch(DatasetFacts, "describe", counted_describe)
     return calls
+
+
+@contextlib.contextmanager
+def in_process_client(threads: int = 1) -> Iterator[Any]:
+    """A Dask client on an in-process cluster of one worker with ``threads`` threads."""
+    from distributed import Client, LocalCluster
+
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=threads, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
 
 
 def hermetic_env(base: Path, **extra: str) -> dict[str, str]:

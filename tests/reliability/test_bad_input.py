@@ -669,6 +669,29 @@ def test_optimize_refuses_an_unknown_sampler(capsys, tmp_path):
     assert not (tmp_path / "root").exists()
 
 
+def test_optimize_refuses_a_journal_of_another_search_before_any_work(capsys, tmp_path):
+    from storage import SweepStore
+    from storage.search_log import SearchJournal
+
+    text = (
+        'name = "design"\nbase = "smoke"\n[space]\n"array.rows" = { low = 1, high = 2 }\n'
+        '[objectives]\n"accuracy.ffnn" = "max"\n"data_rate_bps" = "min"\n'
+    )
+    space = write(tmp_path / "space.toml", text)
+    root = SweepStore.open_or_create(tmp_path / "root").root
+    SearchJournal.open(root, "design", "0123456789abcdef").asked(0, {"array.rows": 2})
+    before = tree(root)
+    code = run_cli(["optimize", "--space", str(space), "--root", str(root)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.splitlines() == [
+        f"eskin: error: {root}/search-design.jsonl holds a search of another space named "
+        "'design' (its base, ranges, objectives, seed or sampler differ): give another --root "
+        "or name"
+    ]
+    assert tree(root) == before
+
+
 def test_sweep_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_path):
     line = assert_refused(capsys, short_class_grid(tmp_path), tmp_path / "root", "sweeps.t[0]")
     for expected in SHORT_CLASS_MESSAGE:

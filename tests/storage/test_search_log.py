@@ -3,7 +3,7 @@
 import pytest
 
 from storage import StoreError
-from storage.search_log import SearchJournal
+from storage.search_log import SearchJournal, journal_fingerprint
 
 
 def test_a_journal_replays_what_was_asked_and_told(tmp_path):
@@ -35,3 +35,13 @@ def test_a_journal_of_another_space_is_refused(tmp_path):
     with pytest.raises(StoreError, match="another space named 'design'"):
         SearchJournal.open(tmp_path, "design", "other")
     assert SearchJournal.open(tmp_path, "elsewhere", "other").params == {}
+
+
+def test_a_journals_fingerprint_is_its_first_readable_lines(tmp_path):
+    assert journal_fingerprint(tmp_path, "design") is None
+    journal = SearchJournal.open(tmp_path, "design", "abc")
+    journal.path.write_text('{"space": "abc", "tri\n[1, 2]\n')  # torn, then not a record
+    assert journal_fingerprint(tmp_path, "design") is None
+    journal.asked(0, {"array.rows": 2})
+    assert journal_fingerprint(tmp_path, "design") == "abc"
+    assert journal_fingerprint(tmp_path, "elsewhere") is None
