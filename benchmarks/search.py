@@ -20,11 +20,13 @@ offline against them (:func:`replay`): the real sampler (:class:`flows.samplers.
 exactly as ``eskin optimize`` makes it) and the real refill loop (:func:`flows.refill.refill`)
 on a simulated clock of 2 workers, each trial paying what its point paid in the exhaustive
 run: its own training and coding, its spike train's stages unless a trial of the search
-started on that train before, and, for the first trial of each worker, a worker's share of
-the one-off load and set-up (as a search on fresh workers pays them). The grid's cost is what
-the exhaustive run paid: every point's own seconds and the shared ones. A search stops asking
-when its seconds told plus those its running trials are expected to cost reach the budget
-(:func:`flows.search.wants_trial`); the trials running then finish and are counted.
+started on that train before (a train under way is waited for, not computed again: a search's
+missing trains are Dask tasks of their own), and, for the first trial of each worker, a
+worker's share of the one-off load and set-up (as a search on fresh workers pays them). The
+grid's cost is what the exhaustive run paid: every point's own seconds and the shared ones. A
+search stops asking when its seconds told plus those its running trials are expected to cost
+reach the budget (:func:`flows.search.wants_trial`); the trials running then finish and are
+counted.
 
 One replay per space, sampler and seed runs to the largest budget: a search with a smaller
 budget asks the same trials up to the first ask that budget refuses (the sampler and the clock
@@ -267,7 +269,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     shared_per_worker = float(shared.sum()) / starts
     out = Replay()
     trials: dict[int, Any] = {}
-    started_trains: dict[int, float] = {}  # train -> when the first trial on it ends
+    started_trains: dict[int, float] = {}  # train -> when it is ready
     paid: set[int] = set()  # points tried
     told_points: set[int] = set()
     repeats = [0]  # trials in a row at points told before
@@ -303,16 +305,20 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         # counts each point once).
         seconds = 0.0 if point in paid else float(own[point])
         paid.add(point)
-        ends = started_trains.get(int(train[point]))
-        if seconds and (ends is None or ends > clock[0]):  # a train under way is computed again
-            seconds += train_cost[train[point]]
-        if number < WORKERS:
-            seconds += shared_per_worker
+        key = int(train[point])
+        ready = started_trains.get(key)
+        if seconds and ready is None:
+            seconds += train_cost[key]
+        one_off = shared_per_worker if number < WORKERS else 0.0
+        seconds += one_off
         out.seconds.append(seconds)
         print(".", end="", file=sys.stderr, flush=True)
-        if ends is None:
-            started_trains[int(train[point])] = clock[0] + seconds
-        token = (clock[0] + seconds, number)
+        if ready is None:
+            started_trains[key] = clock[0] + one_off + train_cost[key]
+        # A train under way is a Dask task of its own that this trial waits for
+        # (flows.scheduling), not computed again.
+        begin = clock[0] if ready is None else max(clock[0], ready)
+        token = (begin + seconds, number)
         heapq.heappush(events, token)
         return token
 
