@@ -119,8 +119,11 @@ class Search:
         self.space = space
         self.root = str(root)
         self.journal = SearchJournal.open(root, space.name, fingerprint or space.fingerprint())
-        # ``budget`` (trials in all; None for seconds) picks ``auto``'s sampler and the start-up.
-        self.proposer = Proposer(space, seed_for(space.seed, len(self.journal.params)), budget)
+        # ``budget`` (trials in all; None for seconds) picks ``auto``'s sampler and the start-up;
+        # a search begun by ``auto`` keeps the sampler it began with, whatever budget extends it.
+        sampler = self.journal.sampler if space.sampler is Sampler.AUTO else None
+        chosen = space if sampler is None else dataclasses.replace(space, sampler=Sampler(sampler))
+        self.proposer = Proposer(chosen, seed_for(space.seed, len(self.journal.params)), budget)
         for number in sorted(self.journal.params):
             params = self.journal.params[number]
             if number in self.journal.values:
@@ -149,7 +152,7 @@ class Search:
                 number = pending.pop(0)
             else:
                 number = max(self.journal.params, default=-1) + 1
-                self.journal.asked(number, params)
+                self.journal.asked(number, params, self.proposer.kind.value)
             self._asked[number] = trial
             numbers.append(number)
         return numbers

@@ -1,7 +1,8 @@
 """The journal of a search (``eskin optimize``) in its run root: every trial asked and told.
 
 ``<root>/search-<space>.jsonl`` holds one JSON object per line, appended as the search goes:
-``{"space", "trial", "params"}`` when a trial is asked (before its point is submitted) and
+``{"space", "trial", "params", "sampler"}`` when a trial is asked (before its point is
+submitted; ``sampler`` names the sampler that asked it, absent in journals written before) and
 ``{"space", "trial", "values"}`` (its objective values) or ``{"space", "trial", "failed"}``
 when it is told. ``space`` is the fingerprint of the space searched, so a journal is never
 replayed into another space. Each line is written with one ``write`` on a file opened with
@@ -85,7 +86,8 @@ class SearchJournal:
     """The trials of one search read from its journal, in trial order.
 
     ``params`` maps each asked trial's number to its values by field; ``values`` each told
-    trial's objective values; ``failed`` each failed trial's reason.
+    trial's objective values; ``failed`` each failed trial's reason; ``sampler`` names the
+    sampler that asked the journal's first trial (None if it was not recorded).
     """
 
     path: Path
@@ -93,6 +95,7 @@ class SearchJournal:
     params: dict[int, dict[str, Any]] = field(default_factory=dict)
     values: dict[int, list[float]] = field(default_factory=dict)
     failed: dict[int, str] = field(default_factory=dict)
+    sampler: str | None = None
 
     @classmethod
     def open(cls, root: str | Path, name: str, fingerprint: str) -> SearchJournal:
@@ -122,6 +125,8 @@ class SearchJournal:
             try:
                 if "params" in record:
                     journal.params[number] = dict(record["params"])
+                    if journal.sampler is None and isinstance(record.get("sampler"), str):
+                        journal.sampler = record["sampler"]
                 elif "values" in record:
                     journal.values[number] = [float(v) for v in record["values"]]
                 else:
@@ -135,11 +140,15 @@ class SearchJournal:
         """Trials asked but never told (a killed search's), in order."""
         return [n for n in sorted(self.params) if n not in self.values and n not in self.failed]
 
-    def asked(self, number: int, params: Mapping[str, Any]) -> None:
-        """Record that trial ``number`` was asked with ``params`` (values by field), before its
-        point is submitted."""
+    def asked(self, number: int, params: Mapping[str, Any], sampler: str | None = None) -> None:
+        """Record that trial ``number`` was asked with ``params`` (values by field) by
+        ``sampler`` (None: not recorded), before its point is submitted."""
         self.params[number] = dict(params)
-        self._append({"trial": number, "params": dict(params)})
+        record: dict[str, Any] = {"trial": number, "params": dict(params)}
+        if sampler is not None:
+            self.sampler = self.sampler or sampler
+            record["sampler"] = sampler
+        self._append(record)
 
     def told(self, number: int, values: Sequence[float]) -> None:
         """Record trial ``number``'s objective values, in the order of the space's

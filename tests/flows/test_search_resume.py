@@ -98,3 +98,20 @@ def test_a_scene_field_added_at_a_neutral_default_keeps_the_fingerprint():
     assert later.fingerprint() == today.fingerprint()
     # The form of older journals changed with it: those written from now on are safe.
     assert later.fingerprint(every_field=True) != today.fingerprint(every_field=True)
+
+
+def test_a_search_begun_by_auto_keeps_its_sampler_when_a_larger_budget_extends_it(tmp_path):
+    from flows.samplers import GP_MAX_TRIALS
+
+    auto = space()
+    large = GP_MAX_TRIALS + 100
+    assert resolve_sampler(auto, 20) is Sampler.GP and resolve_sampler(auto, large) is Sampler.TPE
+    root = SweepStore.open_or_create(tmp_path / "run").root
+    first = Search(auto, root, budget=20)
+    assert first.ask(1) == [0]
+    assert first.journal.sampler == "gp"
+    # Extended past auto's GP limit: the search goes on with the GP it began with.
+    assert Search(auto, root, budget=large).proposer.kind is Sampler.GP
+    # A new search of that budget: auto's choice for it.
+    fresh = SweepStore.open_or_create(tmp_path / "fresh").root
+    assert Search(auto, fresh, budget=large).proposer.kind is Sampler.TPE

@@ -71,7 +71,9 @@ def test_two_running_trials_that_share_a_train_compute_it_once(two_threads, tmp_
     # train once.
     payers = [key for key in keys if "readout" in entries[key].paid[Charge.OWN]]
     assert len(payers) == 1
-    assert all(entries[key].paid[Charge.OWN]["coding"] > 0 for key in keys)
+    # Training is always a point's own; its rate matrices may come from the memory of the
+    # in-process worker, which an earlier test's trial at the same design left there.
+    assert all(entries[key].paid[Charge.OWN]["train_ffnn"] > 0 for key in keys)
     paid = sum(v for key in keys for steps in entries[key].paid.values() for v in steps.values())
     cube = trials_cube(space, root, params, [0, 1])
     assert spent_seconds(space, params, cube) == pytest.approx(paid, rel=1e-9)

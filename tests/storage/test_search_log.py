@@ -15,6 +15,7 @@ def test_a_journal_replays_what_was_asked_and_told(tmp_path):
     journal.told_failed(2, "point 1234: out of memory")
     again = SearchJournal.open(tmp_path, "design", "abc")
     assert again.params == journal.params
+    assert again.sampler is None  # not recorded
     assert again.values == {0: [0.5, 120.0]}
     assert again.failed == {2: "point 1234: out of memory"}
     assert again.pending == [1]
@@ -45,3 +46,11 @@ def test_a_journals_fingerprint_is_its_first_readable_lines(tmp_path):
     journal.asked(0, {"array.rows": 2})
     assert journal_fingerprint(tmp_path, "design") == "abc"
     assert journal_fingerprint(tmp_path, "elsewhere") is None
+
+
+def test_a_journal_keeps_the_sampler_that_asked_its_first_trial(tmp_path):
+    journal = SearchJournal.open(tmp_path, "design", "abc")
+    journal.asked(0, {"array.rows": 2}, sampler="gp")
+    journal.asked(1, {"array.rows": 1}, sampler="tpe")
+    assert journal.sampler == "gp"
+    assert SearchJournal.open(tmp_path, "design", "abc").sampler == "gp"
