@@ -594,7 +594,8 @@ def search_summary(
     search: Search, new_trials: int, cache_hits: int, computed: int, seconds: float
 ) -> dict[str, Any]:
     """What ``eskin optimize --json`` prints: ``root``, ``space``, ``trials`` (finished, all
-    runs), ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
+    runs), ``sampler`` (the one that asked this run's trials, ``auto`` resolved),
+    ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
     batches), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
     :meth:`Search.seconds_spent`), ``cubes`` (where the search's ``trials`` and ``front`` cubes
     are) and ``front`` (:meth:`Search.front_rows`)."""
@@ -602,6 +603,7 @@ def search_summary(
         "root": search.root,
         "space": search.space.name,
         "trials": len(search.journal.values),
+        "sampler": search.proposer.kind.value,
         "new_trials": new_trials,
         "cache_hits": cache_hits,
         "computed": computed,

@@ -219,7 +219,7 @@ def format_search_summary(summary: Mapping[str, Any]) -> str:
     lines = [
         f"{summary['trials']} trials ({summary['new_trials']} new: {summary['computed']} points "
         f"computed, {summary['cache_hits']} found in the store) in {summary['seconds']:.1f} s; "
-        f"{summary['search_seconds']:.1f} stage seconds in all",
+        f"{summary['search_seconds']:.1f} stage seconds in all; sampler {summary['sampler']}",
         "front (~: off it, but not significantly worse):",
     ]
     for row in summary["front"]:

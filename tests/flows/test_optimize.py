@@ -75,6 +75,7 @@ def test_a_budget_of_12_then_16_computes_only_the_4_new_trials(space, tmp_path):
     first = optimize(path, root, env, "--budget", "12")
     assert {"root", "trials", "computed", "cache_hits", "seconds", "front"} <= set(first)
     assert first["trials"] == 12 and first["new_trials"] == 12
+    assert first["sampler"] == "gp"  # auto, for a short search of ordered dimensions
     cubes = open_results(root)
     assert list(cubes) == ["tiny.front", "tiny.trials"]
     assert first["cubes"] == {

@@ -46,6 +46,7 @@ def test_a_search_begun_under_the_former_default_sampler_continues_with_it(
     )
     assert (summary["trials"], summary["new_trials"]) == (2, 1)
     assert kinds == [Sampler.TPE]  # not auto's GP
+    assert summary["sampler"] == "tpe"
     notes = [line for line in capsys.readouterr().err.splitlines() if "eskin: note" in line]
     assert len(notes) == 1
     assert "search-tiny.jsonl was begun with sampler 'tpe'" in notes[0]

@@ -7,7 +7,13 @@ from types import SimpleNamespace
 import numpy as np
 import xarray as xr
 
-from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
+from flows.summaries import (
+    format_search_summary,
+    format_summary,
+    format_sweep_summary,
+    json_safe,
+    result_summary,
+)
 from pipeline.chain.training import CrossValidation
 from pipeline.design.scene import Model, Scene
 
@@ -166,3 +172,40 @@ def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
         for i in (0, 2)
     ]
     assert (by_position[0].low, by_position[0].high) != (by_position[1].low, by_position[1].high)
+
+
+def test_format_search_summary_names_the_sampler_and_marks_trials_off_the_front():
+    summary = {
+        "trials": 3,
+        "new_trials": 2,
+        "computed": 2,
+        "cache_hits": 0,
+        "seconds": 12.5,
+        "search_seconds": 10.25,
+        "sampler": "gp",
+        "front": [
+            {
+                "trial": 0,
+                "objectives": {"accuracy.ffnn": 0.5},
+                "params": {"array.rows": 2},
+                "on_front": True,
+            },
+            {
+                "trial": 2,
+                "objectives": {"accuracy.ffnn": 0.48},
+                "params": {"array.rows": 1},
+                "on_front": False,
+            },
+        ],
+        "cubes": {"trials": "r/store.zarr/cubes/s.trials"},
+    }
+    lines = format_search_summary(summary).splitlines()
+    assert lines[0] == (
+        "3 trials (2 new: 2 points computed, 0 found in the store) in 12.5 s; "
+        "10.2 stage seconds in all; sampler gp"
+    )
+    assert lines[2:4] == [
+        "  trial 0: accuracy.ffnn 0.5 at array.rows=2",
+        "  ~trial 2: accuracy.ffnn 0.48 at array.rows=1",
+    ]
+    assert lines[4] == "cube trials: r/store.zarr/cubes/s.trials"
