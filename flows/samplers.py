@@ -29,10 +29,10 @@ space is mostly ordered; TPE otherwise.
 * A Gaussian process needs few trials to learn which dimensions matter and how smoothly the
   objectives vary along each. Replayed on the benchmark's spaces (``benchmarks/search.py``,
   the performance page), it found more of the exhaustive front than TPE and random search at
-  10 % of the grid's paid seconds (0.967 against 0.931 and 0.882 of the hypervolume on 3
-  dimensions; 0.879 against 0.843 and 0.853 on 5) and at 5 % on 3 dimensions (at 5 % on 5,
-  8 trials, all three were their random start), while TPE was ahead at 25 % on 3
-  dimensions (0.990 against 0.978, 62-80 trials). Its ask costs seconds (1-3 s at 30-60 trials
+  5 and 10 % of the grid's paid seconds (at 10 %: 0.962 against 0.925 and 0.885 of the
+  hypervolume on 3 dimensions; 0.887 against 0.867 and 0.853 on 5), while TPE was slightly
+  ahead at 25 % (0.991 against 0.986 on 3 dimensions, 0.968 against 0.964 on 5; 56-134
+  trials). Its ask costs seconds (about 1.3 s on average over searches of up to 130 trials
   on a busy 2-core machine; TPE's milliseconds) and grows with the cube of the trials told
   (its fit factorises their covariance); :data:`GP_MAX_TRIALS` is a judgment, not a
   measurement, of where that and TPE's lead on long searches outweigh the GP's start.
