@@ -212,8 +212,8 @@ class SpaceFillingStart:
     ``low + u * (high - low)`` for a continuous float (in logarithms for a log range).
     """
 
-    #: Points drawn at once: a power of two (a Sobol' sequence's balanced size), more than any
-    #: start-up needs; the next 64 are drawn if ever needed.
+    #: How many points are drawn at once, a power of two (a Sobol' sequence's balanced size)
+    #: and more than any start-up needs; the next as many are drawn if ever needed.
     BLOCK = 64
 
     def __init__(self, distributions: Mapping[str, Any], seed: int):
