@@ -102,7 +102,7 @@ def skip_exit_collection() -> None:
     The interpreter collects garbage as it tears its modules down at exit, walking every object
     the process still holds: seconds for a Dask worker that trained (torch, numba and the
     training's objects), about a second for a command that swept. The memory goes back to the
-    system either way, so an exit handler freezes every object first (:func:`gc.freeze`: the
+    system either way, so an exit handler freezes every object first (``gc.freeze()``: the
     passes leave frozen objects alone); a worker's nanny otherwise waited 4 s for its exit and
     then killed it, which skips the rest of the teardown too. Registered once, as early as
     possible, so that it runs after every other exit handler (they run last registered first):
