@@ -104,10 +104,10 @@ def skip_exit_collection() -> None:
     training's objects), about a second for a command that swept. The memory goes back to the
     system either way, so an exit handler freezes every object first (``gc.freeze()``: the
     passes leave frozen objects alone); a worker's nanny otherwise waited 4 s for its exit and
-    then killed it, which skips the rest of the teardown too. Registered once, as early as
-    possible, so that it runs after every other exit handler (they run last registered first):
-    exit handlers still run and objects freed by reference counting are still finalized; only
-    objects in reference cycles are left unfinalized, as Python allows at exit.
+    then killed it, which skips the rest of the teardown too. Registered once per process.
+    Every other exit handler still runs, before or after this one, and objects freed by
+    reference counting are still finalized; only objects in reference cycles are left
+    unfinalized, as Python allows at exit.
     """
     atexit.register(gc.freeze)
 
