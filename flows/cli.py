@@ -468,6 +468,10 @@ def main(argv: list[str] | None = None) -> int:
     stderr and returns the error's exit status; an interrupt returns 130.
     """
     interrupts.as_program(argv is None)
+    if interrupts.is_program():
+        from flows.environment import skip_exit_collection
+
+        skip_exit_collection()
     args = build_parser().parse_args(argv)
     status = _handled(args)
     if interrupts.is_program():

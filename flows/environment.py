@@ -9,9 +9,11 @@ Settings the user already made win (``setdefault``): a user with a real Prefect 
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import ctypes
 import functools
+import gc
 import hashlib
 import os
 from collections.abc import Iterable, Iterator
@@ -91,6 +93,23 @@ def tune_allocator() -> bool:
     except (OSError, AttributeError):
         return False
     return bool(mallopt(_M_MMAP_MAX, 0) and mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES))
+
+
+@functools.cache
+def skip_exit_collection() -> None:
+    """Spare the process the garbage collector's passes over its objects as it exits.
+
+    The interpreter collects garbage as it tears its modules down at exit, walking every object
+    the process still holds: seconds for a Dask worker that trained (torch, numba and the
+    training's objects), about a second for a command that swept. The memory goes back to the
+    system either way, so an exit handler freezes every object first (``gc.freeze()``: the
+    passes leave frozen objects alone); a worker's nanny otherwise waited 4 s for its exit and
+    then killed it, which skips the rest of the teardown too. Registered once per process.
+    Every other exit handler still runs, before or after this one, and objects freed by
+    reference counting are still finalized; only objects in reference cycles are left
+    unfinalized, as Python allows at exit.
+    """
+    atexit.register(gc.freeze)
 
 
 @contextlib.contextmanager

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from flows.environment import tune_allocator
+from flows.environment import skip_exit_collection, tune_allocator
 from pipeline.design.scene import Scene
 from pipeline.run import stages
 from pipeline.run.records import Charge, Paid, StepSeconds
@@ -123,6 +123,7 @@ def ensure_entries(
 
     torch.set_num_threads(1)
     tune_allocator()
+    skip_exit_collection()
     _quiet_write_failures()
     setup_s = time.perf_counter() - start
     wanted = stages.level_named(level)

@@ -6,6 +6,7 @@ tutorial notebook executes), into a temporary folder; the tests then read the bu
 
 from __future__ import annotations
 
+import functools
 import html.parser
 import importlib
 import pkgutil
@@ -190,6 +191,7 @@ class _Resources(html.parser.HTMLParser):
             self.found.append((tag, values["href"], tag == "link" and bool(rel & fetched)))
 
 
+@functools.cache  # three tests read every page; a built page does not change
 def resources(page: Path) -> _Resources:
     parser = _Resources()
     parser.feed(page.read_text())

@@ -42,10 +42,7 @@ from torch import nn
 
 from pipeline.chain.models import CNN_CHANNELS, FoldCNN, FoldFFNN
 
-__all__ = ["OPERATIONS", "Operations", "cnn_operations", "conv3x3_fan_out", "count_operations"]
-
-#: The kinds of operation counted, in the order of :meth:`Operations.stacked`.
-OPERATIONS = ("acs", "macs", "neuron_updates")
+__all__ = ["Operations", "cnn_operations", "conv3x3_fan_out", "count_operations"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,7 +62,8 @@ class Operations:
     neuron_updates: np.ndarray
 
     def stacked(self) -> np.ndarray:
-        """float64 ``(F, B, D, 3)``: the three counts in :data:`OPERATIONS` order."""
+        """float64 ``(F, B, D, 3)``: the three counts in
+        :data:`~pipeline.chain.operation_kinds.OPERATIONS` order."""
         return np.stack([self.acs, self.macs, self.neuron_updates], axis=-1)
 
 

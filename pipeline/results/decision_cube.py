@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.chain.operations import OPERATIONS
+from pipeline.chain.operation_kinds import OPERATIONS
 
 __all__ = ["DECODER_VARIABLES", "decision_variables"]
 
-#: The cube variable of each kind of operation, in :data:`~pipeline.chain.operations.OPERATIONS`
-#: order.
+#: The cube variable of each kind of operation, in
+#: :data:`~pipeline.chain.operation_kinds.OPERATIONS` order.
 DECODER_VARIABLES = tuple(f"decoder_{kind}" for kind in OPERATIONS)
 
 

@@ -265,7 +265,7 @@ class Decisions:
         float32 ``(repeats, D, n)``: softmax probability of that class; NaN where no decision.
     operations : dict[str, numpy.ndarray]
         float64 ``(D, 3)``: mean operations per recording of a decision at each time (accumulates,
-        multiply-accumulates, neuron updates: :data:`pipeline.chain.operations.OPERATIONS`);
+        multiply-accumulates, neuron updates: :data:`pipeline.chain.operation_kinds.OPERATIONS`);
         NaN where no decision.
     """
 

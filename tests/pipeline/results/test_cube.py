@@ -81,7 +81,8 @@ def built_grids() -> dict[str, xr.Dataset]:
 
 def test_building_cubes_imports_no_scipy_stats():
     """Intervals and correlations need only scipy.special: a warm re-run of a sweep rebuilds
-    every cube, and importing scipy.stats would take it about a second."""
+    every cube, and importing scipy.stats would take it about a second. Nor does building a
+    cube import torch (another second for the sweep's process, which never trains)."""
     code = (
         "import sys\n"
         "from pipeline.results.cube import build_cube\n"
@@ -90,7 +91,7 @@ def test_building_cubes_imports_no_scipy_stats():
         "records = golden.rich_entries(grid)\n"
         "cubes = [build_cube(grid, sweep, records) for sweep in grid.sweeps]\n"
         "assert any('correlation_r' in cube for cube in cubes)\n"
-        "print(sorted(name for name in sys.modules if name.startswith('scipy.stats')))\n"
+        "print(sorted(name for name in sys.modules if name.startswith(('scipy.stats', 'torch'))))\n"
     )
     result = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=300
