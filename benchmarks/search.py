@@ -7,14 +7,14 @@ Two spaces (:data:`SPACES`), each gridded exhaustively once:
   3 windows x 1-4 taxel rows x threshold mismatch 0-0.3 in steps of 0.1 (576 points);
 
 on the built-in data with enough recordings and training that the exhaustive front is a
-measurement, not a draw (:data:`BASE`: 80 touches per class of 2 s, 5 folds, FFNN, 40 epochs;
-:data:`BASE_LARGE` for ``encoder``: 40 touches per class, 20 epochs; the 95 % intervals of
-the front's accuracies are stated beside the accuracy range the grid spans, :func:`noise`).
+measurement, not a draw (:data:`BASE`, for both: 80 touches per class of 2 s, 5 folds, FFNN,
+40 epochs; the 95 % intervals of the front's accuracies are stated beside the accuracy range
+the grid spans, :func:`noise`).
 Objectives: FFNN accuracy (max) and data rate (min).
 
 The exhaustive results are computed once and kept, small, in :data:`DATA`
 (``python -m benchmarks.search --exhaustive``, a sweep of both grids on 2 workers into a run
-root, about an hour on a busy 2-core machine): per point its objectives, the 95 % interval of
+root, about two hours on a 2-core machine): per point its objectives, the 95 % interval of
 its accuracy, and the seconds it paid (:func:`exhaustive_arrays`). Searches are then replayed
 offline against them (:func:`replay`): the real sampler (:class:`flows.samplers.Proposer`,
 exactly as ``eskin optimize`` makes it) and the real refill loop (:func:`flows.refill.refill`)
@@ -83,12 +83,6 @@ BASE = {
     "array": {"rows": 1, "cols": 1},
     "training": {"models": ["ffnn"], "epochs": 40, "folds": 5},
 }
-#: The larger space's base: half the touches and training (its 576 points on a busy machine).
-BASE_LARGE = {
-    **BASE,
-    "dataset": {**BASE["dataset"], "recordings_per_class": 40},
-    "training": {**BASE["training"], "epochs": 20},
-}
 OBJECTIVES = {"accuracy.ffnn": "max", "data_rate_bps": "min"}
 SPACES: dict[str, dict[str, Any]] = {
     "rows": {
@@ -103,12 +97,11 @@ SPACES: dict[str, dict[str, Any]] = {
     },
     "encoder": {
         "name": "encoder",
-        "base": BASE_LARGE,
+        "base": BASE,
         "space": {
             "readout.encoder": {"choices": ["lcs", "decaying"]},
-            # From 0.045 V, as when the kept exhaustive results were made: the first exhaustive
-            # run saw the decaying encoder fail at 0.03 V (its lowest threshold) under mismatch,
-            # which did not reproduce on the committed code; 0.03 V back needs the data again.
+            # From 0.045 V, which keeps the grid at 576 points (an exhaustive sweep of about
+            # 100 minutes on 2 workers); the lower thresholds are the rows space's to explore.
             "readout.threshold_v": {"choices": THRESHOLDS[2:]},
             "coding.window_s": {"choices": [0.05, 0.1, 0.2]},
             "array.rows": {"low": 1, "high": 4},
