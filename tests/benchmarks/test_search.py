@@ -9,7 +9,9 @@ from benchmarks.search import (
     MISMATCH,
     SPACES,
     WORKERS,
+    Budget,
     at_budget,
+    grid_cost,
     grid_params,
     oracle_share,
     point_label,
@@ -83,3 +85,17 @@ def test_the_oracle_of_a_dimension_that_moves_nothing_finds_the_front_at_any_cop
     median, low, high = oracle_share({**lucky, "labels": labels}, MISMATCH, draws=400)
     assert low < 1.0 and high == 1.0 and low <= median <= high
     assert oracle_share({**equal, "labels": labels}, "coding.window_s") is None
+
+
+def test_a_budget_beyond_the_start_leaves_the_workers_start_out_of_the_share():
+    # Two workers' starts of 3 s each in a grid of 10 points of 1 s (16 s in all).
+    arrays = {
+        "own_s": np.full(10, 1.0),
+        "train_s": np.zeros(10),
+        "shared_s": np.array([3.0, 0, 0, 0, 0, 3.0, 0, 0, 0, 0]),
+    }
+    assert grid_cost(arrays) == 16.0
+    assert Budget.PAID.seconds(0.5, arrays) == 8.0
+    assert Budget.BEYOND_START.seconds(0.5, arrays) == 6.0 + 5.0
+    for budget in Budget:  # what a search spent, as the share its budget was given in
+        assert budget.spent(budget.seconds(0.25, arrays), arrays) == 0.25
