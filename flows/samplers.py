@@ -28,12 +28,12 @@ space is mostly ordered; TPE otherwise.
 
 * A Gaussian process needs few trials to learn which dimensions matter and how smoothly the
   objectives vary along each. Replayed on the benchmark's spaces (``benchmarks/search.py``,
-  the performance page), it found more of the exhaustive front than TPE and random search at
-  5 and 10 % of the grid's paid seconds (at 10 %: 0.962 against 0.925 and 0.885 of the
-  hypervolume on 3 dimensions; 0.887 against 0.867 and 0.853 on 5), while TPE was slightly
-  ahead at 25 % (0.991 against 0.986 on 3 dimensions, 0.968 against 0.964 on 5; 56-134
-  trials). Its ask costs seconds (about 1.3 s on average over searches of up to 130 trials
-  on a busy 2-core machine; TPE's milliseconds) and grows with the cube of the trials told
+  the performance page), it found at least as much of the exhaustive front as TPE and random
+  search at 5 and 10 % of the grid's paid seconds (at 10 %: 0.891 against 0.856 and 0.786 of
+  the hypervolume on 3 dimensions; 0.952 against 0.935 and 0.914 on 5), while TPE was
+  slightly ahead at 25 % on 3 dimensions (0.981 against 0.976; 42-49 trials). Its ask costs
+  up to seconds (about 1 s on average over searches of up to 165 trials on a shared 2-core
+  machine; TPE's milliseconds) and grows with the cube of the trials told
   (its fit factorises their covariance); :data:`GP_MAX_TRIALS` is a judgment, not a
   measurement, of where that and TPE's lead on long searches outweigh the GP's start.
 * Unordered choices are where a kernel over positions helps least (Optuna's GP measures them
