@@ -14,7 +14,7 @@ Objectives: FFNN accuracy (max) and data rate (min).
 
 The exhaustive results are computed once and kept, small, in :data:`DATA`
 (``python -m benchmarks.search --exhaustive``, a sweep of both grids on 2 workers into a run
-root, about 7 minutes on a quiet 2-core machine): per point its objectives, the 95 % interval of
+root, about 20 minutes on a busy 2-core machine): per point its objectives, the 95 % interval of
 its accuracy, and the seconds it paid (:func:`exhaustive_arrays`). Searches are then replayed
 offline against them (:func:`replay`): the real sampler (:class:`flows.samplers.Proposer`,
 exactly as ``eskin optimize`` makes it) and the real refill loop (:func:`flows.refill.refill`)
@@ -30,8 +30,8 @@ counted.
 
 A budget is a share of the grid's cost, counted two ways (:class:`Budget`): of everything
 the grid paid (``paid``), and of its points' seconds beyond the workers' start, which a search
-on fresh workers pays as the grid did (``beyond_start``). The benchmark's points cost about a
-second each, so the start is a large part of a small ``paid`` budget; for trials that cost
+on fresh workers pays as the grid did (``beyond_start``). The benchmark's points cost a few
+seconds each, so the start is a large part of a small ``paid`` budget; for trials that cost
 hours the two are the same.
 
 One replay per space, sampler and seed runs to the largest budget: a search with a smaller
