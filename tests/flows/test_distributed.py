@@ -88,11 +88,11 @@ def api_post(api: str, path: str, body: dict, auth: str | None) -> list[dict]:
         return json.loads(response.read())
 
 
-def test_prefect_deployment_run(smoke_sweep, tmp_path):
+def test_prefect_deployment_run(smoke_sweep, tmp_path, migrated_server_state):
     """``prefect deployment run sweep/default --watch`` on the local server ``eskin`` starts,
     with its auth string set as a user sets it; afterwards the API lists the run's task runs
     (one per named sweep) and its artifacts. Without the string the API answers 401."""
-    state = tmp_path / "server-state"
+    state = migrated_server_state(tmp_path / "server-state")  # set up: no flow run in it yet
     env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
     serving = None
     try:

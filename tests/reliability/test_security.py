@@ -223,7 +223,7 @@ def test_an_external_tls_scheduler_needs_matching_credentials(tmp_path):
     assert not (tmp_path / "run").exists()
 
 
-def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
+def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch, migrated_server_state):
     # hermetic_environment writes os.environ: give it a copy without the user's Prefect settings.
     environ = {k: v for k, v in os.environ.items() if not k.startswith("PREFECT_")}
     monkeypatch.setattr(os, "environ", environ)
@@ -234,7 +234,7 @@ def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
     runner = get_current_settings().runner.server  # eskin serve's own web server, if enabled
     assert not runner.enable and runner.host in ("localhost", "127.0.0.1")
     # The local Prefect server that sweeps start: API and UI on loopback only.
-    state = tmp_path / "server-state"
+    state = migrated_server_state(tmp_path / "server-state")
     monkeypatch.setenv(server.SERVER_DIR_ENV, str(state))
     try:
         with server.prefect_server(show_progress=False) as url:
