@@ -114,16 +114,20 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path, migrated_server_state):
             cwd=tmp_path,
         )
 
-        def deployed():
-            inspect = subprocess.run(
-                [BIN / "prefect", "deployment", "inspect", "sweep/default"],
-                env=env,
-                capture_output=True,
-                timeout=60,
+        def deployed() -> bool:
+            # The API itself (what `prefect deployment inspect` asks, without a CLI start each).
+            request = urllib.request.Request(
+                f"{api}/deployments/name/sweep/default", headers=api_headers(auth)
             )
-            return inspect.returncode == 0
+            try:
+                with urllib.request.urlopen(request, timeout=60) as response:
+                    return response.status == 200
+            except urllib.error.HTTPError as error:
+                if error.code == 404:
+                    return False
+                raise
 
-        wait_for(deployed, 180, "the deployment sweep/default", interval=2)
+        wait_for(deployed, 180, "the deployment sweep/default", interval=0.5)
         root = tmp_path / "deployed"
         run = subprocess.run(
             [
