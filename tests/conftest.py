@@ -4,6 +4,7 @@ import contextlib
 import functools
 import json
 import os
+import shutil
 import sqlite3
 import subprocess
 from collections.abc import Callable
@@ -82,7 +83,17 @@ def migrated_server_state(migrated_prefect_db) -> Callable[[Path], Path]:
 
 
 @pytest.fixture(scope="session")
-def smoke_sweep(tmp_path_factory):
+def suite_server_db(suite_prefect_server, migrated_prefect_db) -> None:
+    """The suite's server state holds a copy of :func:`migrated_prefect_db` before the server
+    first starts there, so that start skips the set-up. A state that has a database already
+    (its server started) is left alone; the first users of the server ask for this."""
+    database = suite_prefect_server / "prefect.db"
+    if not database.exists():
+        shutil.copyfile(migrated_prefect_db, database)
+
+
+@pytest.fixture(scope="session")
+def smoke_sweep(tmp_path_factory, suite_server_db):
     """The smoke grid swept once on the default local cluster: (root, JSON summary, env)."""
     base = tmp_path_factory.mktemp("smoke-sweep")
     env = hermetic_env(base)
