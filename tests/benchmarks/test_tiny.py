@@ -36,6 +36,7 @@ def test_make_bench_runs_every_suite():
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("suite_server_db")  # the sweeps' suites start the suite's server
 @pytest.mark.parametrize("suite", SUITES, ids=short)
 def test_a_suite_runs_at_its_tiny_size_and_gives_well_formed_rows(suite, tmp_path, monkeypatch):
     monkeypatch.setenv("DASK_TEMPORARY_DIRECTORY", str(tmp_path / "dask"))

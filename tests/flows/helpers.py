@@ -4,6 +4,7 @@ import base64
 import contextlib
 import math
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -95,6 +96,14 @@ def hermetic_env(base: Path, **extra: str) -> dict[str, str]:
         }
     )
     return env
+
+
+def server_state_with_db(state: Path, database: Path) -> Path:
+    """Make ``state``, a local server's state folder, as the server makes it (mode 0700), with a
+    copy of ``database`` (a Prefect database already set up) as the server's; return it."""
+    state.mkdir(mode=0o700, parents=True)
+    shutil.copyfile(database, state / "prefect.db")
+    return state
 
 
 def api_headers(auth: str | None) -> dict[str, str]:

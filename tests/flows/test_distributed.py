@@ -88,11 +88,11 @@ def api_post(api: str, path: str, body: dict, auth: str | None) -> list[dict]:
         return json.loads(response.read())
 
 
-def test_prefect_deployment_run(smoke_sweep, tmp_path):
+def test_prefect_deployment_run(smoke_sweep, tmp_path, migrated_server_state):
     """``prefect deployment run sweep/default --watch`` on the local server ``eskin`` starts,
     with its auth string set as a user sets it; afterwards the API lists the run's task runs
     (one per named sweep) and its artifacts. Without the string the API answers 401."""
-    state = tmp_path / "server-state"
+    state = migrated_server_state(tmp_path / "server-state")  # set up: no flow run in it yet
     env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
     serving = None
     try:
@@ -114,16 +114,20 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path):
             cwd=tmp_path,
         )
 
-        def deployed():
-            inspect = subprocess.run(
-                [BIN / "prefect", "deployment", "inspect", "sweep/default"],
-                env=env,
-                capture_output=True,
-                timeout=60,
+        def deployed() -> bool:
+            # The API itself (what `prefect deployment inspect` asks, without a CLI start each).
+            request = urllib.request.Request(
+                f"{api}/deployments/name/sweep/default", headers=api_headers(auth)
             )
-            return inspect.returncode == 0
+            try:
+                with urllib.request.urlopen(request, timeout=60) as response:
+                    return response.status == 200
+            except urllib.error.HTTPError as error:
+                if error.code == 404:
+                    return False
+                raise
 
-        wait_for(deployed, 180, "the deployment sweep/default", interval=2)
+        wait_for(deployed, 180, "the deployment sweep/default", interval=0.5)
         root = tmp_path / "deployed"
         run = subprocess.run(
             [

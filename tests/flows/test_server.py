@@ -1,7 +1,9 @@
 """The local Prefect server: started on first need, reused, stopped on demand or when idle.
 
 Each test uses its own state folder, so it starts (and stops) a server of its own and never
-touches the suite's shared one.
+touches the suite's shared one. Only the first test's folder starts empty (the server makes it,
+and sets up its database); the others hold a copy of a database already set up
+(``migrated_server_state``), which spares each start several seconds.
 """
 
 import fcntl
@@ -31,6 +33,12 @@ def state(tmp_path, monkeypatch):
     monkeypatch.delenv("PREFECT_API_URL", raising=False)
     yield folder
     server.stop(folder)
+
+
+@pytest.fixture
+def migrated(state, migrated_server_state):
+    """Makes :func:`state`, with its database set up."""
+    migrated_server_state(state)
 
 
 def api_status(url: str, auth: str | None = None) -> int:
@@ -80,17 +88,19 @@ def test_started_once_reused_and_stopped(state):
     assert server.status(state) is None and not (state / "server.json").exists()
 
 
+@pytest.mark.usefixtures("migrated")
 def test_idle_server_stops_by_itself_but_not_while_leased(state, monkeypatch):
-    monkeypatch.setenv(server.IDLE_ENV, "2")
+    monkeypatch.setenv(server.IDLE_ENV, "1")
     with server.prefect_server(show_progress=False):
         info = server.status(state)
-        time.sleep(5)  # twice the idle period, with a lease held
+        time.sleep(2.5)  # more than twice the idle period, with a lease held
         assert server.status(state) is not None, "stopped while a sweep used it"
-    psutil.Process(info.pid).wait(timeout=60)  # stops about 2 s after the lease ends
+    psutil.Process(info.pid).wait(timeout=60)  # stops about 1 s after the lease ends
     assert not (state / "server.json").exists()
-    assert "no sweep for 2 s; stopping" in (state / "server.log").read_text()
+    assert "no sweep for 1 s; stopping" in (state / "server.log").read_text()
 
 
+@pytest.mark.usefixtures("migrated")
 def test_a_sweep_arriving_while_the_idle_server_stops_waits_and_gets_a_new_one(state):
     """The monitor holds the lease lock exclusively while it shuts down; a sweep waits for it."""
     with server.prefect_server(show_progress=False):
@@ -113,6 +123,7 @@ def test_a_sweep_arriving_while_the_idle_server_stops_waits_and_gets_a_new_one(s
     assert server.status(state).pid != old.pid
 
 
+@pytest.mark.usefixtures("migrated")
 def test_a_named_server_is_used_with_the_users_own_auth_string(state, monkeypatch):
     with server.prefect_server(show_progress=False) as url:
         auth = os.environ[server.CLIENT_AUTH_ENV]
@@ -151,8 +162,8 @@ def test_a_server_that_cannot_start_is_one_error_line_and_exit_1(tmp_path):
     assert str(state / "server.log") in lines[-1]
 
 
-def test_server_commands(tmp_path):
-    state = tmp_path / "cli-state"
+def test_server_commands(tmp_path, migrated_server_state):
+    state = migrated_server_state(tmp_path / "cli-state")
     env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
     try:
         status = eskin("server", "status", "--json", env=env)
@@ -172,6 +183,7 @@ def test_server_commands(tmp_path):
         server.stop(state)
 
 
+@pytest.mark.usefixtures("migrated")
 def test_start_lock_serialises_concurrent_starts(state):
     """Two processes that both find no server start only one between them."""
     code = (

@@ -233,15 +233,11 @@ def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
 
     runner = get_current_settings().runner.server  # eskin serve's own web server, if enabled
     assert not runner.enable and runner.host in ("localhost", "127.0.0.1")
-    # The local Prefect server that sweeps start: API and UI on loopback only.
-    state = tmp_path / "server-state"
-    monkeypatch.setenv(server.SERVER_DIR_ENV, str(state))
-    try:
-        with server.prefect_server(show_progress=False) as url:
-            assert url.startswith("http://127.0.0.1:")
-            addresses = listening(psutil.Process(server.status(state).pid))
-    finally:
-        server.stop(state)
+    # The local Prefect server that sweeps start (the suite's, started here if no test has yet;
+    # it serves later tests too): API and UI on loopback only.
+    with server.prefect_server(show_progress=False) as url:
+        assert url.startswith("http://127.0.0.1:")
+        addresses = listening(psutil.Process(server.status().pid))
     assert addresses and set(addresses) == {"127.0.0.1"}, addresses
 
 

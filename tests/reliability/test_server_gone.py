@@ -22,7 +22,15 @@ import psutil
 import pytest
 
 from flows import server
-from tests.flows.helpers import api_headers, assert_same_cubes, eskin, hermetic_env, stop, wait_for
+from tests.flows.helpers import (
+    api_headers,
+    assert_same_cubes,
+    eskin,
+    hermetic_env,
+    server_state_with_db,
+    stop,
+    wait_for,
+)
 from tests.reliability.test_interruption import dask_workers, results, start_sweep
 
 pytestmark = pytest.mark.slow
@@ -31,10 +39,11 @@ POINTS = 7  # distinct points of the smoke grid
 
 
 @pytest.fixture(scope="module")
-def setting(tmp_path_factory):
-    """(environment with this module's server state, that state folder)."""
+def setting(tmp_path_factory, migrated_prefect_db):
+    """(environment with this module's server state, that state folder); the state holds a
+    database already set up, as after the server's first start."""
     base = tmp_path_factory.mktemp("server-gone")
-    state = base / "server-state"
+    state = server_state_with_db(base / "server-state", migrated_prefect_db)
     yield hermetic_env(base, ESKIN_SERVER_DIR=str(state)), state
     server.stop(state)
 
