@@ -205,6 +205,9 @@ def dask_client(
     try:
         client = Client(cluster, security=security, set_as_default=True)
         try:
+            from flows.worker_logs import QuietHeartbeatAtClose
+
+            client.register_plugin(QuietHeartbeatAtClose())
             yield client
         finally:
             client.close()

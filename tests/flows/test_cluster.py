@@ -72,3 +72,19 @@ def test_only_the_kill_of_a_worker_still_exiting_is_left_unsaid():
     killed = record("Worker process still alive after 4.0 seconds, killing")
     assert not _exiting_worker_killed(killed)
     assert _exiting_worker_killed(record("Restarting worker"))
+
+
+def _worker_logs(messages):
+    """Which of ``messages`` this process's Dask worker logger lets through, at ERROR."""
+    import logging
+
+    logger = logging.getLogger("distributed.worker")
+    records = [logging.LogRecord(logger.name, logging.ERROR, "", 0, m, (), None) for m in messages]
+    return [bool(logger.filter(r)) for r in records]
+
+
+def test_a_local_worker_does_not_report_a_heartbeat_to_its_closed_scheduler():
+    messages = ["Failed to communicate with scheduler during heartbeat.", "Compute Failed"]
+    with dask_client(workers=1) as client:
+        (said,) = client.run(_worker_logs, messages).values()
+    assert said == [False, True]
