@@ -627,11 +627,14 @@ def _run_flow(
 def _outcome(record: Any, run: Callable[[SweepStore], Any], store: SweepStore) -> Any:
     """``run(store)``'s result: the flow's, or, when Prefect failed to record the end of a
     flow whose body had ended, the body's own (the record's ``outcome``), its final
-    state then left to the record."""
+    state then left to the record. A run whose server answered busy before its body began is
+    started again (:func:`flows.record.started`)."""
     from prefect.states import Completed, Failed, State
 
+    from flows.record import started
+
     try:
-        return run(store)
+        return started(record, lambda: run(store))
     except Exception as error:
         outcome = record.outcome
         if not outcome.done or error is outcome.error:

@@ -24,6 +24,13 @@ own time). When the engine cannot set the flow run's final state, the command li
 run's outcome from the record (its ``outcome``, an :class:`Outcome`) and the record sets that
 state once the server answers.
 
+The server may answer a request "busy, try again" (503, when other requests hold its SQLite
+database; 429): the flow engine, which does not retry, then fails. Before the flow's body began
+nothing ran, so the run starts again after each of :data:`START_WAITS_S` (:func:`started`, one
+line on stderr each time); the server still busy after the last, the run fails in one line
+(exit status 1) with nothing computed. A flow run the engine had made before the busy answer is
+left pending on the server.
+
 A run that ends with its record incomplete says so in one line (:meth:`Record.incomplete_note`);
 its results are complete and its exit status is that of the run (0 for a sweep that finished).
 """
@@ -33,6 +40,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import logging
+import sys
 import threading
 import time
 from collections import OrderedDict, deque
@@ -40,7 +48,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from flows.server import healthy, registered_run
+from flows.server import ServerError, healthy, registered_run
 
 #: Seconds between health checks of a server that stopped answering.
 PROBE_S = 2.0
@@ -58,6 +66,12 @@ INTERRUPTED_FLUSH_S = 2.0
 #: takes a minute per request when the server is gone; its transport still tries to connect
 #: 4 times over about 3.5 s).
 ENGINE_RETRIES = 0
+#: Seconds waited before each new start of a flow whose server answered busy before its body
+#: began (:func:`started`): about 7 s of waiting in all, a few seconds more than the busiest
+#: moments of a shared local server last.
+START_WAITS_S = (1.0, 2.0, 4.0)
+#: The HTTP statuses of an answer that asks the client to try again later.
+BUSY_STATUSES = (429, 503)
 #: Prefect's log lines that say an event was not sent (the record counts them instead).
 _EVENT_LOSS = ("Unable to connect to", "Service 'EventsWorker' failed")
 #: Prefect's loggers whose lines about a server that does not answer the record stands in for.
@@ -430,3 +444,49 @@ def run_recorded(body: Callable[[Record], T], *, what: str, root: str) -> T:
                 raise
             record.outcome = Outcome(done=True, value=value)
             return value
+
+
+def busy_status(error: BaseException) -> int | None:
+    """The status of a Prefect API answer that asks the client to try again later
+    (:data:`BUSY_STATUSES`), None for any other error."""
+    import httpx
+
+    if isinstance(error, httpx.HTTPStatusError):
+        if error.response.status_code in BUSY_STATUSES:
+            return error.response.status_code
+    return None
+
+
+def started(record: Record, call: Callable[[], T]) -> T:
+    """``call()``, a flow's run with ``record`` active; called again after each of
+    :data:`START_WAITS_S` while it fails with a busy answer (:func:`busy_status`) before the
+    flow's body began (the record has no flow run id yet), as the module docstring says.
+
+    Raises
+    ------
+    ServerError
+        Still busy after the last wait (exit status 1); the busy answer is its cause.
+    """
+    waits = iter(START_WAITS_S)
+    while True:
+        try:
+            return call()
+        except Exception as error:
+            status = busy_status(error)
+            if status is None or record.flow_run_id is not None or record.outcome.done:
+                raise
+            where = record.api_url or "the Prefect API"
+            wait_s = next(waits, None)
+            if wait_s is None:
+                tries = len(START_WAITS_S) + 1
+                raise ServerError(
+                    f"the Prefect server at {where} answered {status} (busy) to each of {tries} "
+                    "starts of the run; nothing was computed; run it again"
+                ) from error
+            print(
+                f"eskin: the Prefect server at {where} answered {status} (busy) as the run "
+                f"started; starting it again in {wait_s:g} s",
+                file=sys.stderr,
+                flush=True,
+            )
+            time.sleep(wait_s)
