@@ -67,8 +67,7 @@ INTERRUPTED_FLUSH_S = 2.0
 #: 4 times over about 3.5 s).
 ENGINE_RETRIES = 0
 #: Seconds waited before each new start of a flow whose server answered busy before its body
-#: began (:func:`started`): about 7 s of waiting in all, a few seconds more than the busiest
-#: moments of a shared local server last.
+#: began (:func:`started`): doubling, as Prefect's own client backs off, 7 s in all.
 START_WAITS_S = (1.0, 2.0, 4.0)
 #: The HTTP statuses of an answer that asks the client to try again later.
 BUSY_STATUSES = (429, 503)
