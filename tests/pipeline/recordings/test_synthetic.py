@@ -43,30 +43,31 @@ def test_same_seed_gives_identical_recordings():
         np.testing.assert_array_equal(x, y)
 
 
+# A fresh process, as a worker: its first load imports scipy's filters, which the load step's
+# timer must book as shared set-up, not as the load's work; a later load imports nothing, so it
+# books no one-off time at all.
+_FIRST_LOAD = """
+import sys
+from pipeline.chain import jit
+from pipeline.design.scene import DatasetSpec
+from pipeline.run.stages import SETUP_STEP, Charge, Stopwatch, load
+
+assert "scipy.signal" not in sys.modules and "scipy.ndimage" not in sys.modules
+dataset = DatasetSpec(recordings_per_class=1, duration_s=0.5)
+first, later = Stopwatch(None), Stopwatch(None)
+load(dataset=dataset, watch=first)
+assert "scipy.signal" in sys.modules and "scipy.ndimage" in sys.modules
+assert first.paid[Charge.SHARED].get(SETUP_STEP, 0.0) > 0.0, first.paid
+assert first.paid[Charge.SHARED]["load"] == first.seconds["load"], first.paid
+booked = jit.one_off_seconds()
+load(dataset=dataset, watch=later)
+assert jit.one_off_seconds() == booked, "a later load booked one-off time"
+assert SETUP_STEP not in later.paid[Charge.SHARED], later.paid
+"""
+
+
 def test_a_process_s_first_load_books_importing_scipy_as_one_off_set_up_not_load_work():
-    # A fresh process, as a worker: its first load imports scipy's filters, which the load
-    # step's timer must book as shared set-up, not as the load's work; a later load imports
-    # nothing, so no one-off time at all.
-    code = (
-        "import sys\n"
-        "from pipeline.chain import jit\n"
-        "from pipeline.design.scene import DatasetSpec\n"
-        "from pipeline.run.stages import SETUP_STEP, Charge, Stopwatch, load\n"
-        "assert 'scipy.signal' not in sys.modules and 'scipy.ndimage' not in sys.modules\n"
-        "dataset = DatasetSpec(recordings_per_class=1, duration_s=0.5)\n"
-        "watch = Stopwatch(None)\n"
-        "load(dataset=dataset, watch=watch)\n"
-        "assert 'scipy.signal' in sys.modules and 'scipy.ndimage' in sys.modules\n"
-        "setup_s = watch.paid[Charge.SHARED].get(SETUP_STEP, 0.0)\n"
-        "assert setup_s > 0.0, watch.paid\n"
-        "assert watch.paid[Charge.SHARED]['load'] == watch.seconds['load'], watch.paid\n"
-        "booked = jit.one_off_seconds()\n"
-        "again = Stopwatch(None)\n"
-        "load(dataset=dataset, watch=again)\n"
-        "assert jit.one_off_seconds() == booked, 'a later load booked one-off time'\n"
-        "assert SETUP_STEP not in again.paid[Charge.SHARED], again.paid\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", _FIRST_LOAD], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
 
 
