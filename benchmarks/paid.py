@@ -6,8 +6,8 @@ local cluster of :data:`WORKERS` single-thread workers (:func:`flows.run.run_swe
 workers' busy time is the time their tasks computed, summed over tasks; the paid seconds are the
 report's "sweep's own cost" (:func:`pipeline.report.cost.sweep_cost` over the root's cubes: each
 distinct point's paid seconds, both charges). What the paid seconds leave out is the tasks'
-work outside any point's stages: importing torch on a worker, listing and reading the store,
-writing the entries.
+work outside any point's stages: listing and reading the store, writing the entries. (A
+worker's import of torch is paid, by the first point its task computes, as shared ``setup``.)
 
 Row: paid seconds / busy time (1 would be all of it); the detail gives both, the shared part of
 the paid seconds and the margin ``1 - paid / busy``.

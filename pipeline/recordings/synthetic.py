@@ -242,9 +242,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from pipeline.chain import jit
 from pipeline.errors import DatasetError
 from pipeline.numbers import positive_number, whole_number
 from pipeline.recordings.recording_set import Recordings
@@ -726,10 +728,7 @@ def touch(
     :func:`material_map`. The touch's own draws come from the children 0..3 (motion, surface,
     asperities, sensor noise) of ``SeedSequence([seed, class_index, recording])``.
     """
-    # scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
-    # cached, or that checks a grid on other recordings, never needs them.
-    from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import sosfilt
+    gaussian_filter1d, sosfilt = _scipy_filters()
 
     m = TEXTURE_CLASSES[class_index]
     children = np.random.SeedSequence([int(seed), int(class_index), int(recording)]).spawn(4)
@@ -837,6 +836,21 @@ def touch(
         slide_s=float(t_s),
         break_s=float(t[first]) if first < n else math.inf,
     )
+
+
+@functools.cache
+def _scipy_filters() -> tuple[Any, Any]:
+    """scipy's ``gaussian_filter1d`` and ``sosfilt``, imported on the first call.
+
+    scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
+    cached, or that checks a grid on other recordings, never needs them. The import is one-off
+    time (:func:`pipeline.chain.jit.one_off`: a step's timer books it as shared set-up), not
+    the work of the first load of a process.
+    """
+    with jit.one_off():
+        from scipy.ndimage import gaussian_filter1d
+        from scipy.signal import sosfilt
+    return gaussian_filter1d, sosfilt
 
 
 @functools.lru_cache(maxsize=8)

@@ -162,9 +162,10 @@ __all__ = [
 
 
 #: A worker process's one-off work, charged ``shared`` to the point that paid it:
-#: importing numba, torch and scikit-learn, and loading (or, the first time, compiling) the numba
-#: kernels: the spikes level's warm-up (:func:`warm_kernels`), and every such second inside any
-#: other step (:func:`pipeline.chain.jit.one_off_seconds`).
+#: importing numba, torch and scikit-learn (and scipy's filters, for the synthetic recordings),
+#: and loading (or, the first time, compiling) the numba kernels: the spikes level's warm-up
+#: (:func:`warm_kernels`), and every such second inside any other step
+#: (:func:`pipeline.chain.jit.one_off_seconds`).
 SETUP_STEP = "setup"
 
 

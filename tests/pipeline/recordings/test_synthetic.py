@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -39,6 +41,34 @@ def test_same_seed_gives_identical_recordings():
     np.testing.assert_array_equal(a.labels, b.labels)
     for x, y in zip(a.signals, b.signals, strict=True):
         np.testing.assert_array_equal(x, y)
+
+
+# A fresh process, as a worker: its first load imports scipy's filters, which the load step's
+# timer must book as shared set-up, not as the load's work; a later load imports nothing, so it
+# books no one-off time at all.
+_FIRST_LOAD = """
+import sys
+from pipeline.chain import jit
+from pipeline.design.scene import DatasetSpec
+from pipeline.run.stages import SETUP_STEP, Charge, Stopwatch, load
+
+assert "scipy.signal" not in sys.modules and "scipy.ndimage" not in sys.modules
+dataset = DatasetSpec(recordings_per_class=1, duration_s=0.5)
+first, later = Stopwatch(None), Stopwatch(None)
+load(dataset=dataset, watch=first)
+assert "scipy.signal" in sys.modules and "scipy.ndimage" in sys.modules
+assert first.paid[Charge.SHARED].get(SETUP_STEP, 0.0) > 0.0, first.paid
+assert first.paid[Charge.SHARED]["load"] == first.seconds["load"], first.paid
+booked = jit.one_off_seconds()
+load(dataset=dataset, watch=later)
+assert jit.one_off_seconds() == booked, "a later load booked one-off time"
+assert SETUP_STEP not in later.paid[Charge.SHARED], later.paid
+"""
+
+
+def test_a_process_s_first_load_books_importing_scipy_as_one_off_set_up_not_load_work():
+    done = subprocess.run([sys.executable, "-c", _FIRST_LOAD], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
 
 
 def test_different_seed_gives_different_recordings():
