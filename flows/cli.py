@@ -252,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SECONDS",
         help="stage seconds of the trials in all, each point and spike train counted once",
     )
-    _add_cluster_options(optimize, "local Dask workers, 1 thread each, and trials per batch")
+    _add_cluster_options(optimize, "local Dask workers, 1 thread each: trials running at once")
     optimize.add_argument(
         "--report", action="store_true", help="write the report (<root>/report) at the end"
     )

@@ -21,7 +21,7 @@ from prefect.cache_policies import NO_CACHE
 
 from flows.planning import SweepPlan
 from flows.record import Record, run_recorded
-from flows.search import BatchOutcome, Search, check_budget, default_search_root, run_optimize
+from flows.search import Search, TrialsOutcome, check_budget, default_search_root, run_optimize
 from flows.sweep import artifact_key, flow_run_url
 from pipeline.design.space import Space
 
@@ -62,7 +62,7 @@ def optimize(
 
         return trial_task(quote(search), numbers, quote(client_for), numbers[0])
 
-    def on_batch(record: Record, search: Search, outcome: BatchOutcome) -> None:
+    def on_told(record: Record, search: Search, outcome: TrialsOutcome) -> None:
         name = search.space.name
         done = search.told / budget if budget else min(1.0, search.seconds_spent() / budget_s)
         record.progress(
@@ -110,7 +110,7 @@ def optimize(
             budget_s=budget_s,
             workers=workers,
             address=address,
-            on_batch=lambda search, outcome: on_batch(record, search, outcome),
+            on_told=lambda search, outcome: on_told(record, search, outcome),
             compute=compute,
             on_note=on_note,
         )

@@ -16,12 +16,13 @@ What the sampler sees (:class:`Proposer`):
 
 The samplers (:func:`make_sampler`): a Gaussian process (``GPSampler``: Matern 5/2 kernel with a
 length scale per dimension, log expected hypervolume improvement for two or three objectives,
-the running trials conditioned on as pending; told that the objectives are deterministic, as a
-design's are: its scene seeds every draw and the store computes it once, so a design told
-again costs nothing and teaches nothing, and a GP with a noise term kept proposing its best
-corner again until the search ended on repeats), multi-objective TPE (multivariate, with a
-constant liar for the running trials), NSGA-II and random search. Both model-based samplers
-start with :func:`startup_trials` trials spread over the space (:class:`SpaceFillingStart`).
+the running trials taken at its predicted values, Optuna's kriging believer; told that the
+objectives are deterministic, as a design's are: its scene seeds every draw and the store
+computes it once, so a design told again costs nothing and teaches nothing, and a GP with a
+noise term kept proposing its best corner again until the search ended on repeats),
+multi-objective TPE (multivariate, with a constant liar for the running trials), NSGA-II and
+random search. Both model-based samplers start with :func:`startup_trials` trials spread over
+the space (:class:`SpaceFillingStart`).
 
 The auto rule (:func:`resolve_sampler`): GP when the search is expected to be short and the
 space is mostly ordered; TPE otherwise.

@@ -92,8 +92,8 @@ class BudgetError(EskinError):
 
 
 @dataclass
-class BatchOutcome:
-    """What one batch of trials did: its trial numbers, distinct points found in the store
+class TrialsOutcome:
+    """What trials told together did: their numbers, distinct points found in the store
     (``cache_hits``) and computed, and failures by trial."""
 
     trials: list[int]
@@ -180,7 +180,7 @@ class Search:
         self.cube = self.build_cube()
         return computed
 
-    def evaluate(self, numbers: list[int], client_for: Callable[[], Any]) -> BatchOutcome:
+    def evaluate(self, numbers: list[int], client_for: Callable[[], Any]) -> TrialsOutcome:
         """Compute the trials' points (those not in the store) and tell the trials
         (:meth:`compute`, :meth:`tell`). ``client_for()`` gives the Dask client, called only if
         a point is missing."""
@@ -188,10 +188,10 @@ class Search:
 
     def tell(
         self, numbers: list[int], plan: SweepPlan, failed_keys: Mapping[str, str]
-    ) -> BatchOutcome:
+    ) -> TrialsOutcome:
         """Tell the trials ``numbers``, whose points ``plan`` computed (:meth:`compute`; those
         in ``failed_keys`` failed), from the cube of every trial so far."""
-        outcome = BatchOutcome(numbers)
+        outcome = TrialsOutcome(numbers)
         outcome.cache_hits, outcome.computed = len(plan.cached), len(plan.missing)
         keys = [point.key for point in plan.grid.points()]
         for number, key in zip(numbers, keys, strict=True):
@@ -430,8 +430,9 @@ def lazy_client(
         yield get
 
 
-def batch_size(client: Any, workers: int | None) -> int:
-    """Trials per batch: the cluster's worker threads (the local cluster's ``workers``)."""
+def trial_slots(client: Any, workers: int | None) -> int:
+    """Trials running at once: the cluster's worker threads (the local cluster's
+    ``workers``)."""
     if client is not None:
         return max(1, sum(client.nthreads().values()))
     from flows.cluster import available_cores
@@ -458,7 +459,7 @@ def run_optimize(
     client: Any = None,
     workers: int | None = None,
     address: str | None = None,
-    on_batch: Callable[[Search, BatchOutcome], None] | None = None,
+    on_told: Callable[[Search, TrialsOutcome], None] | None = None,
     compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
     | None = None,
     on_note: Callable[[str], None] | None = None,
@@ -467,12 +468,12 @@ def run_optimize(
     ``root``, without Prefect.
 
     Holds the root's lock, replays the root's journal of this space (with the sampler it was
-    begun with, :func:`resumed_space`), asks batches of trials
+    begun with, :func:`resumed_space`), asks trials
     until ``budget`` trials (default :data:`DEFAULT_BUDGET`) or ``budget_s`` stage seconds
     are spent, keeping one trial running per worker thread (:func:`flows.refill.refill`), and
     returns :func:`search_summary`. ``client`` (left open), or a local cluster of ``workers``
     processes, or the scheduler at ``address``, made only if a point is missing.
-    ``on_batch`` is called after each trial is told (with its outcome); ``compute`` replaces
+    ``on_told`` is called after each trial is told (with its outcome); ``compute`` replaces
     :meth:`Search.compute` (the Prefect flow runs it as a task), called from a thread per
     running trial. ``on_note`` is given each note for the user (one line); by default they are
     printed on stderr.
@@ -503,9 +504,9 @@ def run_optimize(
         # as trials are told, is what a killed search resumes from.
         try:
             with lazy_client(store.root, client, workers, address) as client_for:
-                slots = batch_size(client_for() if address else client, workers)
+                slots = trial_slots(client_for() if address else client, workers)
                 computed += search.restore(client_for)
-                counts = _run_trials(search, budget, budget_s, slots, client_for, on_batch, compute)
+                counts = _run_trials(search, budget, budget_s, slots, client_for, on_told, compute)
                 cache_hits, computed, failed = counts[0], computed + counts[1], counts[2]
         finally:
             search.write_cubes()
@@ -530,7 +531,7 @@ def _run_trials(
     budget_s: float | None,
     slots: int,
     client_for: Callable[[], Any],
-    on_batch: Callable[[Search, BatchOutcome], None] | None,
+    on_told: Callable[[Search, TrialsOutcome], None] | None,
     compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
     | None,
 ) -> tuple[int, int, dict[int, str]]:
@@ -578,8 +579,8 @@ def _run_trials(
         computed += outcome.computed
         failed.update(outcome.failed)
         failures_in_row = failures_in_row + 1 if outcome.failed else 0
-        if on_batch is not None:
-            on_batch(search, outcome)
+        if on_told is not None:
+            on_told(search, outcome)
 
     try:
         refill(slots, ask, start, finish)
@@ -596,7 +597,7 @@ def search_summary(
     """What ``eskin optimize --json`` prints: ``root``, ``space``, ``trials`` (finished, all
     runs), ``sampler`` (the one that asked this run's trials, ``auto`` resolved),
     ``new_trials``, ``cache_hits`` and ``computed`` (distinct points of this run's
-    batches), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
+    trials), ``seconds`` (wall), ``search_seconds`` (stage seconds of every finished trial,
     :meth:`Search.seconds_spent`), ``cubes`` (where the search's ``trials`` and ``front`` cubes
     are) and ``front`` (:meth:`Search.front_rows`)."""
     return {

@@ -124,7 +124,7 @@ def test_a_killed_search_resumes_without_recomputing_stored_points(space, tmp_pa
     command += ["--root", str(root), "--budget", "6", "--workers", "1", "--json"]
     search = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        # One worker: one trial per batch. Killed once a trial is told and the next asked.
+        # One worker: one trial at a time. Killed once a trial is told and the next asked.
         wait_for(
             lambda: any("values" in r for r in journal(root)) and journal(root)[-1].get("params"),
             600,

@@ -42,7 +42,7 @@ def test_a_search_begun_under_the_former_default_sampler_continues_with_it(
 
     kinds = []
     summary = run_optimize(
-        auto, root, budget=2, client=client, on_batch=lambda s, _: kinds.append(s.proposer.kind)
+        auto, root, budget=2, client=client, on_told=lambda s, _: kinds.append(s.proposer.kind)
     )
     assert (summary["trials"], summary["new_trials"]) == (2, 1)
     assert kinds == [Sampler.TPE]  # not auto's GP
