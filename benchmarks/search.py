@@ -14,8 +14,10 @@ Objectives: FFNN accuracy (max) and data rate (min).
 
 The exhaustive results are computed once and kept, small, in :data:`DATA`
 (``python -m benchmarks.search --exhaustive``, a sweep of both grids on 2 workers into a run
-root, about 20 minutes on a busy 2-core machine): per point its objectives, the 95 % interval of
-its accuracy, and the seconds it paid (:func:`exhaustive_arrays`). Searches are then replayed
+root, about 13 minutes on a 2-core machine with nothing else running; measure the seconds
+there, since a busy machine's contention is paid by some points and not others): per point
+its objectives, the 95 % interval of its accuracy, and the seconds it paid
+(:func:`exhaustive_arrays`). Searches are then replayed
 offline against them (:func:`replay`): the real sampler (:class:`flows.samplers.Proposer`,
 exactly as ``eskin optimize`` makes it) and the real refill loop (:func:`flows.refill.refill`)
 on a simulated clock of 2 workers, each trial paying what its point paid in the exhaustive
@@ -109,7 +111,7 @@ SPACES: dict[str, dict[str, Any]] = {
         "space": {
             "readout.encoder": {"choices": ["lcs", "decaying"]},
             # From 0.045 V, which keeps the grid at 576 points (an exhaustive sweep of about
-            # 100 minutes on 2 workers); the lower thresholds are the rows space's to explore.
+            # 9 minutes on 2 idle workers); the lower thresholds are the rows space's to explore.
             "readout.threshold_v": {"choices": THRESHOLDS[2:]},
             "coding.window_s": {"choices": [0.05, 0.1, 0.2]},
             "array.rows": {"low": 1, "high": 4},

@@ -30,9 +30,9 @@ space is mostly ordered; TPE otherwise.
 * A Gaussian process needs few trials to learn which dimensions matter and how smoothly the
   objectives vary along each. Replayed on the benchmark's spaces (``benchmarks/search.py``,
   the performance page), it found at least as much of the exhaustive front as TPE and random
-  search at 5 and 10 % of the grid's paid seconds (at 10 %: 0.902 against 0.860 and 0.796 of
-  the hypervolume on 3 dimensions; 0.946 against 0.944 and 0.912 on 5), while TPE was
-  slightly ahead at 25 % on 3 dimensions (0.984 against 0.974; 41-50 trials). Its ask costs
+  search at 5 and 10 % of the grid's paid seconds (at 10 %: 0.950 against 0.926 and 0.812 of
+  the hypervolume on 3 dimensions; 0.960 against 0.929 and 0.921 on 5), while TPE was
+  slightly ahead at 25 % on 3 dimensions (0.988 against 0.984; 46-60 trials). Its ask costs
   up to seconds (0.2-1 s on average over searches of up to 160 trials on a shared 2-core
   machine; TPE's milliseconds) and grows with the cube of the trials told
   (its fit factorises their covariance); :data:`GP_MAX_TRIALS` is a judgment, not a
