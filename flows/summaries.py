@@ -171,17 +171,24 @@ def format_sweep_summary(
     if sweeps is None:
         cubes = open_results(summary["root"]) if cubes is None else cubes
         sweeps = {name: summarize(cubes[name]) for name in summary["cubes"]}
+    dims = {
+        name: ", ".join(f"{d}={size}" for d, size in sweeps[name]["dims"].items())
+        for name in summary["cubes"]
+    }
+    # Columns as wide as their longest entry, so long sweep names keep the table aligned.
+    name_w = max([len("sweep"), *map(len, dims)])
+    dims_w = max([len("dims"), *map(len, dims.values())])
     lines = [
         f"{summary['points']} points ({summary['cache_hits']} cached, {summary['computed']} "
         f"computed) in {summary['seconds']:.1f} s",
-        f"{'sweep':12s} {'dims':28s} {'model':6s} best accuracy (mean over folds)",
+        f"{'sweep':{name_w}s} {'dims':{dims_w}s} {'model':6s} best accuracy (mean over folds)",
     ]
     for name in summary["cubes"]:
-        dims = ", ".join(f"{d}={size}" for d, size in sweeps[name]["dims"].items())
         for row in sweeps[name]["best"]:
             at = ", ".join(f"{d}={_coordinate(v)}" for d, v in row["at"].items())
             lines.append(
-                f"{name:12s} {dims:28s} {row['model']:6s} {100 * row['accuracy']:5.1f} % at {at}"
+                f"{name:{name_w}s} {dims[name]:{dims_w}s} {row['model']:6s} "
+                f"{100 * row['accuracy']:5.1f} % at {at}"
             )
     # A root may be a URL (s3://...), which Path would mangle.
     lines.append(f"cubes: {str(summary['root']).rstrip('/')}/store.zarr/cubes")

@@ -209,3 +209,23 @@ def test_format_search_summary_names_the_sampler_and_marks_trials_off_the_front(
         "  ~trial 2: accuracy.ffnn 0.48 at array.rows=1",
     ]
     assert lines[4] == "cube trials: r/store.zarr/cubes/s.trials"
+
+
+def test_format_sweep_summary_keeps_columns_aligned_past_long_names(tmp_path):
+    """A sweep name and dims longer than the header's keep every column starting in one
+    place."""
+    short = xr.Dataset(
+        {"accuracy_mean": (("threshold_v", "model"), np.array([[0.5], [0.7]]))},
+        coords={"threshold_v": [0.05, 0.09], "model": ["ffnn"]},
+    )
+    wide = xr.Dataset(
+        {"accuracy_mean": (("sigma_rel", "chip", "model"), np.full((2, 3, 1), 0.6))},
+        coords={"sigma_rel": [0.0, 0.1], "chip": [0, 1, 2], "model": ["ffnn"]},
+    )
+    summary = {"root": str(tmp_path), "cubes": {"t": "x", "mismatch_shared_chips": "y"}}
+    summary |= {"points": 8, "cache_hits": 0, "computed": 8, "seconds": 1.0}
+    cubes = {"t": short, "mismatch_shared_chips": wide}
+    lines = format_sweep_summary(summary, cubes).splitlines()[1:4]
+    assert lines[0].index("model") == lines[1].index("ffnn") == lines[2].index("ffnn")
+    assert lines[1].index("%") == lines[2].index("%")
+    assert lines[0].index("dims") == lines[2].index("sigma_rel=2")
