@@ -41,7 +41,7 @@ from flows import cluster, interrupts
 from flows.report import DEFAULT_ADC_BITS, needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, json_safe, result_summary
 from pipeline.errors import EskinError
-from pipeline.results.hardware import MAX_BITS
+from pipeline.results.readout_power import MAX_BITS
 
 if TYPE_CHECKING:
     from storage import SweepStore
@@ -410,7 +410,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _energy_options() -> argparse.ArgumentParser:
     """The energy model's constants as options, each declared once on its field."""
-    from pipeline.results.hardware import PARAMETERS, EnergyModel
+    from pipeline.results.readout_constants import PARAMETERS, EnergyModel
 
     parent = argparse.ArgumentParser(add_help=False)
     group = parent.add_argument_group(
@@ -434,7 +434,7 @@ def _checked(
 ):
     """An argparse ``type``: a finite number >= 0 (a whole number >= 1, or > 0; at most
     ``at_most``), named in argparse's one-line error."""
-    from pipeline.results.hardware import Parameter
+    from pipeline.results.readout_constants import Parameter
 
     rule = Parameter(option, "", 1.0, "", "", count=whole)
 
@@ -456,7 +456,7 @@ def _checked(
 
 
 def _energy(args: argparse.Namespace):
-    from pipeline.results.hardware import PARAMETERS, EnergyModel
+    from pipeline.results.readout_constants import PARAMETERS, EnergyModel
 
     return EnergyModel.from_options({name: getattr(args, name) for name in PARAMETERS})
 
@@ -770,7 +770,7 @@ def _report(args: argparse.Namespace) -> int:
 
 def _power(args: argparse.Namespace) -> int:
     from flows.summaries import format_power
-    from pipeline.results.hardware import power_budget
+    from pipeline.results.readout_power import power_budget
 
     try:
         budget = power_budget(

@@ -6,7 +6,7 @@ claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
 line's frame-readout options become a :class:`~pipeline.report.designs.FrameReadout` here, checked
 before anything is read or written; its energy options arrive as an
-:class:`~pipeline.results.hardware.EnergyModel`.
+:class:`~pipeline.results.readout_constants.EnergyModel`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 
     from pipeline.report import FrameReadout, Report
     from pipeline.report.answer import ModelAnswer
-    from pipeline.results.hardware import EnergyModel
+    from pipeline.results.readout_constants import EnergyModel
 
 DEFAULT_ADC_BITS = 12
 
@@ -55,7 +55,7 @@ def write_run_report(
         cubes state it).
     energy
         The readout power estimate's constants (default: those of
-        :class:`pipeline.results.hardware.EnergyModel`, calibrated on a chip).
+        :class:`pipeline.results.readout_constants.EnergyModel`, calibrated on a chip).
 
     Raises
     ------
@@ -138,7 +138,7 @@ def report_answers(
 def _adc_problems(adc_bits: int, adc_rate_hz: float | None) -> list[str]:
     """What is wrong with the frame readout's figures, named as the command line's options."""
     from pipeline.numbers import positive_number
-    from pipeline.results.hardware import MAX_BITS
+    from pipeline.results.readout_power import MAX_BITS
 
     problems = []
     if not 1 <= adc_bits <= MAX_BITS:

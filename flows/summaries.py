@@ -19,7 +19,7 @@ import numpy as np
 if TYPE_CHECKING:  # the command line imports this module; xarray loads only when a sweep prints
     import xarray as xr
 
-    from pipeline.results.hardware import PowerBudget
+    from pipeline.results.readout_power import PowerBudget
 
 
 def result_summary(result: Any) -> dict[str, Any]:

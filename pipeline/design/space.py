@@ -34,24 +34,24 @@ Objectives (:class:`Metric`), read per trial from its result cube:
 * ``accuracy.<model>``: ``accuracy_mean`` of that model (fraction);
 * ``data_rate_bps``: the address-event data rate (bit/s);
 * ``readout_power_w``: ``event_rate_hz * E_event + data_rate_bps * E_link`` with the default
-  :class:`pipeline.results.hardware.EnergyModel` (W);
+  :class:`pipeline.results.readout_constants.EnergyModel` (W);
 * ``compute_s``: the stage seconds of the point for the objective's models (all trained models,
   spike stages included), as measured when they were computed;
 * ``decision_s.<model>``: the mean decision time (s of touch) of that model under early exit at
-  confidence :data:`pipeline.results.latency.EXIT_CONFIDENCE` (0.9): each recording decided at
+  confidence :data:`pipeline.results.early_exit.EXIT_CONFIDENCE` (0.9): each recording decided at
   the first time the softmax probability of its decided class reaches 0.9, else at the full
-  touch (:func:`pipeline.results.latency.exit_objectives`). Chosen over the earliest decision
+  touch (:func:`pipeline.results.early_exit.exit_objectives`). Chosen over the earliest decision
   time not significantly below the full touch, the report's, because a search compares trials
   by a number that is a property of the design: a significance test's verdict also depends on
   how many recordings the trial was tested on (more recordings make a small loss significant and
   the time later) and moves in steps. The early exit is what a decoder deployed with that rule
   would achieve, and its accuracy is the cost of deciding early;
 * ``decoder_energy_j.<model>``: the decoder's mean energy per decision (J) under the same early
-  exit, at the high end of its band (:class:`pipeline.results.hardware.DecoderEnergyModel`;
+  exit, at the high end of its band (:class:`pipeline.results.decoder_energy.DecoderEnergyModel`;
   the high end so that a search never promises what only the most frugal chip delivers); both
   are NaN, and the trial failed, where the cube keeps no decisions;
 * ``array_area_m2``: the comparators' matched gate area of the array that the point's threshold
-  mismatch demands by Pelgrom's law (:func:`pipeline.results.hardware.array_area_m2` of
+  mismatch demands by Pelgrom's law (:func:`pipeline.results.matched_area.array_area_m2` of
   ``array.rows * array.cols``, ``sigma_rel`` and ``threshold_v``, m^2; minimise it): needs
   ``readout.effects.threshold_mismatch`` in the base scene or a searched field of it;
 * ``accuracy_p05.<model>``: the yield, the 5th percentile over chips of that model's accuracy
@@ -99,8 +99,9 @@ from pipeline.design.grid import (
 from pipeline.design.scene import Model, Scene, SceneVariants
 from pipeline.design.transforms import Transform
 from pipeline.errors import SceneError
-from pipeline.results.hardware import array_area_m2, event_power_w
-from pipeline.results.latency import exit_objectives
+from pipeline.results.early_exit import exit_objectives
+from pipeline.results.matched_area import array_area_m2
+from pipeline.results.readout_power import event_power_w
 
 #: The name of the trial cube's sweep.
 TRIALS = "trials"
@@ -404,7 +405,7 @@ def _over_chips(cube: xr.Dataset) -> xr.Dataset:
 
 
 def _array_area(cube: xr.Dataset, dim: str) -> np.ndarray:
-    """float64 (points,): each point's :func:`~pipeline.results.hardware.array_area_m2`, NaN
+    """float64 (points,): each point's :func:`~pipeline.results.matched_area.array_area_m2`, NaN
     where the cube does not state its mismatch."""
     from pipeline.results.cube import field_coordinate
 

@@ -19,7 +19,7 @@ Stages, each a module with the frozen dataclasses it returns:
 - :mod:`~pipeline.report.fronts`: accuracy against data rate, event rate, bits, compute time
   and readout power, with designs indistinguishable from the front marked;
 - :mod:`~pipeline.report.cost`: the front rule, observation time, the sweep's own cost;
-- :mod:`~pipeline.report.latency`: accuracy against decision time, the earliest decision not
+- :mod:`~pipeline.report.decision_time`: accuracy against decision time, the earliest decision not
   significantly below the full touch, early exit and the energy per decision (decoder and
   readout), where the cubes keep decisions along the touch;
 - :mod:`~pipeline.report.analysis`: :func:`~pipeline.report.analysis.build_report`, all of the

@@ -12,7 +12,7 @@ import xarray as xr
 from pipeline.errors import EskinError
 from pipeline.report import paper
 from pipeline.report.answer import ModelAnswer, YieldAnswer, design_answers, yield_answers
-from pipeline.report.chips import chip_curves, fill_groups, pooled
+from pipeline.report.chip_population import chip_curves, fill_groups, pooled
 from pipeline.report.claims import (
     Claim,
     deployment_note,
@@ -33,22 +33,23 @@ from pipeline.report.cubes import (
     sweeps_for,
 )
 from pipeline.report.curves import Curve, MetricFit, metric_fits
-from pipeline.report.designs import Design, FrameReadout, gather_designs
-from pipeline.report.evidence import Evidence, gather_evidence
-from pipeline.report.fronts import Front, hardware_fronts
-from pipeline.report.latency import (
+from pipeline.report.decision_time import (
     LATENCY_STEM,
     LatencyCurve,
     full_touch_energies,
     gather_decisions,
     latency_curves,
 )
+from pipeline.report.designs import Design, FrameReadout, gather_designs
+from pipeline.report.evidence import Evidence, gather_evidence
+from pipeline.report.fronts import Front, hardware_fronts
 from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
-from pipeline.results.hardware import DecoderEnergyModel, EnergyModel
+from pipeline.results.decoder_energy import DecoderEnergyModel
+from pipeline.results.readout_constants import EnergyModel
 
 
 @dataclass(frozen=True)
@@ -136,12 +137,12 @@ def build_report(
         that comparison unknown.
     energy
         Constants of the readout power estimate (default:
-        :class:`~pipeline.results.hardware.EnergyModel`'s).
+        :class:`~pipeline.results.readout_constants.EnergyModel`'s).
     runs
         The run log's sweeps of this root (the sweep's own cost).
     decoder
         Per-operation energies of the decoder (default:
-        :class:`~pipeline.results.hardware.DecoderEnergyModel`'s).
+        :class:`~pipeline.results.decoder_energy.DecoderEnergyModel`'s).
 
     Raises
     ------

@@ -9,23 +9,22 @@ For each model, over every distinct design of the run (:mod:`pipeline.report.des
    interval, exact McNemar p for one repeat). The ``m`` p-values are Holm-corrected over those
    ``m`` comparisons (:func:`pipeline.results.stats.holm`). ``d`` is *significantly below* the best
    when its adjusted p is below ``ALPHA`` (0.05) and its difference is negative.
-3. The designs not significantly below the best (the best included) are *as accurate as the
-   best* as far as this run can tell; among them the cheapest by address-event data rate and the
-   cheapest by estimated readout power (:func:`pipeline.results.hardware.event_power_w`) are the
-   answer
+3. The designs not significantly below the best (the best included) are *as accurate as the best* as
+   far as this run can tell; among them the cheapest by address-event data rate and the cheapest by
+   estimated readout power (:func:`pipeline.results.readout_power.event_power_w`) are the answer
    (ties go to the more accurate, then to the first met). Designs that cannot be compared with the
    best (no per-recording results, or no recording in common) are never chosen.
 
 Each answer is set against the frame-based readout of the same array (``rows * cols`` taxels,
 ``bits`` per sample at ``rate_hz``): its data rate ``n * bits * rate_hz`` and its power
-(:func:`pipeline.results.hardware.frame_power_w`), as ``frame / event`` ratios. Power is kept as
-its static and dynamic parts (:class:`~pipeline.results.hardware.ReadoutPower`); energy per
+(:func:`pipeline.results.readout_power.frame_power_w`), as ``frame / event`` ratios. Power is kept
+as its static and dynamic parts (:class:`~pipeline.results.readout_power.ReadoutPower`); energy per
 decision is power times the seconds of touch the design observed. Where the cubes count the
-decoder's operations, the decoder's energy per decision at the full touch stands beside it, a
-band (:func:`pipeline.results.hardware.decoder_energy_j`; the small table gains its column).
+decoder's operations, the decoder's energy per decision at the full touch stands beside it, a band
+(:func:`pipeline.results.decoder_energy.decoder_energy_j`; the small table gains its column).
 
 By yield, for runs whose designs are simulated as several chips each
-(:mod:`pipeline.report.chips`): per model, the design with the highest 5th percentile of
+(:mod:`pipeline.report.chip_population`): per model, the design with the highest 5th percentile of
 accuracy over its chips (``accuracy_p05``, the share of chips a designer can sign off on) is the
 *best by yield*; every other design of several chips is compared with it by a bootstrap over
 chips and recordings together (:meth:`pipeline.report.evidence.Evidence.compare_yield`),
@@ -45,7 +44,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from pipeline.report import paper
-from pipeline.report.chips import ChipYield
+from pipeline.report.chip_population import ChipYield
 from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost, readout_power
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import REPEATS
@@ -59,15 +58,9 @@ from pipeline.report.text import (
     si,
     times,
 )
-from pipeline.results.hardware import (
-    CHIP,
-    CHIP_EVENT_RATE_HZ,
-    CHIP_TAXELS,
-    EnergyBand,
-    EnergyModel,
-    ReadoutPower,
-    power_budget,
-)
+from pipeline.results.decoder_energy import EnergyBand
+from pipeline.results.readout_constants import CHIP, CHIP_EVENT_RATE_HZ, CHIP_TAXELS, EnergyModel
+from pipeline.results.readout_power import ReadoutPower, power_budget
 from pipeline.results.stats import PairedComparison, holm
 
 
@@ -168,7 +161,7 @@ def design_answers(
     """One :class:`ModelAnswer` per model that any design trained, in the order first met.
 
     ``decoder`` gives the decoder's energy per decision at the full touch by (result key,
-    model), where the cubes count its operations (:mod:`pipeline.report.latency`).
+    model), where the cubes count its operations (:mod:`pipeline.report.decision_time`).
     """
     models = list(dict.fromkeys(m for d in designs for m in d.accuracy))
     return tuple(

@@ -20,9 +20,9 @@ results), per model and sweep, tallied over them.
   significantly. Without 1 or 16 in the sweep: its smallest and largest counts, and its last step.
 * SSNR and STE (Fig. 9): the cube's Pearson ``r`` and two-sided ``p`` of accuracy against the
   metric; SSNR should correlate positively and STE negatively (p < 0.05).
-* Mismatch: the least-squares slope of accuracy on ``sigma_rel`` with its paired bootstrap
-  interval and p-value; supported when significantly negative. Where the chips' deployment was
-  swept (:mod:`pipeline.report.chips`), the claim is judged on the ``shared`` deployment alone
+* Mismatch: the least-squares slope of accuracy on ``sigma_rel`` with its paired bootstrap interval
+  and p-value; supported when significantly negative. Where the chips' deployment was swept
+  (:mod:`pipeline.report.chip_population`), the claim is judged on the ``shared`` deployment alone
   (one classifier loaded into every chip, as chips are shipped uncalibrated), and the largest
   mismatch is compared with the smallest by a bootstrap over chips and recordings;
   :func:`deployment_note` sets every deployment side by side.
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.report import paper
-from pipeline.report.chips import CLAIM_DEPLOYMENT
+from pipeline.report.chip_population import CLAIM_DEPLOYMENT
 from pipeline.report.curves import Curve, MetricFit
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import PANEL_TITLES, Panel

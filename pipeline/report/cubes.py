@@ -69,7 +69,7 @@ def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
 
 def _by_deployment(cube: xr.Dataset, wanted: tuple[set[str], ...]) -> bool:
     """A two-dimensional cube of a panel's field and the chips' deployment (one curve per
-    deployment, :mod:`pipeline.report.chips`)."""
+    deployment, :mod:`pipeline.report.chip_population`)."""
     fields = set(swept_fields(cube))
     return (
         "accuracy_mean" in cube

@@ -44,7 +44,7 @@ class Curve:
         What sets the curve apart from others of its sweep: the chips' deployment ("" for none).
     chip_low, chip_median, chip_high : float64 (n,) or None
         The 5th, 50th and 95th percentile of the chips' accuracies at each point, for points
-        of several chips (:mod:`pipeline.report.chips`); None for points of one chip.
+        of several chips (:mod:`pipeline.report.chip_population`); None for points of one chip.
     """
 
     sweep: str

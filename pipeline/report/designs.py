@@ -17,17 +17,17 @@ Costs of a design for model ``m`` (:class:`Cost`; lower is cheaper):
   the front end, loading or compiling kernels: :func:`pipeline.run.stages.shared_steps`) are not
   the design's and are left out;
 * readout power (W): static bias of the ``n = rows * cols`` taxels plus the dynamic power of
-  its events and bits (:func:`pipeline.results.hardware.event_power_w`, constants of an
-  :class:`~pipeline.results.hardware.EnergyModel`), the two parts kept apart
+  its events and bits (:func:`pipeline.results.readout_power.event_power_w`, constants of an
+  :class:`~pipeline.results.readout_constants.EnergyModel`), the two parts kept apart
   (:func:`readout_power`);
 * energy per decision (J): that power times the seconds of touch the point observed,
   ``n_windows_used * window_s`` (the windows it really used, from the cube);
 * array area (m^2): the comparators' matched gate area that the design's threshold mismatch
-  demands by Pelgrom's law, ``n`` times :func:`pipeline.results.hardware.taxel_area_m2` of its
+  demands by Pelgrom's law, ``n`` times :func:`pipeline.results.matched_area.taxel_area_m2` of its
   ``sigma_rel`` and ``threshold_v`` (NaN for a design that names no mismatch).
 
 The frame-based readout of the same array (:class:`FrameReadout`) sends ``n * bits * rate_hz``
-bit/s and draws :func:`pipeline.results.hardware.frame_power_w`.
+bit/s and draws :func:`pipeline.results.readout_power.frame_power_w`.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.report.chips import ChipYield, chip_yields
+from pipeline.report.chip_population import ChipYield, chip_yields
 from pipeline.report.cubes import (
     axis_coordinates,
     describe_coordinate,
@@ -52,20 +52,22 @@ from pipeline.report.cubes import (
 from pipeline.report.panels import COLS, MISMATCH_SIGMA_REL, N_WINDOWS, ROWS, THRESHOLD_V, WINDOW_S
 from pipeline.report.text import label
 from pipeline.results.cube import work_seconds
-from pipeline.results.hardware import (
+from pipeline.results.matched_area import (
     A_VT_PROCESS,
     A_VT_SOURCE,
     A_VT_V_M,
     MATCHED_DEVICES_PER_TAXEL,
-    EnergyModel,
-    ReadoutPower,
     array_area_m2,
+    taxel_area_m2,
+)
+from pipeline.results.readout_constants import EnergyModel
+from pipeline.results.readout_power import (
+    ReadoutPower,
     event_dynamic_power_w,
     event_static_power_w,
     frame_data_rate_bps,
     frame_dynamic_power_w,
     frame_static_power_w,
-    taxel_area_m2,
 )
 from pipeline.run.stages import shared_steps
 
@@ -129,7 +131,8 @@ class Design:
     @property
     def taxel_area_m2(self) -> float:
         """Matched comparator gate area of one taxel (m^2, Pelgrom's law:
-        :func:`~pipeline.results.hardware.taxel_area_m2`); NaN without a mismatch to size for."""
+        :func:`~pipeline.results.matched_area.taxel_area_m2`); NaN without a mismatch to size
+        for."""
         if not (self.mismatch_sigma_rel >= 0 and self.threshold_v >= 0):
             return math.nan
         return float(taxel_area_m2(self.mismatch_sigma_rel, self.threshold_v))
@@ -196,13 +199,14 @@ class FrameReadout:
 
     def data_rate_bps(self, n_taxels: int) -> float:
         """Bits per second of this readout for an array of ``n_taxels`` taxels,
-        ``n_taxels * rate_hz * bits`` (:func:`~pipeline.results.hardware.frame_data_rate_bps`)."""
+        ``n_taxels * rate_hz * bits``
+        (:func:`~pipeline.results.readout_power.frame_data_rate_bps`)."""
         return float(frame_data_rate_bps(n_taxels, self.rate_hz, self.bits))
 
     def power(self, n_taxels: int, energy: EnergyModel) -> ReadoutPower:
         """Static and dynamic power of this readout for an array of ``n_taxels`` taxels under the
-        constants ``energy`` (:func:`~pipeline.results.hardware.frame_static_power_w`,
-        :func:`~pipeline.results.hardware.frame_dynamic_power_w`), in W."""
+        constants ``energy`` (:func:`~pipeline.results.readout_power.frame_static_power_w`,
+        :func:`~pipeline.results.readout_power.frame_dynamic_power_w`), in W."""
         return ReadoutPower(
             float(frame_static_power_w(n_taxels, energy)),
             float(frame_dynamic_power_w(n_taxels, self.rate_hz, self.bits, energy)),

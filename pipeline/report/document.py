@@ -10,7 +10,7 @@ sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipelin
 the power front is drawn once, at the top), every search's front
 (:func:`pipeline.report.trials.search_fronts`), and what accuracy costs in time (where the cubes
 keep decisions, accuracy against decision time, early exit and the energy per decision first:
-:mod:`pipeline.report.latency`).
+:mod:`pipeline.report.decision_time`).
 
 Files of a report (``<root>/report`` by default), as :func:`report_files` returns them::
 
@@ -40,12 +40,12 @@ from pipeline.report.answer import (
     yield_sentence,
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
-from pipeline.report.chips import method_sentence as chips_method_sentence
+from pipeline.report.chip_population import method_sentence as chips_method_sentence
 from pipeline.report.cost import observation_sentence
+from pipeline.report.decision_time import latency_blocks
 from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
-from pipeline.report.latency import latency_blocks
 from pipeline.report.panels import PANEL_TITLES, Panel
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.seeds import REPORT_SEED

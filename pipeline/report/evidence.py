@@ -14,9 +14,9 @@ both predicted in every such repeat; then :func:`pipeline.results.stats.compare_
 recordings) and its p-value (exact McNemar for one repeat, bootstrap otherwise). A trend along
 several points (:func:`pipeline.results.stats.trend`) uses the recordings all of them predicted.
 
-Points of several chips (:mod:`pipeline.report.chips`) hold ``correct`` per chip, int8 (chips,
-repeats, n_run_recordings), in ``per_chip``; ``correct`` holds their chips as repeats. Two such
-points are compared by a bootstrap over chips and recordings together
+Points of several chips (:mod:`pipeline.report.chip_population`) hold ``correct`` per chip, int8
+(chips, repeats, n_run_recordings), in ``per_chip``; ``correct`` holds their chips as repeats. Two
+such points are compared by a bootstrap over chips and recordings together
 (:func:`pipeline.results.stats.compare_over_chips`): the mean over chips by
 :meth:`Evidence.compare`, the 5th percentile over chips (the yield) by
 :meth:`Evidence.compare_yield`.
@@ -109,10 +109,10 @@ class Evidence:
 
     def compare_yield(self, a: str, b: str, model: str) -> PairedComparison | None:
         """``yield(a) - yield(b)`` of ``model``, the yield being the 5th percentile of the
-        chips' accuracies (:func:`pipeline.report.chips.chip_quantile`), with the interval and
-        p-value of a bootstrap over chips and recordings; None unless both points hold
-        several chips' predictions on common recordings."""
-        from pipeline.report.chips import chip_quantile
+        chips' accuracies (:func:`pipeline.report.chip_population.chip_quantile`), with the
+        interval and p-value of a bootstrap over chips and recordings; None unless both points
+        hold several chips' predictions on common recordings."""
+        from pipeline.report.chip_population import chip_quantile
 
         memo = ("yield", a, b, model)
         if memo not in self._memo:
@@ -148,7 +148,7 @@ class Evidence:
         if not (self.has(a, model) and self.has(b, model)):
             return None
         if (a, model) in self.per_chip and (b, model) in self.per_chip:
-            from pipeline.report.chips import chip_mean
+            from pipeline.report.chip_population import chip_mean
 
             return self._over_chips(a, b, model, chip_mean, "mean")
         ca, cb = self.correct[(a, model)], self.correct[(b, model)]
@@ -179,7 +179,7 @@ class Evidence:
 
 def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
     """The per-recording results of every point of every cube that kept them."""
-    from pipeline.report.chips import CHIP_DIM, CHIP_REPEAT, PER_CHIP, pooled
+    from pipeline.report.chip_population import CHIP_DIM, CHIP_REPEAT, PER_CHIP, pooled
 
     index: dict[tuple[str, str, int], int] = {}
     found: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}

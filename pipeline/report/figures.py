@@ -5,9 +5,10 @@ no global state, nothing written (:func:`figure_images` renders one to PNG and S
 Error bars are the 95 % interval of accuracy (``accuracy_low``/``accuracy_high``), not the spread
 over folds; points without an interval (runs that predate per-recording results) have none.
 Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the class count is known.
-Every model is drawn on every panel. Points of several chips (:mod:`pipeline.report.chips`) draw
-the spread of their chips' accuracies (5th to 95th percentile) as a shaded band around the curve,
-apart from the error bars; one line style per deployment.
+Every model is drawn on every panel. Points of several chips
+(:mod:`pipeline.report.chip_population`) draw the spread of their chips' accuracies (5th to 95th
+percentile) as a shaded band around the curve, apart from the error bars; one line style per
+deployment.
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ from matplotlib.ticker import (
 from pipeline.report import paper
 from pipeline.report.analysis import Report
 from pipeline.report.curves import Curve, MetricFit
+from pipeline.report.decision_time import LATENCY_STEM, LATENCY_TITLE, LatencyCurve
 from pipeline.report.designs import Cost
 from pipeline.report.fronts import Front
-from pipeline.report.latency import LATENCY_STEM, LATENCY_TITLE, LatencyCurve
 from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si

@@ -12,7 +12,7 @@ one unadjusted test per point, alpha 0.05) finds no significant difference: a de
 it for a reason the cost axis does not show, so it is drawn and listed, not hidden.
 
 The frame-based readout of each array size in the run is a reference on the data-rate and power
-fronts: ``n * bits * rate_hz`` bit/s and :func:`pipeline.results.hardware.frame_power_w`.
+fronts: ``n * bits * rate_hz`` bit/s and :func:`pipeline.results.readout_power.frame_power_w`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import numpy as np
 from pipeline.report.cost import pareto_front
 from pipeline.report.designs import Accuracy, Cost, Design, FrameReadout, cost
 from pipeline.report.evidence import ALPHA, Evidence
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.readout_constants import EnergyModel
 from pipeline.results.stats import PairedComparison
 
 MAX_REFERENCES = 4  # frame-readout reference lines per front; more array sizes are not drawn

@@ -23,7 +23,7 @@ DATASET_KIND = scene_field("dataset.kind")
 DATASET_PATH = scene_field("dataset.path")
 REPEATS = scene_field("training.repeats")
 #: How one classifier meets many chips (the scene's ``chips`` part; see
-#: :mod:`pipeline.report.chips`).
+#: :mod:`pipeline.report.chip_population`).
 DEPLOYMENT = "chips.deployment"
 
 

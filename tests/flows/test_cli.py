@@ -325,7 +325,7 @@ def test_power_prints_both_readouts_and_takes_energy_options(capsys):
     argv += ["--adc-fom-fj", "5"]
     assert main([*argv, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    # As tests/pipeline/results/test_hardware.py works it out by hand.
+    # As tests/pipeline/results/test_readout_power.py works it out by hand.
     assert out["event_readout_w"] == pytest.approx(17.15e-9, rel=1e-12)
     assert out["frame_readout_w"] == pytest.approx(149.12e-9, rel=1e-12)
     assert out["frame_data_rate_bps"] == 32_000.0

@@ -9,7 +9,7 @@ from flows.report import write_report, write_run_report
 from pipeline.errors import EskinError
 from pipeline.report import Panel, build_report
 from pipeline.report.figures import draw_report
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.readout_constants import EnergyModel
 from storage import StoreError
 from storage.report import MARKER
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes

@@ -7,8 +7,8 @@ import pytest
 
 from pipeline.design.space import Metric, Space, objective_values
 from pipeline.errors import SceneError
-from pipeline.results.hardware import decoder_energy_j
-from pipeline.results.latency import EXIT_CONFIDENCE, exit_objectives
+from pipeline.results.decoder_energy import decoder_energy_j
+from pipeline.results.early_exit import EXIT_CONFIDENCE, exit_objectives
 from tests.latency_helpers import SPIKING_ACS, SPIKING_UPDATES, TIMES, with_decisions
 from tests.report_helpers import make_cubes
 

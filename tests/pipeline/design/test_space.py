@@ -181,7 +181,7 @@ def _chip_trials():
 def test_area_and_yield_objectives_read_the_cube_over_chips():
     import numpy as np
 
-    from pipeline.results.hardware import array_area_m2
+    from pipeline.results.matched_area import array_area_m2
 
     objectives = [
         Objective(Metric.ACCURACY, Direction.MAX, "ffnn"),

@@ -14,7 +14,8 @@ from pipeline.report import FrameReadout, build_report
 from pipeline.report.answer import comparison_rows, glance_header, glance_rows, how_sure
 from pipeline.report.document import report_blocks
 from pipeline.report.render import render_markdown
-from pipeline.results.hardware import EnergyModel, frame_data_rate_bps, frame_power_w
+from pipeline.results.readout_constants import EnergyModel
+from pipeline.results.readout_power import frame_data_rate_bps, frame_power_w
 from pipeline.results.stats import holm
 from tests.report_helpers import N_RECORDINGS, make_cubes
 

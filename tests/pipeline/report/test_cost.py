@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from pipeline.report import Panel, build_report
 from pipeline.report.cost import pareto_front, time_to_accuracy
 from pipeline.report.designs import Cost, cost
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.readout_constants import EnergyModel
 from tests.report_helpers import make_cubes
 
 

@@ -14,7 +14,7 @@ from pipeline.report.designs import Cost
 from pipeline.report.document import report_blocks, report_files
 from pipeline.report.figures import draw_report
 from pipeline.report.render import render_markdown
-from pipeline.results.hardware import EnergyModel
+from pipeline.results.readout_constants import EnergyModel
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 GOLDEN = Path(__file__).parents[2] / "data" / "report_golden.md"

@@ -14,7 +14,8 @@ from pipeline.report.designs import Cost
 from pipeline.report.document import report_blocks
 from pipeline.report.figures import front_figure
 from pipeline.report.render import render_markdown
-from pipeline.results.hardware import EnergyModel, frame_power_w
+from pipeline.results.readout_constants import EnergyModel
+from pipeline.results.readout_power import frame_power_w
 from tests.pipeline.report.test_answer import SWEEPS, by_threshold
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
@@ -87,7 +88,7 @@ def test_a_zero_event_rate_is_priced_not_divided_by():
 
 
 def test_the_area_front_is_the_pelgrom_area_of_the_mismatch_a_design_names():
-    from pipeline.results.hardware import array_area_m2, taxel_area_m2
+    from pipeline.results.matched_area import array_area_m2, taxel_area_m2
 
     found = build_report(make_cubes({"mismatch": PAPER_LIKE_SWEEPS["mismatch"]}))
     area = front(found, Cost.AREA)

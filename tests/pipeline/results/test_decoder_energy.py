@@ -5,11 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.results.hardware import (
-    DecoderEnergyModel,
-    OperationEnergy,
-    decoder_energy_j,
-)
+from pipeline.results.decoder_energy import DecoderEnergyModel, OperationEnergy, decoder_energy_j
 
 
 def test_the_declared_bands_are_the_cited_figures():

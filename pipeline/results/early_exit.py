@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.results.hardware import DecoderEnergyModel, EnergyBand, decoder_energy_j
+from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
 
 #: Confidence thresholds of the report's early-exit table.
 EXIT_THRESHOLDS = (0.5, 0.7, 0.8, 0.9, 0.95, 0.99)
@@ -164,13 +164,13 @@ def exit_energy_j(
         float (..., times): mean cumulative operations per decision read at each time, with
         the leading dimensions of ``exit``.
     model
-        The per-operation energies (:class:`~pipeline.results.hardware.DecoderEnergyModel`).
+        The per-operation energies (:class:`~pipeline.results.decoder_energy.DecoderEnergyModel`).
 
     Returns
     -------
     EnergyBand
         float64 (...): the energy at each pair's exit time
-        (:func:`~pipeline.results.hardware.decoder_energy_j`), averaged over the pairs with a
+        (:func:`~pipeline.results.decoder_energy.decoder_energy_j`), averaged over the pairs with a
         decision; NaN where there is none or a count at an exit time is unknown.
     """
     band = decoder_energy_j(acs, macs, neuron_updates, model)

@@ -24,10 +24,10 @@ the *full touch* is the last of them.
   correction (each hypothesis is tested only if every later one was not rejected), and unlike a
   Holm correction over all times it does not make a model with more decision times look
   earlier.
-* Early exit (:func:`pipeline.results.latency.early_exit`) at each confidence threshold of
-  :data:`~pipeline.results.latency.EXIT_THRESHOLDS`: the mean decision time and the accuracy.
+* Early exit (:func:`pipeline.results.early_exit.early_exit`) at each confidence threshold of
+  :data:`~pipeline.results.early_exit.EXIT_THRESHOLDS`: the mean decision time and the accuracy.
 * Energy per decision: the decoder's, a band from the operations counted up to the decision
-  (:func:`pipeline.results.hardware.decoder_energy_j`), beside the readout's, its power times
+  (:func:`pipeline.results.decoder_energy.decoder_energy_j`), beside the readout's, its power times
   the seconds of touch observed up to the decision.
 
 The curves are drawn for each model's best design of the answer (:mod:`pipeline.report.answer`).
@@ -48,21 +48,21 @@ from pipeline.report.cubes import point_keys, sweep_dims
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.seeds import rng_for
 from pipeline.report.text import comparison, pct, pct_interval, si
-from pipeline.results.hardware import DecoderEnergyModel, EnergyBand, decoder_energy_j
-from pipeline.results.latency import EXIT_THRESHOLDS, early_exit, exit_energy_j
+from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
+from pipeline.results.early_exit import EXIT_THRESHOLDS, early_exit, exit_energy_j
 from pipeline.results.stats import PairedComparison, accuracy_interval
 
 #: The cube's decision variables, (axes..., model, decision_s, repeat, recording).
 DECISION_VARIABLES = ("decision_correct", "decision_confidence")
 #: The cube's operation counts, (axes..., model, decision_s), in
-#: :func:`~pipeline.results.hardware.decoder_energy_j`'s order.
+#: :func:`~pipeline.results.decoder_energy.decoder_energy_j`'s order.
 OPERATION_VARIABLES = ("decoder_acs", "decoder_macs", "decoder_neuron_updates")
 #: The stem of the latency figure.
 LATENCY_STEM = "latency"
 
 
 @dataclass(frozen=True)
-class Decisions:
+class DesignDecisions:
     """One model's decisions at one design, at the times it decides.
 
     Attributes
@@ -158,10 +158,10 @@ class LatencyCurve:
         return self.readout_power_w * float(self.decision_s[index])
 
 
-def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], Decisions]:
+def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], DesignDecisions]:
     """Every (result key, model) whose cube holds decisions, at the times the model decides
     (the first cube met holding a point wins)."""
-    found: dict[tuple[str, str], Decisions] = {}
+    found: dict[tuple[str, str], DesignDecisions] = {}
     for cube in cubes.values():
         if not all(v in cube.variables for v in (*DECISION_VARIABLES, "decision_s", "label")):
             continue
@@ -186,7 +186,7 @@ def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], D
                 decided = (correct[p, m] >= 0).any(axis=(-2, -1))
                 if (key, model) in found or not decided.any():
                     continue
-                found[(key, model)] = Decisions(
+                found[(key, model)] = DesignDecisions(
                     decision_s=times[decided],
                     correct=correct[p, m][decided].astype(np.int8),
                     confidence=confidence[p, m][decided].astype(np.float64),
@@ -203,7 +203,7 @@ def _points(variable: xr.DataArray, dims: tuple[str, ...]) -> np.ndarray:
 
 
 def earliest_not_below(
-    decisions: Decisions, key: str, model: str, alpha: float = ALPHA
+    decisions: DesignDecisions, key: str, model: str, alpha: float = ALPHA
 ) -> EarliestDecision:
     """The earliest decision time not significantly below the full touch, by a fixed sequence
     of paired tests from the full touch backwards (see the module docstring)."""
@@ -232,7 +232,7 @@ def earliest_not_below(
 
 
 def accuracy_along(
-    decisions: Decisions, key: str, model: str
+    decisions: DesignDecisions, key: str, model: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
     """Accuracy (fraction) and its 95 % interval at each decision time, float64 (times,), and
     the interval's method(s); see the module docstring."""
@@ -256,7 +256,7 @@ def accuracy_along(
 
 
 def latency_curve(
-    decisions: Decisions,
+    decisions: DesignDecisions,
     key: str,
     model: str,
     label: str,
@@ -296,7 +296,7 @@ def latency_curve(
 
 
 def full_touch_energies(
-    decisions: Mapping[tuple[str, str], Decisions], energy: DecoderEnergyModel
+    decisions: Mapping[tuple[str, str], DesignDecisions], energy: DecoderEnergyModel
 ) -> dict[tuple[str, str], EnergyBand]:
     """The decoder's energy per decision at the full touch, by (result key, model), where the
     cube states the operations (float J at both ends)."""
@@ -309,7 +309,7 @@ def full_touch_energies(
 
 
 def latency_curves(
-    decisions: Mapping[tuple[str, str], Decisions],
+    decisions: Mapping[tuple[str, str], DesignDecisions],
     answers: Sequence[ModelAnswer],
     energy: DecoderEnergyModel,
 ) -> tuple[LatencyCurve, ...]:

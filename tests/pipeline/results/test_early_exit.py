@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.results.hardware import DecoderEnergyModel
-from pipeline.results.latency import decides, early_exit, exit_energy_j, full_touch
+from pipeline.results.decoder_energy import DecoderEnergyModel
+from pipeline.results.early_exit import decides, early_exit, exit_energy_j, full_touch
 
 TIMES = np.array([1.0, 2.0, 3.0])
 TIMES4 = np.array([0.1, 0.2, 0.3, 0.4])

@@ -14,11 +14,11 @@ import pytest
 
 from pipeline.report import FrameReadout, build_report
 from pipeline.report.answer import DECODER_COLUMN, glance_header, glance_rows
+from pipeline.report.decision_time import LATENCY_STEM, gather_decisions
 from pipeline.report.document import report_blocks
 from pipeline.report.figures import draw_report
-from pipeline.report.latency import LATENCY_STEM, gather_decisions
 from pipeline.report.render import render_markdown
-from pipeline.results.hardware import decoder_energy_j
+from pipeline.results.decoder_energy import decoder_energy_j
 from tests.latency_helpers import FFNN_MACS, FFNN_UPDATES, SPIKING_ACS, TIMES, with_decisions
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 

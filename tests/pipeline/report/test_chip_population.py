@@ -10,7 +10,7 @@ import pytest
 from pipeline.design.scene import Deployment
 from pipeline.report import Panel, build_report
 from pipeline.report.answer import yield_sentence
-from pipeline.report.chips import PER_CHIP, chip_curves, fill_groups, pooled
+from pipeline.report.chip_population import PER_CHIP, chip_curves, fill_groups, pooled
 from pipeline.report.claims import Verdict
 from pipeline.report.cubes import panel_x
 from pipeline.report.document import report_blocks
