@@ -129,7 +129,7 @@ def test_every_name_of_a_built_cube_is_declared_for_the_reference():
 
 
 def test_the_command_line_page_lists_every_command_and_option(site):
-    from flows.cli import build_parser
+    from flows.cli_parser import build_parser
 
     page = (site / "reference" / "cli.html").read_text()
     parser = build_parser()

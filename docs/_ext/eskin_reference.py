@@ -287,11 +287,11 @@ def resolve_public_name(app: Sphinx, env, node, contnode):
 
 
 def command_line_parser():
-    """``eskin``'s parser (:func:`flows.cli.build_parser`) for the command-line page, its
+    """``eskin``'s parser (:func:`flows.cli_parser.build_parser`) for the command-line page, its
     commands' epilogs left out: they list the scene fields, which have a page of their own."""
     import argparse
 
-    from flows.cli import build_parser
+    from flows.cli_parser import build_parser
 
     parser = build_parser()
     for action in parser._actions:
