@@ -48,7 +48,7 @@ _OPEN_ZARR = {"consolidated": False, "zarr_format": 3, "chunks": None, "decode_c
 
 
 @dataclass(frozen=True)
-class Record:
+class BatchEntry:
     """One entry as a batch stores it: its key, its variables and its JSON attributes."""
 
     key: str
@@ -60,7 +60,7 @@ class BatchError(ValueError):
     """A batch's data or metadata is inconsistent (corrupt): its message says what."""
 
 
-def write_batch(path: Path | Store, kind: str, records: Sequence[Record]) -> None:
+def write_batch(path: Path | Store, kind: str, records: Sequence[BatchEntry]) -> None:
     """Write ``records`` as one batch group at ``path`` (a folder or a Zarr store; empty).
 
     Raises
@@ -119,7 +119,7 @@ def metadata_keys(metadata: bytes) -> tuple[str, ...]:
     return tuple(str(entry["key"]) for entry in entries)
 
 
-def read_batch(path: Path | Store, kind: str) -> list[Record]:
+def read_batch(path: Path | Store, kind: str) -> list[BatchEntry]:
     """Every entry of the batch at ``path`` (a folder or a Zarr store), checked against the
     batch's digests.
 
@@ -165,7 +165,7 @@ def read_batch(path: Path | Store, kind: str) -> list[Record]:
                 raise BatchError(f"variable {name!r} does not match its entries' shapes")
             variables[name] = (dims, flat[start : start + size].reshape(shape), {})
             offsets[name] = start + size
-        records.append(Record(str(entry["key"]), variables, entry["attrs"]))
+        records.append(BatchEntry(str(entry["key"]), variables, entry["attrs"]))
     if any(offsets[name] != arrays[name][1].size for name in arrays):
         raise BatchError("a variable holds values of no entry")
     return records

@@ -28,7 +28,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from storage.batches import Record, Variables
+from storage.batches import BatchEntry, Variables
 
 
 class DeclaredVariable(Protocol):
@@ -58,7 +58,7 @@ class Declaration(Protocol):
     decode: Callable[[Mapping[str, np.ndarray], Mapping[str, Any]], Any]
 
 
-def to_record(kind: Declaration, key: str, entry: Any) -> Record:
+def to_record(kind: Declaration, key: str, entry: Any) -> BatchEntry:
     """``entry`` of ``kind`` as a batch record, checked against its declaration.
 
     Raises
@@ -96,10 +96,10 @@ def to_record(kind: Declaration, key: str, entry: Any) -> Record:
         json.dumps(attrs, allow_nan=False)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{kind.name} entry: attributes JSON cannot hold: {error}") from error
-    return Record(key, variables, dict(attrs))
+    return BatchEntry(key, variables, dict(attrs))
 
 
-def from_record(kind: Declaration, record: Record) -> Any:
+def from_record(kind: Declaration, record: BatchEntry) -> Any:
     """The entry a batch record holds, its arrays checked against ``kind``'s declaration.
 
     Raises

@@ -47,7 +47,7 @@ import xarray as xr
 import zarr
 
 from storage import cube_files, index
-from storage.batches import BATCH_PREFIX, Record, metadata_keys, read_batch, write_batch
+from storage.batches import BATCH_PREFIX, BatchEntry, metadata_keys, read_batch, write_batch
 from storage.errors import StoreError, one_line
 from storage.layout import CUBES, MARKER, STORE_NAME, VERSION, check_metadata
 from storage.objects import Conflict, Objects
@@ -142,7 +142,7 @@ class ObjectRoot:
             lambda: metadata_keys(self.objects.get(metadata)[0]),
         )
 
-    def write_batch(self, kind: str, records: list[Record]) -> None:
+    def write_batch(self, kind: str, records: list[BatchEntry]) -> None:
         """Publish ``records`` as a new batch of ``kind``, its group metadata last."""
         self._ensure_group(kind)
         files: dict[str, Any] = {}
@@ -150,7 +150,7 @@ class ObjectRoot:
         prefix = self._key(kind, f"{BATCH_PREFIX}{uuid.uuid4().hex}") + "/"
         self.objects.publish(prefix, _bytes(files), last=cube_files.METADATA)
 
-    def read_batch(self, kind: str, batch: str) -> list[Record]:
+    def read_batch(self, kind: str, batch: str) -> list[BatchEntry]:
         """Every entry of a complete batch (:func:`storage.batches.read_batch`)."""
         store = self.objects.zarr_store(self._key(kind, batch), read_only=True)
         return read_batch(store, kind)

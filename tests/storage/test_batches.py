@@ -15,8 +15,8 @@ from hypothesis.extra import numpy as hnp
 
 import storage.batches as batches
 from storage.batches import (
+    BatchEntry,
     BatchError,
-    Record,
     digest,
     json_digest,
     nbytes,
@@ -32,10 +32,10 @@ NEG_NAN = -np.float64("nan")  # a NaN with the sign bit set
 CORRUPT = (ValueError, OSError, RuntimeError)
 
 
-def records() -> list[Record]:
+def records() -> list[BatchEntry]:
     """Two entries of every supported kind of variable; the second lacks some of them."""
     return [
-        Record(
+        BatchEntry(
             "first",
             {
                 "t": (("event",), np.array([0.5, -0.0, NEG_NAN, np.inf, -np.inf, 5e-324]), {}),
@@ -52,7 +52,7 @@ def records() -> list[Record]:
             },
             {"ideal": False, "seconds": {"readout": 1.5, "taxels": 0.25}, "names": ["a", "é"]},
         ),
-        Record(
+        BatchEntry(
             "second",
             {
                 "t": (("event",), np.array([], np.float64), {}),
@@ -65,7 +65,7 @@ def records() -> list[Record]:
     ]
 
 
-def assert_records_identical(actual: list[Record], expected: list[Record]) -> None:
+def assert_records_identical(actual: list[BatchEntry], expected: list[BatchEntry]) -> None:
     """Same keys in order, same attrs, same variables with equal dims, dtypes and bits."""
     assert [r.key for r in actual] == [r.key for r in expected]
     for got, want in zip(actual, expected, strict=True):
@@ -143,7 +143,7 @@ def test_the_number_of_files_grows_with_variables_not_entries(tmp_path):
             path,
             "spikes",
             [
-                Record(f"k{i}", {"x": (("r",), np.arange(i + 1, dtype=np.float64), {})}, {})
+                BatchEntry(f"k{i}", {"x": (("r",), np.arange(i + 1, dtype=np.float64), {})}, {})
                 for i in range(n_entries)
             ],
         )
@@ -154,7 +154,7 @@ def test_the_number_of_files_grows_with_variables_not_entries(tmp_path):
 
 def test_entries_without_variables(tmp_path):
     path = tmp_path / "batch"
-    expected = [Record("a", {}, {"q": [1, None]}), Record("b", {}, {})]
+    expected = [BatchEntry("a", {}, {"q": [1, None]}), BatchEntry("b", {}, {})]
     write_batch(path, "results", expected)
     assert_records_identical(read_batch(path, "results"), expected)
 
@@ -162,8 +162,8 @@ def test_entries_without_variables(tmp_path):
 def test_big_variables_are_chunked_and_still_exact(tmp_path, monkeypatch):
     monkeypatch.setattr(batches, "CHUNK_BYTES", 32)  # four float64 values a chunk
     expected = [
-        Record("a", {"x": (("i",), np.arange(6, dtype=np.float64) - 0.5, {})}, {}),
-        Record("b", {"x": (("i",), np.array([NEG_NAN, -0.0, 1e300, 2.0]), {})}, {}),
+        BatchEntry("a", {"x": (("i",), np.arange(6, dtype=np.float64) - 0.5, {})}, {}),
+        BatchEntry("b", {"x": (("i",), np.array([NEG_NAN, -0.0, 1e300, 2.0]), {})}, {}),
     ]
     path = tmp_path / "batch"
     write_batch(path, "spikes", expected)
@@ -177,7 +177,7 @@ def test_big_variables_are_chunked_and_still_exact(tmp_path, monkeypatch):
 
 def test_empty_string_variable_round_trips(tmp_path):
     path = tmp_path / "batch"
-    expected = [Record("a", {"name": (("recording",), np.array([], dtype=object), {})}, {})]
+    expected = [BatchEntry("a", {"name": (("recording",), np.array([], dtype=object), {})}, {})]
     write_batch(path, "results", expected)
     assert_records_identical(read_batch(path, "results"), expected)
 
@@ -203,7 +203,7 @@ JSON = st.recursive(
 
 
 @st.composite
-def ragged_records(draw) -> list[Record]:
+def ragged_records(draw) -> list[BatchEntry]:
     """1-4 entries, each with a random subset of the variables in random shapes."""
     keys = draw(st.lists(st.text(max_size=8), min_size=1, max_size=4, unique=True))
     out = []
@@ -224,7 +224,7 @@ def ragged_records(draw) -> list[Record]:
                 values = draw(hnp.arrays(dtype, shape))
             variables[name] = (dims, values, {})
         attrs = draw(st.dictionaries(st.text(max_size=6), JSON, max_size=3))
-        out.append(Record(key, variables, attrs))
+        out.append(BatchEntry(key, variables, attrs))
     return out
 
 
@@ -371,8 +371,8 @@ def test_a_batch_of_another_kind_is_refused(batch):
 # Refusals
 
 
-def one(key: str, name: str, dims: tuple[str, ...], values) -> Record:
-    return Record(key, {name: (dims, np.asarray(values), {})}, {})
+def one(key: str, name: str, dims: tuple[str, ...], values) -> BatchEntry:
+    return BatchEntry(key, {name: (dims, np.asarray(values), {})}, {})
 
 
 @pytest.mark.parametrize(
@@ -406,7 +406,7 @@ def test_inconsistent_batches_are_refused_before_writing(tmp_path, entries, mess
 def test_attributes_json_cannot_hold_are_refused_before_writing(tmp_path):
     path = tmp_path / "batch"
     with pytest.raises(ValueError, match="JSON"):
-        write_batch(path, "spikes", [Record("a", {}, {"seconds": float("nan")})])
+        write_batch(path, "spikes", [BatchEntry("a", {}, {"seconds": float("nan")})])
     assert not path.exists()
 
 
