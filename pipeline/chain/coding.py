@@ -89,6 +89,9 @@ def _count_sorted(times, edges, counts, row):  # pragma: no cover - compiled
 def rate_code(times_s: np.ndarray, window_s: float, n_windows: int) -> tuple[np.ndarray, int]:
     """Count one train's spikes in ``n_windows`` windows of ``window_s`` seconds.
 
+    The frame of a set of one train (:func:`frames`, polarities merged): the contract runs the
+    coder every sweep runs.
+
     Parameters
     ----------
     times_s : float64 (n,)
@@ -104,19 +107,25 @@ def rate_code(times_s: np.ndarray, window_s: float, n_windows: int) -> tuple[np.
         Spikes per window, polarities merged.
     dropped : int
         Spikes outside ``[0, n_windows * window_s)``.
+
+    Raises
+    ------
+    ValueError
+        ``window_s`` or ``n_windows`` out of range, or a spike time is NaN.
     """
     times_s = np.asarray(times_s, dtype=np.float64)
-    if not (math.isfinite(window_s) and window_s > 0):
-        raise ValueError(f"window_s must be a finite number > 0, got {window_s!r}")
-    if n_windows < 1:
-        raise ValueError(f"n_windows must be >= 1, got {n_windows!r}")
     if np.isnan(times_s).any():
         raise ValueError("spike times contain NaN")
     if np.any(times_s[1:] < times_s[:-1]):
         times_s = np.sort(times_s)
-    counts = np.zeros((1, n_windows), dtype=np.int64)
-    dropped = _count_sorted(times_s, window_edges_s(window_s, n_windows), counts, 0)
-    return counts[0], int(dropped)
+    one_train = SpikeTrains(
+        times_s=times_s,
+        polarity=np.ones(times_s.shape, dtype=np.int8),
+        count=np.array([[times_s.size]], dtype=np.int64),
+        duration_s=np.array([np.nan]),  # the recording's length: unknown, and not read
+    )
+    counts, dropped = frames(one_train, window_s, n_windows)
+    return counts[0, 0, 0], int(dropped[0, 0])
 
 
 @kernel()
@@ -140,13 +149,25 @@ def frames(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rate-code every train of a dataset into per-recording frames.
 
+    ``trains`` holds each train's times sorted (as the readout emits them); ``window_s`` > 0 and
+    ``n_windows`` >= 1 as in :func:`rate_code`.
+
     Returns
     -------
     counts : int64 (n_recordings, channels, n_taxels, n_windows)
         ``channels`` is 1 for merged polarity, 2 for split (+1 first).
     dropped : int64 (n_recordings, n_taxels)
         Spikes of each train outside the windows.
+
+    Raises
+    ------
+    ValueError
+        ``window_s`` is not a finite number > 0 or ``n_windows`` is < 1.
     """
+    if not (math.isfinite(window_s) and window_s > 0):
+        raise ValueError(f"window_s must be a finite number > 0, got {window_s!r}")
+    if n_windows < 1:
+        raise ValueError(f"n_windows must be >= 1, got {n_windows!r}")
     channels = 2 if polarity == Polarity.SPLIT else 1
     n_rec, n_tax = trains.count.shape
     out = np.zeros((n_rec * n_tax * channels, n_windows), dtype=np.int64)
