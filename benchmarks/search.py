@@ -27,8 +27,9 @@ missing trains are Dask tasks of their own), and, for the first trial of each wo
 worker's share of the one-off load and set-up (as a search on fresh workers pays them). The
 grid's cost is what the exhaustive run paid: every point's own seconds and the shared ones. A
 search stops asking when its seconds told plus those its running trials are expected to cost
-reach the budget (:func:`flows.search.wants_trial`); the trials running then finish and are
-counted.
+reach the budget, or as its sampler proposes only designs told before: the search's own rule
+(:class:`flows.search.StopRule`, :func:`flows.search.committed_seconds`) decides; the trials
+running then finish and are counted.
 
 A budget is a share of the grid's cost, counted two ways (:class:`Budget`): of everything
 the grid paid (``paid``), and of its points' seconds beyond the workers' start, which a search
@@ -73,7 +74,7 @@ import numpy as np
 from benchmarks.sweep import REPO
 from flows.refill import refill
 from flows.samplers import Proposer, resolve_sampler, seed_for
-from flows.search import MAX_REPEATS_IN_ROW
+from flows.search import StopRule, committed_seconds
 from pipeline.design.space import Sampler, Space
 from pipeline.report.trials import hypervolume
 
@@ -324,8 +325,9 @@ class Budget(enum.Enum):
 @dataclasses.dataclass
 class Replay:
     """One search replayed to its budget: per trial asked, the grid point, the seconds it
-    cost and what :func:`flows.search.wants_trial` weighed when it was asked (seconds told
-    plus those expected of the running trials), and the wall seconds of the sampler's asks."""
+    cost and what the search weighed against its budget when it was asked (seconds told plus
+    those expected of the running trials, :func:`flows.search.committed_seconds`), and the wall
+    seconds of the sampler's asks."""
 
     points: list[int] = dataclasses.field(default_factory=list)
     seconds: list[float] = dataclasses.field(default_factory=list)
@@ -347,8 +349,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
     started_trains: dict[int, float] = {}  # train -> when it is ready
     paid: set[int] = set()  # points tried
     told_points: set[int] = set()
-    repeats = [0]  # trials in a row at points told before
-    stopped: list[bool] = []
+    rule = StopRule(WORKERS)
     clock = [0.0]
     events: list[tuple[float, int]] = []
     spent = [0.0]
@@ -356,14 +357,9 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
 
     def ask(running: int) -> int | None:
         told = len(out.points) - running
-        expected = running * spent_own[0] / told if told else 0.0
-        # As flows.search: the budget is spent, or the sampler proposes only designs told
-        # before; and once refused, never again. (Every point tried also ends a replay.)
-        if stopped or spent[0] + expected >= budget_s or len(paid) == len(own):
-            stopped.append(True)
-            return None
-        if repeats[0] >= MAX_REPEATS_IN_ROW:
-            stopped.append(True)
+        weighed = committed_seconds(spent[0], spent_own[0] / told if told else 0.0, running)
+        # The search's own rule; every point tried also ends a replay (the grid has no other).
+        if not rule.asks(lambda: weighed < budget_s and len(paid) < len(own)):
             return None
         tick = time.perf_counter()
         trial, params = proposer.ask()
@@ -371,7 +367,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
         number = len(out.points)
         trials[number] = trial
         out.points.append(where[point_label(params)])
-        out.weighed.append(spent[0] + expected)
+        out.weighed.append(weighed)
         return number
 
     def start(number: int) -> tuple[float, int]:
@@ -404,7 +400,7 @@ def replay(space: Space, arrays: dict[str, np.ndarray], budget_s: float) -> Repl
 
     def finish(number: int, token: Any) -> None:
         point = out.points[number]
-        repeats[0] = repeats[0] + 1 if point in told_points else 0
+        rule.told(repeat=point in told_points, failed=False)
         told_points.add(point)
         spent[0] += out.seconds[number]
         spent_own[0] += out.seconds[number] - (shared_per_worker if number < WORKERS else 0.0)

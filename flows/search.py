@@ -440,14 +440,52 @@ def trial_slots(client: Any, workers: int | None) -> int:
     return workers or available_cores()
 
 
+def committed_seconds(spent_s: float, mean_trial_s: float, running: int) -> float:
+    """The seconds a search weighs against its budget in seconds: those spent plus those its
+    ``running`` trials are expected to cost, ``mean_trial_s`` each."""
+    return spent_s + running * mean_trial_s
+
+
 def wants_trial(search: Search, budget: int | None, budget_s: float | None, running: int) -> bool:
     """Whether a search with ``running`` trials under way starts another: fewer than
     ``budget`` trials told and running, or the seconds spent (:meth:`Search.seconds_spent`)
     plus those the running trials are expected to cost (:meth:`Search.mean_trial_seconds`
-    each) below ``budget_s``."""
+    each, :func:`committed_seconds`) below ``budget_s``."""
     if budget is not None:
         return search.told + running < budget
-    return search.seconds_spent() + running * search.mean_trial_seconds() < budget_s
+    spent_s, mean_trial_s = search.seconds_spent(), search.mean_trial_seconds()
+    return committed_seconds(spent_s, mean_trial_s, running) < budget_s
+
+
+@dataclass
+class StopRule:
+    """When a search stops asking for trials: its budget is spent (``within_budget()`` is
+    false, asked only while nothing else stops it), ``slots`` trials in a row failed (the next
+    would too, spending nothing) or :data:`MAX_REPEATS_IN_ROW` trials in a row were of designs
+    told before. Once it refuses it never asks again: the trials still running finish and the
+    search ends, even if they cost less than expected, so that a search with a smaller budget
+    asks exactly the trials a larger one asks up to that point.
+    """
+
+    slots: int
+    failures_in_row: int = 0
+    repeats_in_row: int = 0
+    stopped: bool = False
+
+    def asks(self, within_budget: Callable[[], bool]) -> bool:
+        """Whether the search asks one more trial now."""
+        if not self.stopped:
+            self.stopped = (
+                self.failures_in_row >= self.slots
+                or self.repeats_in_row >= MAX_REPEATS_IN_ROW
+                or not within_budget()
+            )
+        return not self.stopped
+
+    def told(self, *, repeat: bool, failed: bool) -> None:
+        """Count a trial told: of a design told before (``repeat``), failed or not."""
+        self.repeats_in_row = self.repeats_in_row + 1 if repeat else 0
+        self.failures_in_row = self.failures_in_row + 1 if failed else 0
 
 
 def run_optimize(
@@ -535,28 +573,21 @@ def _run_trials(
     compute: Callable[[Search, list[int], Callable[[], Any]], tuple[SweepPlan, dict[str, str]]]
     | None,
 ) -> tuple[int, int, dict[int, str]]:
-    """Ask, compute and tell trials, ``slots`` running at once, until the budget is spent
-    (:func:`wants_trial`), ``slots`` trials in a row failed (the next would too, spending
-    nothing) or :data:`MAX_REPEATS_IN_ROW` trials in a row were of designs told before;
+    """Ask, compute and tell trials, ``slots`` running at once, until the :class:`StopRule`
+    refuses (the budget spent, :func:`wants_trial`; failures or repeats in a row);
     (cache hits, points computed, failures by trial)."""
     compute = compute or Search.compute
     pool = concurrent.futures.ThreadPoolExecutor(slots, thread_name_prefix="eskin-trial")
     seen: set[str] = set()
     told = set() if search.cube is None else {str(k) for k in search.cube["result_key"].values}
-    cache_hits = computed = failures_in_row = repeats_in_row = 0
+    cache_hits = computed = 0
     failed: dict[int, str] = {}
-    stopped: list[bool] = []
+    rule = StopRule(slots)
 
     def ask(running: int) -> int | None:
-        # Once refused, never again: the trials still running finish and the search ends, even
-        # if they cost less than expected (so a search with a smaller budget asks exactly the
-        # trials a larger one asks up to that point).
-        if not stopped:
-            if failures_in_row >= slots or repeats_in_row >= MAX_REPEATS_IN_ROW:
-                stopped.append(True)
-            elif not wants_trial(search, budget, budget_s, running):
-                stopped.append(True)
-        return None if stopped else search.ask(1)[0]
+        if not rule.asks(lambda: wants_trial(search, budget, budget_s, running)):
+            return None
+        return search.ask(1)[0]
 
     def start(number: int) -> concurrent.futures.Future:
         # The copied context carries the Prefect flow run to a task the hook calls.
@@ -564,10 +595,10 @@ def _run_trials(
         return pool.submit(run, compute, search, [number], client_for)
 
     def finish(number: int, future: concurrent.futures.Future) -> None:
-        nonlocal cache_hits, computed, failures_in_row, repeats_in_row
+        nonlocal cache_hits, computed
         plan, failed_keys = future.result()
         keys = {point.key for point in plan.grid.points()}
-        repeats_in_row = repeats_in_row + 1 if keys <= told else 0
+        repeat = keys <= told
         told.update(keys)
         outcome = search.tell([number], plan, failed_keys)
         # Two trials of one design, running together, computed their point once (Dask holds
@@ -578,7 +609,7 @@ def _run_trials(
         cache_hits += outcome.cache_hits
         computed += outcome.computed
         failed.update(outcome.failed)
-        failures_in_row = failures_in_row + 1 if outcome.failed else 0
+        rule.told(repeat=repeat, failed=bool(outcome.failed))
         if on_told is not None:
             on_told(search, outcome)
 
