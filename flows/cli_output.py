@@ -65,10 +65,12 @@ class StageProgress:
         self.started = 0
 
     def advance(self, stage: str) -> None:
+        """Mark the stage before as done and ``stage`` as running."""
         if self.started:
             self.bar.update(1)
         self.started += 1
         self.bar.set_description(stage)
 
     def close(self) -> None:
+        """Take the bar off the terminal."""
         self.bar.close()

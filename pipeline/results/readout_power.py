@@ -322,7 +322,8 @@ def event_power_w(
 def frame_static_power_w(n_taxels: Any, model: EnergyModel | None = None) -> Any:
     """Static power of the frame readout: ``n_taxels * P_fe + ceil(n_taxels / m) * P_adc``, in W.
 
-    ``m`` is :attr:`EnergyModel.taxels_per_adc`; broadcasts like :func:`frame_data_rate_bps`.
+    ``m`` is :attr:`~pipeline.results.readout_constants.EnergyModel.taxels_per_adc`; broadcasts
+    like :func:`frame_data_rate_bps`.
     """
     model = _model(model)
     n_taxels = non_negative("n_taxels", n_taxels)
