@@ -108,7 +108,7 @@ class CrossValidation:
     operations
         float64 ``(D, 3)``, read-only, or ``None``: mean over recordings (and repeats) of the
         accumulates, multiply-accumulates and neuron updates a decision read at each decision
-        time cost (:func:`pipeline.chain.operations.count_operations`).
+        time cost (:func:`pipeline.chain.decoders.count_operations`).
     chip_accuracy
         float64 ``(chips, repeats, folds)``, read-only, or ``None``: ``fold_accuracy`` of every
         chip of a scene that simulates chips (:mod:`pipeline.chain.deployment`);
