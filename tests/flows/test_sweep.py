@@ -346,8 +346,8 @@ def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
         'name = "g"\nbase = "smoke"\n[sweeps.shared]\n'
         'set = { "chips.count" = 3, "chips.deployment" = "shared", '
         '"training.models" = ["ffnn", "snn"], "training.epochs" = 2, '
-        '"training.snn.epochs" = 2 }\n'
-        'axes = { "readout.effects.threshold_mismatch.sigma_rel" = [0.1, 0.3] }\n'
+        '"training.snn.epochs" = 2, "readout.effects.threshold_mismatch.sigma_rel" = 0.2 }\n'
+        'axes = { "readout.threshold_v" = [0.05, 0.09] }\n'
     )
     root = tmp_path / "run"
     proc = eskin(
@@ -358,6 +358,6 @@ def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
     cube = open_results(root)["shared"]
     assert cube["model"].values.tolist() == ["ffnn", "snn"]
     assert cube.sizes["chip"] == 3
-    accuracy = cube["accuracy_mean"].transpose("sigma_rel", "model", "chip").values
+    accuracy = cube["accuracy_mean"].transpose("threshold_v", "model", "chip").values
     assert accuracy.shape == (2, 2, 3) and np.all((accuracy >= 0) & (accuracy <= 1))
     assert np.all(np.isfinite(cube["accuracy_p05"].values))
