@@ -63,6 +63,7 @@ __all__ = [
     "Preparation",
     "Reads",
     "SNNDecoder",
+    "WindowsDecoder",
     "build_model",
     "count_operations",
     "decoder_of",
@@ -240,12 +241,19 @@ class Decoder(ABC):
 
 
 @dataclass(frozen=True)
-class FFNNDecoder(Decoder):
-    """The paper's FFNN (:class:`pipeline.chain.models.FoldFFNN`) on standardized windows."""
+class WindowsDecoder(Decoder):
+    """A decoder of rate-coded windows, standardized, read along the touch on the prefixes of
+    its frames (:meth:`Decoder.decide`): the paper's FFNN and CNN."""
 
-    model: ClassVar[Model] = Model.FFNN
     reads: ClassVar[Reads] = Reads.WINDOWS
     preparation: ClassVar[Preparation] = Preparation.STANDARDIZED
+
+
+@dataclass(frozen=True)
+class FFNNDecoder(WindowsDecoder):
+    """The paper's FFNN (:class:`pipeline.chain.models.FoldFFNN`)."""
+
+    model: ClassVar[Model] = Model.FFNN
 
     def build(self, input_shape, n_classes, generators, hidden_units, snn):
         from pipeline.chain.models import FoldFFNN
@@ -259,20 +267,13 @@ class FFNNDecoder(Decoder):
 
 
 @dataclass(frozen=True)
-class CNNDecoder(Decoder):
-    """The paper's CNN (:class:`pipeline.chain.models.FoldCNN`) on standardized windows."""
+class CNNDecoder(WindowsDecoder):
+    """The paper's CNN (:class:`pipeline.chain.models.FoldCNN`); its features are computed once
+    for its logits and its count."""
 
     model: ClassVar[Model] = Model.CNN
-    reads: ClassVar[Reads] = Reads.WINDOWS
-    preparation: ClassVar[Preparation] = Preparation.STANDARDIZED
-
-    def build(self, input_shape, n_classes, generators, hidden_units, snn):
-        from pipeline.chain.models import FoldCNN
-
-        return FoldCNN(input_shape, n_classes, generators)
 
     def logits_and_operations(self, net, x):
-        """Its features once, for its logits and its count."""
         from pipeline.chain.operations import cnn_operations
 
         features = net.features(x)
@@ -282,6 +283,11 @@ class CNNDecoder(Decoder):
         from pipeline.chain.operations import cnn_operations
 
         return cnn_operations(net, x, *net.features(x))
+
+    def build(self, input_shape, n_classes, generators, hidden_units, snn):
+        from pipeline.chain.models import FoldCNN
+
+        return FoldCNN(input_shape, n_classes, generators)
 
 
 @dataclass(frozen=True)
