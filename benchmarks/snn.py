@@ -12,22 +12,25 @@ import numpy as np
 import torch
 
 from benchmarks.timing import median_seconds
-from pipeline.chain.coding import frames
-from pipeline.chain.models import build_model, fold_generator
+from pipeline.chain.coding import resolve_n_windows
+from pipeline.chain.decoders import build_model, decoder_of
+from pipeline.chain.models import fold_generator
 from pipeline.chain.training import CrossValidation, cross_validate
-from pipeline.design.scene import Model, Polarity, Scene
-from pipeline.run.simulate import encode, prepare, rate_frames
+from pipeline.design.scene import Model, Scene
+from pipeline.run.simulate import encode, prepare
 
 
 def scene_inputs(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The CNN's frames ``(n, 1, taxels, windows)``, the SNN's step counts ``(n, 2, taxels,
-    steps)`` over the same span, and the labels, of a scene's REAL trains."""
+    steps)`` over the same span, and the labels, of a scene's REAL trains, coded as their
+    decoders read them (:class:`pipeline.chain.decoders.Reads`)."""
     recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v)
-    encoded = encode(recordings, front_end, scene)
-    counts, _ = rate_frames(encoded.real, scene)
-    step_s = scene.training.snn.step_s
-    n_steps = round(counts.shape[-1] * scene.coding.window_s / step_s)
-    steps, _ = frames(encoded.real, step_s, n_steps, Polarity.SPLIT)
+    real = encode(recordings, front_end, scene).real
+    n_windows = resolve_n_windows(scene.coding, real.duration_s)
+    counts, steps = (
+        decoder_of(model).reads.code(real, scene.coding, scene.training.snn, n_windows)[0]
+        for model in (Model.CNN, Model.SNN)
+    )
     return counts, steps, recordings.labels
 
 

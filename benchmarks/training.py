@@ -21,7 +21,8 @@ from benchmarks.timing import median_seconds
 from pipeline.chain.training import CrossValidation, cross_validate
 from pipeline.design.grid import load_grid
 from pipeline.design.scene import Model, Scene
-from pipeline.run.simulate import encode, prepare, rate_frames
+from pipeline.run.decoding import rate_frames
+from pipeline.run.simulate import encode, prepare
 
 WORKER_MEMORY_BYTES = 1.5 * 2**30
 """Memory budget of one Dask worker, the peak resident memory target of docs/performance.md."""
@@ -31,7 +32,7 @@ def scene_frames(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Rate-coded frames ``(n_rec, C, taxels, windows)`` of a scene's REAL trains, and labels."""
     recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v)
     encoded = encode(recordings, front_end, scene)
-    counts, _ = rate_frames(encoded.real, scene)
+    counts, _ = rate_frames(encoded.real, scene.coding)
     return counts, recordings.labels
 
 

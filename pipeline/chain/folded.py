@@ -1,6 +1,7 @@
 """The parts every fold-batched classifier shares (:mod:`pipeline.chain.models`,
-:mod:`pipeline.chain.spiking`): the module that checks the fold-batched input shape, and two
-linear layers drawn per fold.
+:mod:`pipeline.chain.spiking`): the module that checks the fold-batched input shape, two
+linear layers drawn per fold, and the read of a full-touch classifier on the prefixes of its
+frames (:func:`on_prefixes`).
 
 Parameters carry a leading fold dimension ``F``; each fold's are drawn from that fold's own
 :class:`torch.Generator` with PyTorch's default bounds for ``Linear``,
@@ -10,9 +11,11 @@ Parameters carry a leading fold dimension ``F``; each fold's are drawn from that
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
+import numpy as np
 import torch
+import torch.nn.functional as F
 from torch import nn
 
 
@@ -60,3 +63,65 @@ class FoldModel(nn.Module):
             raise ValueError(
                 f"expected input (F={self.n_folds}, B, *{self.input_shape}), got {tuple(x.shape)}"
             )
+
+
+def fold_loss(logits: torch.Tensor, targets: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """Each fold's weighted cross-entropy on logits.
+
+    Parameters
+    ----------
+    logits
+        float32 ``(F, B, n_classes)``.
+    targets
+        int64 ``(F, B)`` class indices.
+    weights
+        float32 ``(F, B)``; ``1 / n_real`` for the ``n_real`` real samples of a fold's batch and
+        0 for padding, so each fold contributes its batch-mean loss.
+
+    Returns
+    -------
+    torch.Tensor
+        float32 ``(F,)``, in nats: ``sum_b weights[f, b] * CE(logits[f, b], targets[f, b])``.
+        Uses :func:`torch.nn.functional.cross_entropy` (log-softmax with the maximum
+        subtracted), finite for logits as large as ``1e30``; an entry of weight 0 contributes
+        nothing to the loss or to any gradient. Training minimizes the sum over folds, which
+        gives each fold exactly its own gradient.
+    """
+    n_folds, batch, n_classes = logits.shape
+    losses = F.cross_entropy(logits.reshape(-1, n_classes), targets.reshape(-1), reduction="none")
+    return (losses * weights.reshape(-1)).reshape(n_folds, batch).sum(dim=1)
+
+
+#: Most input cells (folds x samples x prefixes x frame cells) read at once by
+#: :func:`on_prefixes`: bounds their memory (16 MB).
+PREFIX_CELLS = 4_000_000
+
+
+def on_prefixes(
+    read: Callable[[nn.Module, torch.Tensor], tuple[torch.Tensor, np.ndarray]],
+    net: nn.Module,
+    x: torch.Tensor,
+) -> tuple[torch.Tensor, np.ndarray]:
+    """A full-touch classifier read on every prefix of its frames.
+
+    ``read(net, frames)`` gives the logits float32 ``(F, B', n_classes)`` and operations float64
+    ``(F, B', 3)`` of one forward pass; it is called on the frames ``x`` (float32
+    ``(F, B, C, H, W)``) whose columns after ``k`` are 0, for every ``k < W``, in chunks of at
+    most :data:`PREFIX_CELLS` cells. Returns logits ``(F, B, W, n_classes)`` and operations
+    ``(F, B, W, 3)``, column ``k`` for the prefix ending there.
+    """
+    n_folds, batch = x.shape[:2]
+    n_columns = x.shape[-1]
+    cells = max(1, x[0, 0].numel() * n_folds * batch)
+    chunk = max(1, PREFIX_CELLS // cells)
+    column = torch.arange(n_columns)
+    parts_logits, parts_operations = [], []
+    for first in range(0, n_columns, chunk):
+        ends = torch.arange(first, min(first + chunk, n_columns))
+        keep = (column.reshape(1, -1) <= ends.reshape(-1, 1)).to(x.dtype)  # (L, W)
+        prefixes = x.unsqueeze(2) * keep.reshape(1, 1, len(ends), 1, 1, n_columns)
+        prefixes = prefixes.reshape(n_folds, batch * len(ends), *x.shape[2:])
+        logits, operations = read(net, prefixes)
+        parts_logits.append(logits.reshape(n_folds, batch, len(ends), -1))
+        parts_operations.append(operations.reshape(n_folds, batch, len(ends), 3))
+    return torch.cat(parts_logits, dim=2), np.concatenate(parts_operations, axis=2)

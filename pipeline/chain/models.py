@@ -14,7 +14,8 @@ CNN
 
 Both return logits (no softmax); the loss is cross-entropy on logits. The spiking decoder
 (``snn``, :mod:`pipeline.chain.spiking`) reads spike counts per time step instead and returns
-logits at every step.
+logits at every step. The decoder registry (:mod:`pipeline.chain.decoders`) builds each model
+(:func:`pipeline.chain.decoders.build_model`) and says what it reads and how it is trained.
 
 Fold-batched models
 -------------------
@@ -53,7 +54,6 @@ import torch.nn.functional as F
 from torch import nn
 
 from pipeline.chain.folded import FoldModel, two_layers, uniform
-from pipeline.design.scene import Model, SNNSpec
 
 CNN_CHANNELS = (16, 32)
 """Output channels of the CNN's two convolutions (the paper's)."""
@@ -205,72 +205,3 @@ class FoldCNN(FoldModel):
     def head(self, z: torch.Tensor) -> torch.Tensor:
         """Logits ``(F, B, n_classes)`` from the flattened features ``(F, B, 32*H''*W'')``."""
         return torch.baddbmm(self.fc_b.unsqueeze(1), z, self.fc_w)
-
-
-def build_model(
-    model: Model,
-    input_shape: tuple[int, int, int],
-    n_classes: int,
-    hidden_units: int,
-    n_folds: int,
-    generator: torch.Generator | Sequence[torch.Generator],
-    snn: SNNSpec | None = None,
-) -> nn.Module:
-    """Build ``n_folds`` independent copies of a classifier as one fold-batched module.
-
-    Parameters
-    ----------
-    model
-        :attr:`~pipeline.design.scene.Model.FFNN`, :attr:`~pipeline.design.scene.Model.CNN` or
-        :attr:`~pipeline.design.scene.Model.SNN` (:class:`pipeline.chain.spiking.FoldSNN`).
-    input_shape
-        One sample's frame ``(C, H, W)``: channels, taxels (rows), windows (columns); for the
-        SNN, polarities, taxels and steps.
-    n_classes
-        Number of classes (logits per sample), ``>= 2``.
-    hidden_units
-        Hidden ReLU units of the FFNN (ignored by the CNN).
-    n_folds
-        ``F``, the number of independent models.
-    generator
-        Either one generator per fold (a sequence of length ``n_folds``; fold ``f`` draws its
-        parameters from ``generator[f]`` only, so its weights do not depend on the other folds;
-        use :func:`fold_generator`), or a single generator from which the folds draw in order.
-    snn
-        The SNN's hyper-parameters (required for it; its hidden neurons replace
-        ``hidden_units``).
-
-    Returns
-    -------
-    torch.nn.Module
-        Float32 module; ``forward(x: float32 (F, B, C, H, W)) -> float32 (F, B, n_classes)``.
-    """
-    if isinstance(generator, torch.Generator):
-        generators = [generator] * n_folds
-    else:
-        generators = list(generator)
-    if len(generators) != n_folds or n_folds < 1:
-        raise ValueError(f"need one generator per fold ({n_folds}), got {len(generators)}")
-    if len(input_shape) != 3 or min(input_shape) < 1:
-        raise ValueError(f"input_shape must be (C, H, W) with sides >= 1, got {input_shape}")
-    if n_classes < 2:
-        raise ValueError(f"n_classes must be >= 2, got {n_classes}")
-    model = Model(model)
-    if model is Model.FFNN:
-        return FoldFFNN(input_shape, n_classes, hidden_units, generators)
-    if model is Model.SNN:
-        from pipeline.chain.spiking import FoldSNN
-
-        if snn is None:
-            raise ValueError("the snn needs its hyper-parameters (snn=SNNSpec)")
-        return FoldSNN(
-            input_shape,
-            n_classes,
-            snn.hidden_neurons,
-            generators,
-            step_s=snn.step_s,
-            tau_mem_s=snn.tau_mem_s,
-            threshold=snn.threshold,
-            surrogate_slope=snn.surrogate_slope,
-        )
-    return FoldCNN(input_shape, n_classes, generators)

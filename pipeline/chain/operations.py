@@ -27,9 +27,12 @@ SNN
     \sum_{t' \le t} n(s_{t'})` (input events to the hidden layer, hidden spikes to the
     readout), neuron updates :math:`= t (h + K)`.
 
-:func:`count_operations` returns counts per decision time: the SNN's at every step; the FFNN's
-and CNN's for the one forward pass of the frame given (a decision at an earlier window boundary
-is that of the frame with the later windows left out, :mod:`pipeline.chain.training`).
+One counter per model (:func:`ffnn_operations`, :func:`cnn_operations`, :func:`snn_operations`),
+each the one its decoder declares (:meth:`pipeline.chain.decoders.Decoder.count_operations`;
+:func:`pipeline.chain.decoders.count_operations` asks the registry), returns counts per decision
+time: the SNN's at every step; the FFNN's and CNN's for the one forward pass of the frame given
+(a decision at an earlier window boundary is that of the frame with the later windows left out,
+:meth:`pipeline.chain.decoders.Decoder.decide`).
 """
 
 from __future__ import annotations
@@ -38,11 +41,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-from torch import nn
 
 from pipeline.chain.models import CNN_CHANNELS, FoldCNN, FoldFFNN
+from pipeline.chain.spiking import FoldSNN
 
-__all__ = ["Operations", "cnn_operations", "conv3x3_fan_out", "count_operations"]
+__all__ = ["Operations", "cnn_operations", "conv3x3_fan_out", "ffnn_operations", "snn_operations"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,12 +88,14 @@ def _fanned(x: torch.Tensor, fan: np.ndarray) -> np.ndarray:
     return torch.einsum("fbhw,hw->fb", nonzero, torch.from_numpy(fan)).numpy()
 
 
+@torch.no_grad()
 def cnn_operations(
     model: FoldCNN, x: torch.Tensor, pooled: torch.Tensor, flat: torch.Tensor
 ) -> Operations:
-    """:func:`count_operations` of a CNN given its features on ``x``
-    (:meth:`~pipeline.chain.models.FoldCNN.features`), so that a caller that needs its logits
-    too computes them once."""
+    """The CNN's operations on its inputs ``x`` (float32 ``(F, B, C, H, W)``, standardized
+    frames), given its features on ``x`` (:meth:`~pipeline.chain.models.FoldCNN.features`, so
+    that a caller that needs its logits too computes them once): ``(F, B, 1)``
+    multiply-accumulates of one forward pass."""
     c1, c2 = CNN_CHANNELS
     n_folds, batch, _, height, width = x.shape
     _, _, h1, w1 = pooled.shape
@@ -107,43 +112,28 @@ def _nonzero(x: torch.Tensor, dims: tuple[int, ...]) -> np.ndarray:
 
 
 @torch.no_grad()
-def count_operations(model: nn.Module, x: torch.Tensor) -> Operations:
-    """Count the operations of ``model`` on inputs ``x`` (see the module docstring).
-
-    Parameters
-    ----------
-    model
-        A fold-batched :class:`~pipeline.chain.models.FoldFFNN`,
-        :class:`~pipeline.chain.models.FoldCNN` or :class:`~pipeline.chain.spiking.FoldSNN`.
-    x
-        float32 ``(F, B, C, H, W)``: the model's inputs (standardized frames; for the SNN, spike
-        counts per step, ``W = T`` steps).
-
-    Returns
-    -------
-    Operations
-        ``(F, B, D)`` counts: ``D = T`` cumulative per step for the SNN, ``D = 1`` otherwise.
-    """
-    from pipeline.chain.spiking import FoldSNN
-
+def ffnn_operations(model: FoldFFNN, x: torch.Tensor) -> Operations:
+    """The FFNN's operations on its inputs ``x`` (float32 ``(F, B, C, H, W)``, standardized
+    frames): ``(F, B, 1)`` multiply-accumulates of one forward pass."""
     n_folds, batch = x.shape[:2]
     zeros = np.zeros((n_folds, batch, 1))
-    if isinstance(model, FoldFFNN):
-        hidden, n_classes = model.w2.shape[1:]
-        flat = x.reshape(n_folds, batch, -1)
-        h = torch.relu(torch.baddbmm(model.b1.unsqueeze(1), flat, model.w1))
-        macs = _nonzero(flat, (2,)) * hidden + _nonzero(h, (2,)) * n_classes
-        return Operations(zeros, macs[..., None], zeros)
-    if isinstance(model, FoldCNN):
-        return cnn_operations(model, x, *model.features(x))
-    if isinstance(model, FoldSNN):
-        hidden, n_classes = model.hidden_neurons, model.n_classes
-        events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step
-        spikes = model.hidden_spikes(x)[0].sum(dim=3).to(torch.float64)  # (F, B, T)
-        acs = torch.cumsum(events * hidden + spikes * n_classes, dim=2).numpy()
-        n_steps = x.shape[-1]
-        updates = np.broadcast_to(
-            np.arange(1, n_steps + 1, dtype=np.float64) * (hidden + n_classes), acs.shape
-        ).copy()
-        return Operations(acs, np.zeros_like(acs), updates)
-    raise TypeError(f"no operation count for {type(model).__name__}")
+    hidden, n_classes = model.w2.shape[1:]
+    flat = x.reshape(n_folds, batch, -1)
+    h = torch.relu(torch.baddbmm(model.b1.unsqueeze(1), flat, model.w1))
+    macs = _nonzero(flat, (2,)) * hidden + _nonzero(h, (2,)) * n_classes
+    return Operations(zeros, macs[..., None], zeros)
+
+
+@torch.no_grad()
+def snn_operations(model: FoldSNN, x: torch.Tensor) -> Operations:
+    """The SNN's operations on its spike counts ``x`` (float32 ``(F, B, C, H, T)``, ``T``
+    steps): ``(F, B, T)`` accumulates and neuron updates, cumulative over the steps."""
+    hidden, n_classes = model.hidden_neurons, model.n_classes
+    events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step
+    spikes = model.hidden_spikes(x)[0].sum(dim=3).to(torch.float64)  # (F, B, T)
+    acs = torch.cumsum(events * hidden + spikes * n_classes, dim=2).numpy()
+    n_steps = x.shape[-1]
+    updates = np.broadcast_to(
+        np.arange(1, n_steps + 1, dtype=np.float64) * (hidden + n_classes), acs.shape
+    ).copy()
+    return Operations(acs, np.zeros_like(acs), updates)

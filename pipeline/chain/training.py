@@ -6,15 +6,22 @@ The procedure:
   ``shuffle=True`` and ``random_state = training.seed`` (seeds of ``2**32`` and above, which
   scikit-learn does not accept, go through a ``RandomState`` seeded from
   ``numpy.random.SeedSequence(seed)``).
-* Inputs: each fold's frames are standardized per feature (one feature = one (channel, taxel,
-  window) cell) with the mean and population standard deviation of that fold's TRAINING
-  recordings only (:func:`standardize`); a zero or non-finite standard deviation is replaced by
-  1, so all-zero frames give zeros, never NaN. Inputs are float32.
+* Decoders: what a model reads, how its inputs are prepared, how it is built, how long it trains
+  and how it decides along the touch is its decoder's (:mod:`pipeline.chain.decoders`); this
+  module runs the same procedure for every decoder.
+* Inputs: each fold's frames are prepared with that fold's TRAINING recordings only: the FFNN's
+  and CNN's standardized per feature (one feature = one (channel, taxel, window) cell) with
+  their mean and population standard deviation
+  (:func:`pipeline.chain.decoders.standardize`; a zero or non-finite standard deviation is
+  replaced by 1, so all-zero frames give zeros, never NaN), the SNN's counts as they are.
+  Inputs are float32.
 * Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``,
   betas 0.9/0.999, eps 1e-8), mean cross-entropy on logits per mini-batch
-  (:func:`fold_loss`), ``training.epochs`` epochs of mini-batches of ``training.batch_size``
-  drawn in a fresh random order every epoch.
-* Evaluation: accuracy of ``argmax(logits)`` on each fold's test recordings, and the
+  (:func:`pipeline.chain.folded.fold_loss`), the decoder's epochs (``training.epochs``; the SNN's
+  ``training.snn.epochs``) of mini-batches of ``training.batch_size`` drawn in a fresh random
+  order every epoch.
+* Evaluation: accuracy of ``argmax(logits)`` on each fold's test recordings (as each chip gives
+  them, for a classifier deployed on chips: :mod:`pipeline.chain.deployment`), and the
   out-of-fold prediction of every recording (each recording is tested in exactly one fold), so
   two designs evaluated on the same recordings can be compared recording by recording.
 * Repeats: ``training.repeats`` independent cross-validations, each a fresh stratified split.
@@ -45,11 +52,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 from sklearn.model_selection import StratifiedKFold
 from torch.optim.adam import adam as functional_adam
 
-from pipeline.chain.models import build_model, fold_generator
+from pipeline.chain.decoders import Decoder, build_model, decoder_of
+from pipeline.chain.models import fold_generator
 from pipeline.design.scene import Model, TrainingSpec
 from pipeline.errors import SimulationError
 
@@ -58,10 +65,8 @@ __all__ = [
     "FoldAdam",
     "cross_validate",
     "fit_folds",
-    "fold_loss",
     "predict_folds",
     "repeat_seed",
-    "standardize",
     "stratified_folds",
 ]
 
@@ -103,7 +108,7 @@ class CrossValidation:
     operations
         float64 ``(D, 3)``, read-only, or ``None``: mean over recordings (and repeats) of the
         accumulates, multiply-accumulates and neuron updates a decision read at each decision
-        time cost (:func:`pipeline.chain.operations.count_operations`).
+        time cost (:func:`pipeline.chain.decoders.count_operations`).
     chip_accuracy
         float64 ``(chips, repeats, folds)``, read-only, or ``None``: ``fold_accuracy`` of every
         chip of a scene that simulates chips (:mod:`pipeline.chain.deployment`);
@@ -156,62 +161,6 @@ class CrossValidation:
     def std(self) -> float:
         """Population standard deviation (``ddof=0``) of the accuracy over folds (and repeats)."""
         return float(np.std(self.fold_accuracy, ddof=0))
-
-
-def standardize(train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Standardize features with statistics of the training samples only.
-
-    Parameters
-    ----------
-    train
-        ``(n_train, *feature_shape)`` numbers (counts, int or float), ``n_train >= 1``.
-    test
-        ``(n_test, *feature_shape)``; its values never enter the statistics.
-
-    Returns
-    -------
-    train_z, test_z
-        float32 arrays of the input shapes: ``(x - mean) / std`` per feature, where ``mean`` and
-        ``std`` (population, ``ddof=0``) are computed in float64 over the training samples. A
-        feature whose training std is 0 or not finite gets std 1 (a constant feature maps to 0).
-    """
-    train64 = np.asarray(train, dtype=np.float64)
-    test64 = np.asarray(test, dtype=np.float64)
-    mean = train64.mean(axis=0)
-    std = train64.std(axis=0)
-    std = np.where(np.isfinite(std) & (std > 0), std, 1.0)
-    mean = np.where(np.isfinite(mean), mean, 0.0)
-    return (
-        ((train64 - mean) / std).astype(np.float32),
-        ((test64 - mean) / std).astype(np.float32),
-    )
-
-
-def fold_loss(logits: torch.Tensor, targets: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
-    """Each fold's weighted cross-entropy on logits.
-
-    Parameters
-    ----------
-    logits
-        float32 ``(F, B, n_classes)``.
-    targets
-        int64 ``(F, B)`` class indices.
-    weights
-        float32 ``(F, B)``; ``1 / n_real`` for the ``n_real`` real samples of a fold's batch and
-        0 for padding, so each fold contributes its batch-mean loss.
-
-    Returns
-    -------
-    torch.Tensor
-        float32 ``(F,)``, in nats: ``sum_b weights[f, b] * CE(logits[f, b], targets[f, b])``.
-        Uses :func:`torch.nn.functional.cross_entropy` (log-softmax with the maximum
-        subtracted), finite for logits as large as ``1e30``; an entry of weight 0 contributes
-        nothing to the loss or to any gradient. Training minimizes the sum over folds, which
-        gives each fold exactly its own gradient.
-    """
-    n_folds, batch, n_classes = logits.shape
-    losses = F.cross_entropy(logits.reshape(-1, n_classes), targets.reshape(-1), reduction="none")
-    return (losses * weights.reshape(-1)).reshape(n_folds, batch).sum(dim=1)
 
 
 class FoldAdam:
@@ -364,21 +313,24 @@ def cross_validate(
     class_names: Sequence[str] | None = None,
     batched: bool = True,
     frame_s: float | None = None,
+    tested: np.ndarray | None = None,
 ) -> CrossValidation:
     """Stratified k-fold cross-validated accuracy of one classifier.
 
     Parameters
     ----------
     frames
-        ``(n_recordings, C, H, W)`` spike counts (int64 or float): C channels (polarities),
-        H taxels in raster order, W windows (for the SNN: 2 polarities, H taxels, W steps).
-        The FFNN's and CNN's are standardized (:func:`standardize`); the SNN's are fed as
-        counts.
+        ``(n_recordings, C, H, W)`` spike counts (int64 or float) the classifier trains on: C
+        channels (polarities), H taxels in raster order, W columns, the frames its decoder reads
+        (:attr:`pipeline.chain.decoders.Decoder.reads`: windows, or for the SNN 2 polarities
+        and steps), prepared fold by fold as it prepares them (standardized for the FFNN and
+        CNN, counts for the SNN: :attr:`~pipeline.chain.decoders.Decoder.preparation`).
     labels
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
     model
-        :attr:`~pipeline.design.scene.Model.FFNN` or :attr:`~pipeline.design.scene.Model.CNN`.
+        The classifier (:func:`pipeline.chain.decoders.decoder_of` says how it is built,
+        trained and read).
     training
         Folds, epochs, batch size, learning rate, hidden units and seed.
     class_names
@@ -389,24 +341,33 @@ def cross_validate(
     frame_s
         Seconds of touch per frame column (the window, or the SNN's step). When given, every
         test recording's decision is also read at the end of every column, with its confidence
-        and its operations (:attr:`CrossValidation.decision_s`): the SNN's output at every
-        step; the FFNN's and CNN's on the frame's first ``k`` windows, the later ones set to
-        their training mean (0 once standardized), for every ``k``.
+        and its operations (:attr:`CrossValidation.decision_s`), by its decoder
+        (:meth:`~pipeline.chain.decoders.Decoder.decide`): the SNN's output at every step; the
+        FFNN's and CNN's on the frame's first ``k`` windows, the later ones set to their
+        training mean (0 once standardized), for every ``k``.
+    tested
+        ``(n_chips, n_recordings, C, H, W)``: the frames every chip gives of the recordings,
+        when the classifier trained on ``frames`` is tested on chips
+        (:mod:`pipeline.chain.deployment`): each fold's model, trained once on its training
+        recordings' ``frames``, is tested on its held-out recordings as every chip gives them,
+        prepared with the training frames' statistics. None: tested on ``frames``.
 
     Returns
     -------
     CrossValidation
         Per-fold accuracy (``[r, f]``: fold ``f`` of :func:`stratified_folds` seeded with
         :func:`repeat_seed` ``(training.seed, r)``), every recording's out-of-fold prediction and
-        test fold per repeat, and the wall time.
+        test fold per repeat, and the wall time; with ``tested``, those of chip 0 and every
+        chip's accuracy and predictions (``chip_accuracy``, ``chip_predicted``), the decisions
+        chip 0's.
 
     Raises
     ------
     SimulationError
         Fewer than 2 classes, or a class with fewer recordings than ``training.folds``.
     ValueError
-        ``frames`` is not 4-D, or ``frames`` and ``labels`` disagree in length, or ``frames``
-        holds non-finite values.
+        ``frames`` is not 4-D, or ``frames`` and ``labels`` disagree in length, or ``tested``
+        is not ``frames``' shape per chip, or the frames hold non-finite values.
     """
     start = time.perf_counter()
     frames = np.asarray(frames)
@@ -415,12 +376,83 @@ def cross_validate(
         raise ValueError(f"frames must be (n_recordings, C, H, W), got shape {frames.shape}")
     if labels.shape != (frames.shape[0],):
         raise ValueError(f"labels must be ({frames.shape[0]},), got shape {labels.shape}")
-    if not np.all(np.isfinite(frames)):
+    chips = frames[None] if tested is None else np.asarray(tested)
+    if chips.ndim != 5 or chips.shape[1:] != frames.shape:
+        raise ValueError(f"tested must be (chips, *{frames.shape}), got shape {chips.shape}")
+    if not (np.all(np.isfinite(frames)) and np.all(np.isfinite(chips))):
         raise ValueError("frames hold non-finite values")
-    model = Model(model)
-    classes, y, counts = np.unique(labels, return_inverse=True, return_counts=True)
-    inputs = _as_counts if model is Model.SNN else standardize
+    decoder = decoder_of(model)
+    classes, y = _checked_classes(labels, training.folds, class_names)
     decide = frame_s is not None
+    n_chips, sample = chips.shape[0], frames.shape[1:]
+    accuracy = np.zeros((n_chips, training.repeats, training.folds))
+    predicted = np.zeros((n_chips, training.repeats, len(y)), dtype=np.int64)
+    test_fold = np.zeros((training.repeats, len(y)), dtype=np.int64)
+    train_loss = []
+    n_decisions = frames.shape[-1]
+    decided = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.int64)
+    confidence = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.float32)
+    operations = np.zeros((n_decisions, 3), dtype=np.float64)
+    for repeat in range(training.repeats):
+        seed = repeat_seed(training.seed, repeat)
+        splits = stratified_folds(y, training.folds, seed)
+        # Every chip's held-out frames of a fold (chip-major rows), prepared as its training
+        # frames were; the decisions are read on chip 0's, the first rows.
+        train_x, test_x = zip(
+            *(decoder.prepare(frames[tr], chips[:, te].reshape(-1, *sample)) for tr, te in splits),
+            strict=True,
+        )
+        groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
+        fold_losses, fold_predicted, fold_decisions = [], [], []
+        for group in groups:
+            loss, guess, decisions = _train_and_evaluate(
+                [train_x[f] for f in group],
+                [y[splits[f][0]] for f in group],
+                [test_x[f] for f in group],
+                [len(splits[f][1]) for f in group],
+                group,
+                decoder,
+                len(classes),
+                training,
+                seed,
+                decide,
+            )
+            fold_losses.append(loss)
+            fold_predicted.extend(guess)
+            fold_decisions.extend(decisions)
+        for f, (_, test) in enumerate(splits):
+            guess = fold_predicted[f].reshape(n_chips, len(test))
+            accuracy[:, repeat, f] = (guess == y[test]).mean(axis=1)
+            predicted[:, repeat, test] = classes[guess]
+            test_fold[repeat, test] = f
+            if decide:
+                guess_d, confidence_d, operations_d = fold_decisions[f]
+                decided[repeat][:, test] = classes[guess_d]
+                confidence[repeat][:, test] = confidence_d
+                operations += operations_d.sum(axis=0)
+        train_loss.append(np.concatenate(fold_losses))
+    operations /= training.repeats * len(y)
+    times = decision_times_s(frame_s, n_decisions) if decide else None
+    decisions = (times, decided, confidence, operations) if decide else (None,) * 4
+    return CrossValidation(
+        decoder.model,
+        accuracy[0],
+        time.perf_counter() - start,
+        np.stack(train_loss),
+        predicted[0],
+        test_fold,
+        *decisions,
+        chip_accuracy=None if tested is None else accuracy,
+        chip_predicted=None if tested is None else predicted,
+    )
+
+
+def _checked_classes(
+    labels: np.ndarray, n_folds: int, class_names: Sequence[str] | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct labels and every recording's index into them, refused unless there are at
+    least 2 classes of at least ``n_folds`` recordings each."""
+    classes, y, counts = np.unique(labels, return_inverse=True, return_counts=True)
 
     def name(label: int) -> str:
         if class_names is not None and 0 <= label < len(class_names):
@@ -432,65 +464,14 @@ def cross_validate(
         raise SimulationError(
             f"cross-validation needs at least 2 classes, got {len(classes)} ({found})"
         )
-    short = [f"{name(c)} ({k})" for c, k in zip(classes, counts, strict=True) if k < training.folds]
+    short = [f"{name(c)} ({k})" for c, k in zip(classes, counts, strict=True) if k < n_folds]
     if short:
         raise SimulationError(
             f"class{'es' if len(short) > 1 else ''} {', '.join(short)} "
             f"{'have' if len(short) > 1 else 'has'} fewer recordings than "
-            f"training.folds = {training.folds}"
+            f"training.folds = {n_folds}"
         )
-    accuracy, train_loss = [], []
-    predicted = np.zeros((training.repeats, len(y)), dtype=np.int64)
-    test_fold = np.zeros((training.repeats, len(y)), dtype=np.int64)
-    n_decisions = frames.shape[-1]
-    decided = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.int64)
-    confidence = np.zeros((training.repeats, n_decisions, len(y)), dtype=np.float32)
-    operations = np.zeros((n_decisions, 3), dtype=np.float64)
-    for repeat in range(training.repeats):
-        seed = repeat_seed(training.seed, repeat)
-        splits = stratified_folds(y, training.folds, seed)
-        train_x, test_x = zip(*(inputs(frames[tr], frames[te]) for tr, te in splits), strict=True)
-        groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
-        fold_accuracy, fold_loss_, fold_predicted, fold_decisions = [], [], [], []
-        for group in groups:
-            a, loss, guess, decisions = _train_and_evaluate(
-                [train_x[f] for f in group],
-                [y[splits[f][0]] for f in group],
-                [test_x[f] for f in group],
-                [y[splits[f][1]] for f in group],
-                group,
-                model,
-                len(classes),
-                training,
-                seed,
-                decide,
-            )
-            fold_accuracy.append(a)
-            fold_loss_.append(loss)
-            fold_predicted.extend(guess)
-            fold_decisions.extend(decisions)
-        for f, (_, test) in enumerate(splits):
-            predicted[repeat, test] = classes[fold_predicted[f]]
-            test_fold[repeat, test] = f
-            if decide:
-                guess_d, confidence_d, operations_d = fold_decisions[f]
-                decided[repeat][:, test] = classes[guess_d]
-                confidence[repeat][:, test] = confidence_d
-                operations += operations_d.sum(axis=0)
-        accuracy.append(np.concatenate(fold_accuracy))
-        train_loss.append(np.concatenate(fold_loss_))
-    operations /= training.repeats * len(y)
-    times = decision_times_s(frame_s, n_decisions) if decide else None
-    decisions = (times, decided, confidence, operations) if decide else ()
-    return CrossValidation(
-        model,
-        np.stack(accuracy),
-        time.perf_counter() - start,
-        np.stack(train_loss),
-        predicted,
-        test_fold,
-        *decisions,
-    )
+    return classes, y
 
 
 def decision_times_s(frame_s: float, n_columns: int) -> np.ndarray:
@@ -498,11 +479,6 @@ def decision_times_s(frame_s: float, n_columns: int) -> np.ndarray:
     to the nanosecond so that the times of different columns that coincide (a window boundary
     and a step's end) compare equal."""
     return np.round((np.arange(n_columns, dtype=np.float64) + 1.0) * frame_s, 9)
-
-
-def _as_counts(train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The SNN's inputs: the counts themselves as float32 (events stay events)."""
-    return np.asarray(train, dtype=np.float32), np.asarray(test, dtype=np.float32)
 
 
 def _stack_padded(
@@ -520,37 +496,37 @@ def _train_and_evaluate(
     train_x: Sequence[np.ndarray],
     train_y: Sequence[np.ndarray],
     test_x: Sequence[np.ndarray],
-    test_y: Sequence[np.ndarray],
+    n_decided: Sequence[int],
     folds: Sequence[int],
-    model: Model,
+    decoder: Decoder,
     n_classes: int,
     training: TrainingSpec,
     seed: int,
     decide: bool = False,
-) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[tuple[np.ndarray, ...]]]:
-    """Train the given folds as one batch (``F = len(folds)``); return accuracy, loss, predictions
-    and, with ``decide``, the decisions at every frame column (:func:`_decisions`; else ``[]``).
+) -> tuple[np.ndarray, list[np.ndarray], list[tuple[np.ndarray, ...]]]:
+    """Train the given folds as one batch (``F = len(folds)``); return their loss, predictions
+    and, with ``decide``, the decisions at every frame column (:func:`_decisions`; else ``[]``)
+    of the first ``n_decided[i]`` test inputs of each.
 
     ``train_x[i]`` is float32 ``(n_i, C, H, W)``, ``train_y[i]`` int ``(n_i,)`` for fold
-    ``folds[i]``, likewise the test sets; ``seed`` is the repeat's training seed. Returns float64
-    ``(F,)`` test accuracy, float64 ``(F,)`` mean training loss of the last epoch, and per fold
-    the int64 ``(n_test_i,)`` predicted class indices of its test set, in test-set order.
+    ``folds[i]``, ``test_x[i]`` float32 ``(m_i, C, H, W)``; ``seed`` is the repeat's training
+    seed. Returns float64 ``(F,)`` mean training loss of the last epoch, and per fold the int64
+    ``(m_i,)`` predicted class indices of its test inputs, in order.
     """
-    net, train_loss = fit_folds(train_x, train_y, folds, model, n_classes, training, seed)
+    net, train_loss = fit_folds(train_x, train_y, folds, decoder, n_classes, training, seed)
     guesses = predict_folds(net, test_x)
-    correct = np.array(
-        [np.sum(g == np.asarray(t)) for g, t in zip(guesses, test_y, strict=True)], dtype=np.float64
-    )
-    n_test = np.array([len(t) for t in test_y], dtype=np.float64)
-    decisions = _decisions(net, model, *_stack_padded(test_x, torch.float32)) if decide else []
-    return correct / n_test, train_loss, guesses, decisions
+    decisions = []
+    if decide:
+        decided_x = [x[:n] for x, n in zip(test_x, n_decided, strict=True)]
+        decisions = _decisions(net, decoder, *_stack_padded(decided_x, torch.float32))
+    return train_loss, guesses, decisions
 
 
 def fit_folds(
     train_x: Sequence[np.ndarray],
     train_y: Sequence[np.ndarray],
     folds: Sequence[int],
-    model: Model,
+    model: Model | Decoder,
     n_classes: int,
     training: TrainingSpec,
     seed: int,
@@ -559,7 +535,11 @@ def fit_folds(
     (in eval mode) and float64 ``(F,)`` mean training loss of the last epoch.
 
     ``train_x[i]`` is float32 ``(n_i, C, H, W)`` and ``train_y[i]`` int ``(n_i,)`` for fold
-    ``folds[i]``; ``seed`` is the repeat's training seed."""
+    ``folds[i]``, prepared as its decoder prepares them; ``model`` is the model or its decoder
+    (:func:`pipeline.chain.decoders.decoder_of`), which builds the net, says how many epochs it
+    trains and what loss (:meth:`~pipeline.chain.decoders.Decoder.loss`); ``seed`` is the repeat's
+    training seed."""
+    decoder = model if isinstance(model, Decoder) else decoder_of(model)
     n_folds = len(folds)
     sample_shape = tuple(train_x[0].shape[1:])
     x, n_train = _stack_padded(train_x, torch.float32)
@@ -569,7 +549,7 @@ def fit_folds(
     target_rows = target.reshape(n_folds * n_max)
 
     net = build_model(
-        model,
+        decoder.model,
         sample_shape,
         n_classes,
         training.hidden_units,
@@ -577,7 +557,7 @@ def fit_folds(
         [fold_generator(seed, f, "init") for f in folds],
         training.snn,
     )
-    epochs = training.snn.epochs if model is Model.SNN else training.epochs
+    epochs = decoder.epochs(training)
     params = [p for p in net.parameters()]
     optimizer = FoldAdam(params, training.learning_rate)
 
@@ -613,7 +593,7 @@ def fit_folds(
             rows = epoch_order[:, s:stop].reshape(-1)
             xb = x_rows.index_select(0, rows).reshape(n_folds, stop - s, *sample_shape)
             yb = target_rows.index_select(0, rows).reshape(n_folds, stop - s)
-            loss = fold_loss(net(xb), yb, weights)
+            loss = decoder.loss(net, xb, yb, weights)
             grads = torch.autograd.grad(loss.sum(), params)
             optimizer.step(grads, active)
             if epoch == epochs - 1:
@@ -632,52 +612,18 @@ def predict_folds(net: torch.nn.Module, test_x: Sequence[np.ndarray]) -> list[np
     return [predicted[i, : int(n)].numpy().astype(np.int64) for i, n in enumerate(n_test)]
 
 
-#: Most input cells (folds x samples x prefixes x frame cells) evaluated at once when reading
-#: the FFNN's and CNN's decisions on prefixes of the frames: bounds their memory (16 MB).
-_PREFIX_CELLS = 4_000_000
-
-
 @torch.inference_mode()
 def _decisions(
-    net: torch.nn.Module, model: Model, xt: torch.Tensor, n_test: np.ndarray
+    net: torch.nn.Module, decoder: Decoder, xt: torch.Tensor, n_test: np.ndarray
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Every fold's decisions at the end of every frame column of its test inputs ``xt``
-    (float32 ``(F, B, C, H, W)``, fold ``f``'s first ``n_test[f]`` rows real).
+    (float32 ``(F, B, C, H, W)``, fold ``f``'s first ``n_test[f]`` rows real), as its decoder
+    reads them (:meth:`~pipeline.chain.decoders.Decoder.decide`).
 
     Returns, per fold: int64 ``(W, n_test_f)`` class indices, float32 ``(W, n_test_f)`` their
     softmax probability, float64 ``(n_test_f, W, 3)`` operations (:mod:`pipeline.chain.operations`).
-    The SNN's are its outputs at every step. The FFNN's and CNN's at column ``k`` are those of
-    the trained model on the frame whose columns after ``k`` are 0, the training mean of a
-    standardized input: a prefix of the full-touch model, which costs no training.
     """
-    from pipeline.chain.operations import cnn_operations, count_operations
-
-    n_folds, batch = xt.shape[:2]
-    n_columns = xt.shape[-1]
-    if model is Model.SNN:
-        logits = net.decision_logits(xt)  # (F, B, W, n_classes)
-        operations = count_operations(net, xt).stacked()  # (F, B, W, 3)
-    else:
-        cells = max(1, xt[0, 0].numel() * n_folds * batch)
-        chunk = max(1, _PREFIX_CELLS // cells)
-        column = torch.arange(n_columns)
-        parts_logits, parts_operations = [], []
-        for first in range(0, n_columns, chunk):
-            ends = torch.arange(first, min(first + chunk, n_columns))
-            keep = (column.reshape(1, -1) <= ends.reshape(-1, 1)).to(xt.dtype)  # (L, W)
-            prefixes = xt.unsqueeze(2) * keep.reshape(1, 1, len(ends), 1, 1, n_columns)
-            prefixes = prefixes.reshape(n_folds, batch * len(ends), *xt.shape[2:])
-            if model is Model.CNN:  # its features once, for its logits and its count
-                features = net.features(prefixes)
-                prefix_logits = net.head(features[-1])
-                counted = cnn_operations(net, prefixes, *features).stacked()
-            else:
-                prefix_logits = net(prefixes)
-                counted = count_operations(net, prefixes).stacked()
-            parts_logits.append(prefix_logits.reshape(n_folds, batch, len(ends), -1))
-            parts_operations.append(counted.reshape(n_folds, batch, len(ends), 3))
-        logits = torch.cat(parts_logits, dim=2)
-        operations = np.concatenate(parts_operations, axis=2)
+    logits, operations = decoder.decide(net, xt)  # (F, B, W, n_classes), (F, B, W, 3)
     probability, decided = torch.softmax(logits, dim=-1).max(dim=-1)  # (F, B, W)
     return [
         (

@@ -502,20 +502,12 @@ class Scene:
 
     def refusals(self) -> Iterator[tuple[str, str]]:
         """What the parts refuse together: a deployment of one classifier onto many chips
-        needs a readout whose chips differ (a named fixed effect); the spiking decoder reads one
-        chip's spikes (it does not decode a population of chips yet), and its step must fit
-        whole in a rate-coding window, so that every window boundary is one of its decision
-        times."""
+        needs a readout whose chips differ (a named fixed effect); the spiking decoder's step
+        must fit whole in a rate-coding window, so that every window boundary is one of its
+        decision times."""
         yield from chip_refusals(self)
         if Model.SNN not in self.training.models:
             return
-        if self.chips.simulated:
-            yield (
-                "training.models",
-                f"'snn' decodes the one chip it is trained on, not chips.count = "
-                f"{self.chips.count} chips deployed {self.chips.deployment.value!r} "
-                "(train it with the default chips part)",
-            )
         step_s, window_s = self.training.snn.step_s, self.coding.window_s
         steps = round(window_s / step_s)
         if step_s > window_s:

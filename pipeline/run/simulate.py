@@ -23,7 +23,7 @@ import numpy as np
 
 from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.chain.spikes import Encoded, SpikeTrains
+from pipeline.chain.spikes import Encoded
 from pipeline.chain.training import CrossValidation
 from pipeline.design.grid import DatasetFacts, check_scene_fits
 from pipeline.design.scene import DatasetSpec, Model, Scene
@@ -36,7 +36,6 @@ __all__ = [
     "Stopwatch",
     "encode",
     "prepare",
-    "rate_frames",
     "run_scene",
     "stage_names",
 ]
@@ -139,9 +138,3 @@ def encode(
     return stages.encode_trains(
         recordings, front_end, scene.array, scene.readout, scene.seed, watch
     )
-
-
-def rate_frames(real: SpikeTrains, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Rate-coded frames of the REAL trains: ``counts`` int64 (n_rec, C, taxels, windows), and
-    ``dropped`` int64 (n_rec, taxels); the number of windows is resolved for these recordings."""
-    return stages.rate_frames(real, scene.coding)

@@ -77,7 +77,6 @@ import numpy as np
 
 from pipeline.chain import jit
 from pipeline.chain.chips import ChipTrains, encode_chips
-from pipeline.chain.coding import frames, resolve_n_windows
 from pipeline.chain.frontend import FrontEnd, fit_front_end
 from pipeline.chain.metrics import (
     SpikeMetrics,
@@ -95,17 +94,14 @@ from pipeline.design import scene as scene_module
 from pipeline.design.scene import (
     ArraySpec,
     CanonicalMemo,
-    CodingSpec,
     DatasetSpec,
     Deployment,
     Model,
-    Polarity,
     ReadoutSpec,
     Scene,
-    SNNSpec,
-    TrainingSpec,
 )
 from pipeline.recordings.sources import Recordings, load_recordings
+from pipeline.run.decoding import classify, code_rates, reads_steps
 from pipeline.run.records import (
     CHIP_RESULT_VARIABLES,
     CHIP_SPIKE_VARIABLES,
@@ -144,7 +140,6 @@ __all__ = [
     "SPIKES",
     "Charge",
     "Level",
-    "Rates",
     "Read",
     "Spikes",
     "Stopwatch",
@@ -240,48 +235,6 @@ class Spikes:
     encoded: Encoded
     metrics: SpikeMetrics
     chips: ChipTrains | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class Rates:
-    """Output of the ``rates`` level, kept in memory by the workers (not in the store).
-
-    Attributes
-    ----------
-    counts : int64
-        REAL spikes per window, shape ``(n_recordings, channels, n_taxels, n_windows)``.
-    dropped : int64
-        REAL spikes outside every window, shape ``(n_recordings, n_taxels)``.
-    labels : int64
-        Class index of each recording, into ``class_names``, shape ``(n_recordings,)``.
-    class_names : tuple[str, ...]
-        Class names.
-    chip_counts : int64 or None
-        Every chip's ``counts``, shape ``(n_chips, n_recordings, channels, n_taxels,
-        n_windows)``, for a scene that simulates chips; else None.
-    reference_counts : int64 or None
-        The counts of the reference a ``shared`` or ``robust`` classifier trains on, shaped as
-        ``counts``; else None.
-    window_s : float or None
-        Length of a window (s): a decision read after window ``k`` comes ``(k + 1) * window_s``
-        into the touch.
-    steps : int64 or None
-        The spiking decoder's input, REAL spikes per step of ``step_s``, polarities apart
-        (+1 first), shape ``(n_recordings, 2, n_taxels, n_steps)``, over the same span as the
-        windows; None unless the scene trains the ``snn``.
-    step_s : float or None
-        Length of a step (s), with ``steps``.
-    """
-
-    counts: np.ndarray
-    dropped: np.ndarray
-    labels: np.ndarray
-    class_names: tuple[str, ...]
-    chip_counts: np.ndarray | None = None
-    reference_counts: np.ndarray | None = None
-    window_s: float | None = None
-    steps: np.ndarray | None = None
-    step_s: float | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -430,83 +383,6 @@ def _encode_tiny_signal(readout: ReadoutSpec) -> SpikeMetrics:
     return spike_metrics(Encoded(true, real), readout)
 
 
-def rate_frames(real: SpikeTrains, coding: CodingSpec) -> tuple[np.ndarray, np.ndarray]:
-    """Rate-coded frames of the REAL trains: ``counts`` int64 (n_rec, C, taxels, windows), and
-    ``dropped`` int64 (n_rec, taxels); the number of windows is resolved for these recordings."""
-    n_windows = resolve_n_windows(coding, real.duration_s)
-    return frames(real, coding.window_s, n_windows, coding.polarity)
-
-
-def code_rates(
-    *,
-    spikes: Spikes,
-    recordings: Recordings,
-    coding: CodingSpec,
-    snn: SNNSpec | None,
-    watch: Stopwatch,
-) -> Rates:
-    """Rate-code the REAL trains (step ``coding``), labelled by the recordings' classes; for a
-    scene training the ``snn`` (``snn`` given), also count them per step of ``snn.step_s``,
-    ON and OFF apart, over the windows' span."""
-    with watch.stage("coding"):
-        counts, dropped = rate_frames(spikes.encoded.real, coding)
-        chips = spikes.chips
-        chip_counts = reference_counts = None
-        if chips is not None:
-            chip_counts = rate_frames(chips.real, coding)[0]
-            chip_counts = chip_counts.reshape(chips.n_chips, -1, *chip_counts.shape[1:])
-            if chips.reference is not None:
-                reference_counts = rate_frames(chips.reference, coding)[0]
-        steps = step_s = None
-        if snn is not None:
-            step_s = snn.step_s
-            n_steps = round(counts.shape[-1] * coding.window_s / step_s)
-            steps, _ = frames(spikes.encoded.real, step_s, n_steps, Polarity.SPLIT)
-    return Rates(
-        counts,
-        dropped,
-        recordings.labels,
-        recordings.class_names,
-        chip_counts=chip_counts,
-        reference_counts=reference_counts,
-        window_s=coding.window_s,
-        steps=steps,
-        step_s=step_s,
-    )
-
-
-def classify(
-    *, rates: Rates, training: TrainingSpec, watch: Stopwatch
-) -> dict[Model, CrossValidation]:
-    """Cross-validate every model ``training`` names on the same frames (steps ``train_<m>``)."""
-    accuracy = {}
-    for model in training.models:
-        with watch.stage(f"train_{model.value}"):
-            with jit.one_off():  # torch and scikit-learn: once per process
-                from pipeline.chain.deployment import validate_chips
-                from pipeline.chain.training import cross_validate
-            if rates.chip_counts is not None:
-                accuracy[model] = validate_chips(
-                    rates.chip_counts,
-                    rates.reference_counts,
-                    rates.labels,
-                    model,
-                    training,
-                    class_names=rates.class_names,
-                )
-                continue
-            spiking = model is Model.SNN
-            accuracy[model] = cross_validate(
-                rates.steps if spiking else rates.counts,
-                rates.labels,
-                model,
-                training,
-                class_names=rates.class_names,
-                frame_s=rates.step_s if spiking else rates.window_s,
-            )
-    return accuracy
-
-
 # ---------------------------------------------------------------------------------------------
 # The registry
 
@@ -517,10 +393,6 @@ def _draws_random_numbers(scene: Scene) -> bool:
 
 def _simulates_chips(scene: Scene) -> bool:
     return scene.chips.simulated
-
-
-def _trains_snn(scene: Scene) -> bool:
-    return Model.SNN in scene.training.models
 
 
 @dataclass(frozen=True)
@@ -795,7 +667,7 @@ SPIKES = Level(
 #: memory.
 RATES = Level(
     name="rates",
-    reads=(Read("coding"), Read("training.snn", when=_trains_snn)),
+    reads=(Read("coding"), Read("training.snn", when=reads_steps)),
     after=(SPIKES, RECORDINGS),
     compute=code_rates,
     steps=("coding",),

@@ -336,3 +336,28 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
     with urllib.request.urlopen(request, timeout=60) as response:
         links = json.loads(response.read())
     assert any(Path(summary["report"]).as_uri() in a["data"] for a in links)
+
+
+def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
+    """A sweep of ``ffnn`` and ``snn`` deployed ``shared`` on several chips runs end to end: every
+    chip's accuracy for both models, and the yield over the chips (few chips, few epochs)."""
+    grid = tmp_path / "grid.toml"
+    grid.write_text(
+        'name = "g"\nbase = "smoke"\n[sweeps.shared]\n'
+        'set = { "chips.count" = 3, "chips.deployment" = "shared", '
+        '"training.models" = ["ffnn", "snn"], "training.epochs" = 2, '
+        '"training.snn.epochs" = 2, "readout.effects.threshold_mismatch.sigma_rel" = 0.2 }\n'
+        'axes = { "readout.threshold_v" = [0.05, 0.09] }\n'
+    )
+    root = tmp_path / "run"
+    proc = eskin(
+        "sweep", "--grid", str(grid), "--root", str(root), "--json", env=hermetic_env(tmp_path)
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert json.loads(proc.stdout)["computed"] == 2
+    cube = open_results(root)["shared"]
+    assert cube["model"].values.tolist() == ["ffnn", "snn"]
+    assert cube.sizes["chip"] == 3
+    accuracy = cube["accuracy_mean"].transpose("threshold_v", "model", "chip").values
+    assert accuracy.shape == (2, 2, 3) and np.all((accuracy >= 0) & (accuracy <= 1))
+    assert np.all(np.isfinite(cube["accuracy_p05"].values))

@@ -382,13 +382,6 @@ CASES += [
 ]
 CASES.append(
     (
-        "scene-snn-on-several-chips",
-        lambda t: scene_grid(t, training=_SNN + "[chips]\ncount = 2"),
-        "training.models",
-    )
-)
-CASES.append(
-    (
         "grid-chip-count-negative",
         lambda t: sweeps_grid(t, '[sweeps.a]\naxes = { "chips.count" = [1, -3] }\n'),
         "chips.count",

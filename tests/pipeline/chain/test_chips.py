@@ -5,7 +5,7 @@ from dataclasses import astuple
 import numpy as np
 import pytest
 
-from pipeline.chain import deployment
+from pipeline.chain import training
 from pipeline.chain.readout import effect_rng, level_crossings, real_train
 from pipeline.design.scene import Effect, ReadoutSpec, Scene
 from pipeline.run.records import (
@@ -104,9 +104,9 @@ def test_per_chip_chip_0_is_the_scene_of_one_chip(one_chip):
 @pytest.mark.parametrize("kind", ["shared", "robust"])
 def test_a_deployed_classifier_trains_once_per_fold_whatever_the_chips(kind, monkeypatch, one_chip):
     calls = []
-    fit = deployment.fit_folds
+    fit = training.fit_folds
     monkeypatch.setattr(
-        deployment, "fit_folds", lambda *a, **k: calls.append(len(a[2])) or fit(*a, **k)
+        training, "fit_folds", lambda *a, **k: calls.append(len(a[2])) or fit(*a, **k)
     )
     scene = SMOKE.replace(**{"chips.count": 5, "chips.deployment": kind, "training.repeats": 2})
     (cv,) = run_scene(scene).accuracy.values()

@@ -9,7 +9,8 @@ import pytest
 import torch
 from torch import nn
 
-from pipeline.chain.models import build_model, fold_generator, pool_kernel, pooled_size
+from pipeline.chain.decoders import build_model
+from pipeline.chain.models import fold_generator, pool_kernel, pooled_size
 from pipeline.design.scene import Model
 
 #: The rate-coded classifiers (the snn has tests of its own, tests/pipeline/chain/test_spiking.py).

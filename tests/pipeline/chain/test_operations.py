@@ -1,4 +1,5 @@
-"""The operation counter against small networks counted by hand."""
+"""The operation counter, through the decoder registry, against small networks counted by
+hand."""
 
 from __future__ import annotations
 
@@ -6,8 +7,9 @@ import numpy as np
 import pytest
 import torch
 
-from pipeline.chain.models import build_model, fold_generator
-from pipeline.chain.operations import conv3x3_fan_out, count_operations
+from pipeline.chain.decoders import build_model, count_operations
+from pipeline.chain.models import fold_generator
+from pipeline.chain.operations import conv3x3_fan_out
 from pipeline.chain.spiking import FoldSNN
 
 
@@ -23,7 +25,7 @@ def test_ffnn_counts_nonzero_real_inputs_times_fan_out():
     with torch.no_grad():
         net.b1.copy_(torch.tensor([[1.0, -1.0, 0.0]]))  # hidden = relu(b1) = [1, 0, 0]
     x = torch.tensor([[0.0, 1.5], [-2.0, 0.0]]).reshape(1, 1, 1, 2, 2)
-    ops = count_operations(net, x)
+    ops = count_operations("ffnn", net, x)
     # 2 nonzero inputs x 3 hidden units + 1 nonzero hidden unit x 2 classes.
     assert ops.macs.tolist() == [[[2 * 3 + 1 * 2]]]
     assert ops.acs.tolist() == [[[0.0]]] and ops.neuron_updates.tolist() == [[[0.0]]]
@@ -44,7 +46,7 @@ def test_cnn_counts_both_convolutions_and_the_linear_layer():
     x = torch.zeros(1, 1, 1, 3, 4)
     x[0, 0, 0, 0, 0] = 2.0  # a corner: 2 x 2 output positions x 16 channels
     x[0, 0, 0, 1, 1] = -1.0  # inside: 3 x 3 x 16
-    ops = count_operations(net, x)
+    ops = count_operations("cnn", net, x)
     conv1 = (4 + 9) * 16
     conv2 = 4 * (2 * 2) * 32  # the pooled 2x2 map: 4 pixels of channel 0, each reaching 2 x 2
     linear = 1 * 2  # one nonzero feature after the second pooling (1x1), 2 classes
@@ -71,7 +73,7 @@ def test_snn_counts_events_and_spikes_as_accumulates_and_every_neuron_update():
     spikes, _ = net.hidden_spikes(x)
     assert spikes[0, 0, :, 0].tolist() == [1.0, 0.0, 1.0, 0.0]
     assert spikes[0, 0, :, 1].tolist() == [0.0, 0.0, 0.0, 0.0]
-    ops = count_operations(net, x)
+    ops = count_operations("snn", net, x)
     # Step 1: 2 events x 2 hidden + 1 spike x 3 classes; step 3: 1 x 2 + 1 x 3 more.
     assert ops.acs.tolist() == [[[7.0, 7.0, 12.0, 12.0]]]
     assert ops.macs.tolist() == [[[0.0, 0.0, 0.0, 0.0]]]
@@ -82,7 +84,7 @@ def test_counts_are_per_fold_and_sample():
     net = build_model("ffnn", (1, 1, 3), 2, 4, 2, [fold_generator(0, f, "init") for f in (0, 1)])
     x = torch.zeros(2, 3, 1, 1, 3)
     x[1, 2, 0, 0, :2] = 1.0
-    ops = count_operations(net, x)
+    ops = count_operations("ffnn", net, x)
     assert ops.macs.shape == (2, 3, 1)
     with torch.no_grad():
         hidden = torch.relu(x[1, 2].reshape(-1) @ net.w1[1] + net.b1[1])
@@ -93,5 +95,5 @@ def test_counts_are_per_fold_and_sample():
 
 
 def test_unknown_models_are_refused():
-    with pytest.raises(TypeError, match="Linear"):
-        count_operations(torch.nn.Linear(2, 2), torch.zeros(1, 1, 1, 1, 2))
+    with pytest.raises(ValueError, match="lsnn"):
+        count_operations("lsnn", torch.nn.Linear(2, 2), torch.zeros(1, 1, 1, 1, 2))

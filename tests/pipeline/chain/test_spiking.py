@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from pipeline.chain.models import build_model, fold_generator
+from pipeline.chain.decoders import build_model
+from pipeline.chain.models import fold_generator
 from pipeline.chain.spiking import LeakyLayer
 from pipeline.chain.training import cross_validate
 from pipeline.design.scene import Model, SNNSpec, TrainingSpec
