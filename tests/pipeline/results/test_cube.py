@@ -24,7 +24,9 @@ from pipeline.results.cube import (
     field_coordinate,
     metric_attrs,
 )
-from pipeline.run.records import Charge, Decisions, OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.decisions import Decisions
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge
 from pipeline.run.stages import RESULTS, interval_generator
 from tests import golden_cubes as golden
 
