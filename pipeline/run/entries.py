@@ -33,17 +33,21 @@ from pipeline.chain.chips import ChipTrains
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded
 from pipeline.run.chips import (
+    CHIP_RESULT_VARIABLES,
+    CHIP_SPIKE_VARIABLES,
     ChipResults,
     chip_result_values,
     chip_spike_values,
     read_chip_results,
     read_chip_trains,
 )
-from pipeline.run.decisions import Decisions, decision_values, read_decisions
+from pipeline.run.decisions import DECISION_VARIABLES, Decisions, decision_values, read_decisions
 from pipeline.run.records import (
+    METRICS_VARIABLE,
     Attrs,
     Paid,
     Values,
+    Variable,
     metric_values,
     paid_attr,
     read_metrics,
@@ -52,9 +56,12 @@ from pipeline.run.records import (
     read_trains,
     seconds_attr,
     train_values,
+    train_variables,
 )
 
 __all__ = [
+    "RESULT_VARIABLES",
+    "SPIKE_VARIABLES",
     "OutOfFold",
     "RecordingsInfo",
     "ResultEntry",
@@ -200,6 +207,43 @@ class ResultEntry:
     paid: Paid | None = None
     chips: ChipResults | None = None
     decisions: Decisions | None = None
+
+
+#: The variables of a spike entry (see the module docstring).
+SPIKE_VARIABLES = (
+    *train_variables("true"),
+    *train_variables("real", optional=True),
+    Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
+    METRICS_VARIABLE,
+    *CHIP_SPIKE_VARIABLES,
+)
+#: The variables of a result entry (see the module docstring).
+RESULT_VARIABLES = (
+    Variable("accuracy", ("model", "repeat", "fold"), "float64", "1", "fold accuracy"),
+    Variable("model", ("model",), "str", "1", "classifier"),
+    Variable(
+        "n_windows_used",
+        (),
+        "int64",
+        "1",
+        "rate-coding windows the point used (coding.n_windows resolved)",
+        optional=True,
+    ),
+    Variable(
+        "predicted",
+        ("model", "repeat", "recording"),
+        "int64",
+        "1",
+        "out-of-fold predicted class",
+        optional=True,
+    ),
+    Variable("test_fold", ("repeat", "recording"), "int64", "1", "testing fold", optional=True),
+    Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
+    Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
+    *DECISION_VARIABLES,
+    METRICS_VARIABLE,
+    *CHIP_RESULT_VARIABLES,
+)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -94,10 +94,12 @@ from pipeline.design.scene import (
     TrainingSpec,
 )
 from pipeline.recordings.sources import Recordings, load_recordings
-from pipeline.run.chips import CHIP_RESULT_VARIABLES, CHIP_SPIKE_VARIABLES, chip_results
-from pipeline.run.decisions import DECISION_VARIABLES, decisions_of
+from pipeline.run.chips import chip_results
+from pipeline.run.decisions import decisions_of
 from pipeline.run.encoding import Spikes, encode_spikes
 from pipeline.run.entries import (
+    RESULT_VARIABLES,
+    SPIKE_VARIABLES,
     OutOfFold,
     RecordingsInfo,
     ResultEntry,
@@ -108,12 +110,9 @@ from pipeline.run.entries import (
     encode_spike_entry,
 )
 from pipeline.run.records import (
-    METRICS_VARIABLE,
     Charge,
     Record,
     StepSeconds,
-    Variable,
-    train_variables,
 )
 from pipeline.run.stopwatch import SETUP_STEP, Stopwatch
 
@@ -533,13 +532,7 @@ SPIKES = Level(
     record=Record(
         name="spikes",
         entry_type=SpikeEntry,
-        variables=(
-            *train_variables("true"),
-            *train_variables("real", optional=True),
-            Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
-            METRICS_VARIABLE,
-            *CHIP_SPIKE_VARIABLES,
-        ),
+        variables=SPIKE_VARIABLES,
         make=_spike_entry,
         encode=encode_spike_entry,
         decode=decode_spike_entry,
@@ -566,34 +559,7 @@ RESULTS = Level(
     record=Record(
         name="results",
         entry_type=ResultEntry,
-        variables=(
-            Variable("accuracy", ("model", "repeat", "fold"), "float64", "1", "fold accuracy"),
-            Variable("model", ("model",), "str", "1", "classifier"),
-            Variable(
-                "n_windows_used",
-                (),
-                "int64",
-                "1",
-                "rate-coding windows the point used (coding.n_windows resolved)",
-                optional=True,
-            ),
-            Variable(
-                "predicted",
-                ("model", "repeat", "recording"),
-                "int64",
-                "1",
-                "out-of-fold predicted class",
-                optional=True,
-            ),
-            Variable(
-                "test_fold", ("repeat", "recording"), "int64", "1", "testing fold", optional=True
-            ),
-            Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
-            Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
-            *DECISION_VARIABLES,
-            METRICS_VARIABLE,
-            *CHIP_RESULT_VARIABLES,
-        ),
+        variables=RESULT_VARIABLES,
         make=_result_entry,
         encode=encode_result_entry,
         decode=decode_result_entry,
