@@ -150,7 +150,6 @@ from pipeline.run.stages import RESULTS, steps_of
 
 __all__ = [
     "CUBE_VARIABLES",
-    "PointResult",
     "build_cube",
     "declared_names",
     "describe",
