@@ -28,10 +28,14 @@ class Cell(Protocol):
     (:class:`pipeline.design.grid.GridPoint` is one)."""
 
     @property
-    def index(self) -> tuple[int, ...]: ...
+    def index(self) -> tuple[int, ...]:
+        """Its index along the summary's leading dimensions."""
+        ...
 
     @property
-    def key(self) -> str: ...
+    def key(self) -> str:
+        """The result key of its point."""
+        ...
 
 
 def accuracy_summary(

@@ -22,13 +22,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pipeline.chain import chips as chain_chips
 from pipeline.chain.chips import ChipTrains
-from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.chain.spikes import Encoded
-from pipeline.design.scene import ArraySpec, Deployment, ReadoutSpec
-from pipeline.recordings.recording_set import Recordings
+from pipeline.design.scene import Deployment
 from pipeline.run.records import (
     Values,
     Variable,
@@ -38,7 +34,6 @@ from pipeline.run.records import (
     train_values,
     train_variables,
 )
-from pipeline.run.stopwatch import Stopwatch
 
 if TYPE_CHECKING:
     from pipeline.chain.training import CrossValidation
@@ -57,34 +52,17 @@ __all__ = [
 
 
 def encode_chips(
-    recordings: Recordings,
-    front_end: FrontEnd,
-    array: ArraySpec,
-    readout: ReadoutSpec,
-    seed: int | None,
     count: int | None,
     deployment: Deployment | None,
-    encoded: Encoded,
-    measure: Callable[[Encoded], SpikeMetrics],
-    watch: Stopwatch,
+    encode: Callable[[int, Deployment], ChipTrains],
 ) -> ChipTrains | None:
     """Every chip's REAL trains and metrics and the deployment's reference, for a scene that
-    simulates chips (``count`` and ``deployment`` given: :func:`pipeline.chain.chips.encode_chips`,
-    timed on ``watch``); None for a scene of one chip."""
+    simulates chips (``chips.count`` and ``chips.deployment`` read, as ``count`` and
+    ``deployment``): ``encode(count, deployment)``, the scene's encoding bound to
+    :func:`pipeline.chain.chips.encode_chips`; None for a scene of one chip (neither read)."""
     if count is None or deployment is None:
         return None
-    return chain_chips.encode_chips(
-        recordings,
-        front_end,
-        array,
-        readout,
-        seed,
-        count,
-        deployment,
-        encoded,
-        measure,
-        watch.stage,
-    )
+    return encode(count, deployment)
 
 
 def chip_results(
@@ -165,6 +143,7 @@ def chip_spike_values(chips: ChipTrains | None, duration: np.ndarray) -> Values:
 
 
 def read_chip_trains(values: Mapping[str, np.ndarray], duration: np.ndarray) -> ChipTrains | None:
+    """The chips of a spike entry; None for a scene of one chip."""
     if "chips_metrics" not in values:
         return None
     metrics = tuple(read_metrics({"metrics": row}) for row in values["chips_metrics"])
@@ -189,6 +168,7 @@ def chip_result_values(chips: ChipResults | None, models: list[str]) -> Values:
 
 
 def read_chip_results(values: Mapping[str, np.ndarray], models: list[str]) -> ChipResults | None:
+    """The chips of a result entry, models in ``models`` order; None for a point of one chip."""
     if "chip_accuracy" not in values:
         return None
     accuracy, predicted = values["chip_accuracy"], values["chip_predicted"]

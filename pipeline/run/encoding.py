@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.chain import chips as chain_chips
 from pipeline.chain import jit
 from pipeline.chain.chips import ChipTrains
 from pipeline.chain.frontend import FrontEnd
@@ -137,10 +138,18 @@ def encode_spikes(
     encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
     with watch.stage("metrics"):
         metrics = spike_metrics(encoded, readout)
-    measure = functools.partial(spike_metrics, readout=readout)
-    chips = encode_chips(
-        recordings, front_end, array, readout, seed, count, deployment, encoded, measure, watch
+    encode = functools.partial(
+        chain_chips.encode_chips,
+        recordings,
+        front_end,
+        array,
+        readout,
+        seed,
+        encoded=encoded,
+        measure=functools.partial(spike_metrics, readout=readout),
+        stage=watch.stage,
     )
+    chips = encode_chips(count, deployment, encode)
     return Spikes(encoded, metrics, chips)
 
 

@@ -193,7 +193,7 @@ class ResultEntry:
     chips : ChipResults or None
         Every chip's accuracy, predictions and spike metrics, for a point that simulates chips
         (``fold_accuracy``, ``out_of_fold`` and ``metrics`` are then chip 0's); else None.
-    decisions : Decisions or None
+    decisions : ~pipeline.run.decisions.Decisions or None
         Every model's decisions read during the touch (models as in ``fold_accuracy``, or
         some of them); None in entries written before they were kept.
     """
@@ -278,6 +278,7 @@ def encode_spike_entry(entry: SpikeEntry) -> tuple[Values, Attrs]:
 
 
 def decode_spike_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> SpikeEntry:
+    """A spike entry from its arrays and attributes (the inverse of :func:`encode_spike_entry`)."""
     duration = values["duration_s"]
     true = read_trains(values, "true", duration)
     ideal = attrs["ideal"]
@@ -325,6 +326,7 @@ def encode_result_entry(entry: ResultEntry) -> tuple[Values, Attrs]:
 
 
 def decode_result_entry(values: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> ResultEntry:
+    """A result entry from its arrays and attributes (inverse of :func:`encode_result_entry`)."""
     accuracy = values["accuracy"]
     models = values["model"].tolist()
     if len(models) != accuracy.shape[0]:

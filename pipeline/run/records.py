@@ -178,7 +178,9 @@ class Record:
 # ---------------------------------------------------------------------------------------------
 # Codecs the entries share
 
-METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
+_METRICS = tuple(f.name for f in dataclasses.fields(SpikeMetrics))
+#: The spike metrics of an entry, one float64 per :class:`~pipeline.chain.metrics.SpikeMetrics`
+#: field in its order (+-inf and NaN kept, which JSON attributes cannot hold).
 METRICS_VARIABLE = Variable(
     "metrics", ("metric",), "float64", "1", "spike metrics in SpikeMetrics field order"
 )
@@ -218,6 +220,8 @@ def train_values(prefix: str, trains: SpikeTrains) -> Values:
 
 
 def read_trains(values: Mapping[str, np.ndarray], prefix: str, duration: np.ndarray) -> SpikeTrains:
+    """The trains ``prefix`` of an entry (the inverse of :func:`train_values`), each recording's
+    ``duration`` theirs; refused where counts and starts do not match the events."""
     times, polarity = values[f"{prefix}_times_s"], values[f"{prefix}_polarity"]
     count, start = values[f"{prefix}_count"], values[f"{prefix}_start"]
     flat = count.ravel()
@@ -238,6 +242,7 @@ def seconds_attr(seconds: Mapping[str, float]) -> dict[str, float]:
 
 
 def read_seconds(attrs: Mapping[str, Any]) -> dict[str, float]:
+    """The step seconds of an entry's ``seconds`` attribute."""
     seconds = attrs["seconds"]
     if not isinstance(seconds, dict):
         raise TypeError("attribute 'seconds' is not a mapping")
@@ -261,11 +266,12 @@ def read_paid(attrs: Mapping[str, Any]) -> Paid | None:
 
 def metric_values(metrics: SpikeMetrics) -> np.ndarray:
     """The metrics as one float64 array (attributes are JSON, which cannot hold +-inf)."""
-    return np.array([np.asarray(getattr(metrics, name)) for name in METRICS])
+    return np.array([np.asarray(getattr(metrics, name)) for name in _METRICS])
 
 
 def read_metrics(values: Mapping[str, np.ndarray]) -> SpikeMetrics:
+    """The spike metrics of an entry's ``metrics`` array (the inverse of :func:`metric_values`)."""
     metrics = values["metrics"]
-    if metrics.shape != (len(METRICS),):
-        raise ValueError(f"metrics: {metrics.shape[0]} values, expected {len(METRICS)}")
+    if metrics.shape != (len(_METRICS),):
+        raise ValueError(f"metrics: {metrics.shape[0]} values, expected {len(_METRICS)}")
     return SpikeMetrics(*(float(value) for value in metrics))
