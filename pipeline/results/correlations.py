@@ -1,10 +1,10 @@
 """Correlations of spike metrics with accuracy across a sweep's points (``correlate = true``).
 
 For each model, metric (SSNR and STE: :data:`CORRELATED_METRICS`) and coefficient (Pearson and
-Spearman: :data:`pipeline.chain.metrics.CORRELATION_METHODS`), the correlation of the metric with
-``accuracy_mean`` over the sweep's points, infinite metrics left out
-(:func:`pipeline.chain.metrics.correlate_with_accuracy`): ``correlation_r``, its two-sided
-p-value ``correlation_p`` and the number of points ``correlation_n``.
+Spearman, as :func:`pipeline.chain.metrics.correlate_with_accuracy` names them), the correlation of
+the metric with ``accuracy_mean`` over the sweep's points, infinite metrics left out
+(:func:`pipeline.chain.metrics.correlate_with_accuracy`): ``correlation_r``, its two-sided p-value
+``correlation_p`` and the number of points ``correlation_n``.
 """
 
 from __future__ import annotations

@@ -342,8 +342,8 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
     Parameters
     ----------
     name
-        A name of :data:`CUBE_VARIABLES`, a spike metric, one of :data:`RESULT_VALUES` or a
-        dotted scene field.
+        A name of :data:`CUBE_VARIABLES`, a spike metric, one of
+        :data:`~pipeline.results.variables.RESULT_VALUES` or a dotted scene field.
     field
         The dotted scene field of a swept axis's coordinate (its name is a dimension name).
 
@@ -366,7 +366,7 @@ def describe(name: str, field: str | None = None) -> dict[str, str]:
 def declared_names() -> tuple[str, ...]:
     """Every variable and coordinate name a cube declares with :func:`describe`, swept scene
     fields aside: the cube's own (:data:`CUBE_VARIABLES`), the spike metrics and
-    :data:`RESULT_VALUES`, in that order."""
+    :data:`~pipeline.results.variables.RESULT_VALUES`, in that order."""
     return (*CUBE_VARIABLES, *METRICS, *RESULT_VALUES)
 
 

@@ -1,5 +1,5 @@
-"""What a result cube reads of one point: :class:`PointResult`, the result entry's fields that the
-cube and its feature modules (:mod:`pipeline.results.chip_cube`,
+"""What a result cube reads of one point (:class:`~pipeline.results.point.PointResult`): the result
+entry's fields that the cube and its feature modules (:mod:`pipeline.results.chip_cube`,
 :mod:`pipeline.results.decision_cube`) turn into variables."""
 
 from __future__ import annotations

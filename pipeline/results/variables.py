@@ -1,6 +1,6 @@
-"""The names a result cube is read by: its dimensions and shared variables, each declared once,
-with its units and long name (:data:`SHARED_VARIABLES`), and imported by every module that
-builds or reads a cube.
+"""The names a result cube is read by: its dimensions and shared variables, each declared once, with
+its units and long name (:data:`~pipeline.results.variables.SHARED_VARIABLES`), and imported by
+every module that builds or reads a cube.
 
 A feature's own names are declared beside its cube module: the ``chip`` dimension and the yield
 statistics in :mod:`pipeline.results.chip_cube`, the ``decision_s`` dimension and the decision
@@ -23,7 +23,7 @@ MODEL_DIM = "model"
 REPEAT_DIM = "repeat"
 #: The cross-validation fold.
 FOLD_DIM = "fold"
-#: The recording (coordinate: names), the union of the points' recordings.
+#: The recording; its coordinate holds the names, the union of the points' recordings.
 RECORDING_DIM = "recording"
 #: The pipeline stage of ``seconds`` and ``work_seconds``: every step of the stage registry.
 STAGE_DIM = "stage"

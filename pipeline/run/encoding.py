@@ -44,7 +44,7 @@ __all__ = ["Spikes", "encode_spikes", "encode_trains", "spike_metrics", "warm_ke
 
 @dataclass(frozen=True, eq=False)
 class Spikes:
-    """Output of the ``spikes`` level (its stored :class:`~pipeline.run.records.SpikeEntry` has the
+    """Output of the ``spikes`` level (its stored :class:`~pipeline.run.entries.SpikeEntry` has the
     same fields).
 
     Attributes

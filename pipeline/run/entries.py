@@ -1,5 +1,6 @@
-"""The entries of the two stored levels, ``spikes`` (:class:`SpikeEntry`) and ``results``
-(:class:`ResultEntry`), with their codecs (:mod:`pipeline.run.records` for the declarations).
+"""The entries of the two stored levels, ``spikes`` (:class:`~pipeline.run.entries.SpikeEntry`) and
+``results`` (:class:`~pipeline.run.entries.ResultEntry`), with their codecs
+(:mod:`pipeline.run.records` for the declarations).
 
 Variables of the spike entry: ``true_times_s`` float64 (true_event) s, ``true_polarity`` int8
 (true_event) +-1, ``true_start``/``true_count`` int64 (recording, taxel): train ``(r, t)`` is
