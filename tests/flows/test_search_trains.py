@@ -89,7 +89,7 @@ def test_a_trial_whose_train_fails_is_failed_with_the_reason(two_threads, tmp_pa
     def failing(*args, **kwargs):
         raise MemoryError("no room for the trains")
 
-    monkeypatch.setattr(stages, "encode_trains", failing)
+    monkeypatch.setattr(encoding_module, "encode_trains", failing)
     plan, failed = search.compute([0], lambda: two_threads)
     assert list(failed) == plan.missing and len(failed) == 1
     assert "MemoryError: no room for the trains" in failed[plan.missing[0]]
