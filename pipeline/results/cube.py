@@ -160,13 +160,23 @@ __all__ = [
     "work_seconds",
 ]
 
+
+def _gathered(*declarations: Mapping[str, dict[str, str]]) -> dict[str, dict[str, str]]:
+    """The declarations as one mapping, refused at import if two declare the same name."""
+    gathered: dict[str, dict[str, str]] = {}
+    for declared in declarations:
+        twice = sorted(set(gathered) & set(declared))
+        if twice:
+            raise ValueError(f"cube variables declared twice: {twice}")
+        gathered |= declared
+    return gathered
+
+
 #: ``units`` and ``long_name`` of the cube's own variables and coordinates: the shared ones
 #: (:data:`pipeline.results.variables.SHARED_VARIABLES`) and each feature's.
-CUBE_VARIABLES: dict[str, dict[str, str]] = {
-    **SHARED_VARIABLES,
-    **CHIP_CUBE_VARIABLES,
-    **DECISION_CUBE_VARIABLES,
-}
+CUBE_VARIABLES: dict[str, dict[str, str]] = _gathered(
+    SHARED_VARIABLES, CHIP_CUBE_VARIABLES, DECISION_CUBE_VARIABLES
+)
 
 
 def build_cube(

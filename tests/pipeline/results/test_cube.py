@@ -695,3 +695,11 @@ def test_a_sweep_of_the_grid_takes_the_points_the_grid_built():
     points = grid.points_of(other)
     assert points == sweep_points(grid.base, other)
     assert not any(a is b for a, b in zip(points, grid.points()[4:], strict=False))
+
+
+def test_a_cube_variable_declared_by_two_features_is_refused():
+    from pipeline.results.cube import _gathered
+
+    assert list(_gathered({"a": {}}, {"b": {}})) == ["a", "b"]
+    with pytest.raises(ValueError, match=r"declared twice: \['a'\]"):
+        _gathered({"a": {}}, {"a": {}, "b": {}})
