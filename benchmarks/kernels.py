@@ -36,7 +36,8 @@ POINTS = 3
 _FRESH_WORKER = f"""
 import json
 from pipeline.design.scene import Scene
-from pipeline.run.stages import FRONT_END, RECORDINGS, SPIKES, Stopwatch
+from pipeline.run.stages import FRONT_END, RECORDINGS, SPIKES
+from pipeline.run.stopwatch import Stopwatch
 
 scene = Scene.paper()
 outputs = {{}}

@@ -69,7 +69,9 @@ from flows.progress import completed_points, failure_message
 from flows.scheduling import submit_missing
 from pipeline.design.scene import Scene
 from pipeline.run.decoding import Rates
-from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Spikes, Stopwatch
+from pipeline.run.encoding import Spikes
+from pipeline.run.stages import LEVELS, RESULTS, SPIKES
+from pipeline.run.stopwatch import Stopwatch
 from storage import SweepStore
 
 SIZES = (1_000, 10_000, 100_000)

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from flows.planning import SweepPlan, cube_source
+from pipeline.results.variables import ACCURACY_MEAN, MODEL_DIM
 from pipeline.run.stages import RESULTS
 from storage import StoreError, SweepStore
 
@@ -104,8 +105,8 @@ def summarize(cube: xr.Dataset) -> dict[str, Any]:
         ``{"dims": {dim: size}, "best": best_points(cube)}``, ``dims`` the swept dimensions
         of ``accuracy_mean`` in order.
     """
-    mean = cube["accuracy_mean"]
-    dims = {str(dim): int(cube.sizes[dim]) for dim in mean.dims if dim != "model"}
+    mean = cube[ACCURACY_MEAN]
+    dims = {str(dim): int(cube.sizes[dim]) for dim in mean.dims if dim != MODEL_DIM}
     return {"dims": dims, "best": best_points(cube)}
 
 
@@ -120,10 +121,10 @@ def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
         value at the best point (the first of equals, in the cube's order); a model with no
         finite accuracy has no row.
     """
-    mean = cube["accuracy_chip_mean" if "accuracy_chip_mean" in cube else "accuracy_mean"]
+    mean = cube["accuracy_chip_mean" if "accuracy_chip_mean" in cube else ACCURACY_MEAN]
     rows = []
-    for model in cube["model"].values:
-        per_model = mean.sel(model=model)
+    for model in cube[MODEL_DIM].values:
+        per_model = mean.sel({MODEL_DIM: model})
         if not np.isfinite(per_model.values).any():
             continue
         flat = int(np.nanargmax(per_model.values))

@@ -32,7 +32,7 @@ from flows.environment import machine_memory_bytes
 from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid, plannable_points
 from pipeline.design.scene import DatasetSpec, Scene
 from pipeline.recordings.sources import resolve_dataset_argument
-from pipeline.run.records import ResultEntry
+from pipeline.run.entries import ResultEntry
 from pipeline.run.stages import RECORDINGS, RESULTS
 from storage import SweepStore
 
@@ -238,7 +238,7 @@ def cube_source(
 def _code_digest() -> str:
     """sha256 of this package's version, its dependencies' versions and the source of the
     packages that build and store a cube (an edited module changes it)."""
-    from pipeline.results.cube import DEPENDENCY_VERSIONS
+    from pipeline.results.provenance import DEPENDENCY_VERSIONS
 
     found = hashlib.sha256(
         json.dumps([metadata.version("eskin-sweep"), DEPENDENCY_VERSIONS]).encode()

@@ -16,7 +16,7 @@ raises :class:`PointsFailed` naming the points that failed. A write that fails f
 space or permission (:class:`storage.errors.StoreWriteError`) ends the task at once: the coordinator
 stops the sweep and says so once, so the worker does not log it with its traceback.
 
-What a task times: every level it runs for a point, on a :class:`pipeline.run.stages.Stopwatch`;
+What a task times: every level it runs for a point, on a :class:`pipeline.run.stopwatch.Stopwatch`;
 each entry keeps the work seconds of its point's steps and the seconds the point paid, by charge
 : a level whose output the point found (kept by the worker, in the store, made
 for another point) costs it nothing, and the task's own set-up (importing torch, the first time
@@ -45,7 +45,8 @@ from flows.environment import skip_exit_collection, tune_allocator
 from pipeline.design.scene import Scene
 from pipeline.run import stages
 from pipeline.run.records import Charge, Paid, StepSeconds
-from pipeline.run.stages import Level, Stopwatch
+from pipeline.run.stages import Level
+from pipeline.run.stopwatch import Stopwatch
 from storage import StoreWriteError, SweepStore
 
 # pipeline.chain.training (torch, scikit-learn) is imported by the results level when it runs: the
@@ -277,7 +278,7 @@ class _Point:
             self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
             watch = Stopwatch(None)
             output = level.run(self.scene, self._inputs(level), watch)
-            self._pay(watch.paid)
+            self._pay(watch.paid(stages.step_charge))
             seconds = {
                 step: value
                 for before in _accounted(level)
@@ -304,7 +305,7 @@ class _Point:
         self._pay({Charge.SHARED: {stages.SETUP_STEP: self.task.take_setup()}})
         watch = Stopwatch(None)
         made = (level.run(self.scene, self._inputs(level), watch), dict(watch.seconds))
-        self._pay(watch.paid)
+        self._pay(watch.paid(stages.step_charge))
         with _kept_lock:
             kept[key] = made
             while len(kept) > _KEPT_PER_LEVEL:

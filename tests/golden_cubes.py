@@ -28,7 +28,7 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import CHARGE_DIM, CUBE_VARIABLES
-from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.stages import SETUP_STEP
 
 DATA = Path(__file__).parent / "data"

@@ -18,7 +18,8 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import build_cube
-from pipeline.run.records import Charge, OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge
 
 N_RECORDINGS = 120
 N_FOLDS = 4

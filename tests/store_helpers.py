@@ -3,7 +3,8 @@ reads and writes entries in batches, through the stage registry's record declara
 
 from typing import Any
 
-from pipeline.run.records import Record, ResultEntry, SpikeEntry
+from pipeline.run.entries import ResultEntry, SpikeEntry
+from pipeline.run.records import Record
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 

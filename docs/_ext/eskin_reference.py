@@ -9,7 +9,7 @@ the pages cannot drift from the code.
     type, default, unit, accepted range and meaning.
 ``.. eskin-cube-variables::``
     Every name a result cube declares (:data:`pipeline.results.cube.CUBE_VARIABLES`, the spike
-    metrics and :data:`pipeline.results.cube.RESULT_VALUES`) with its unit and meaning, as
+    metrics and :data:`pipeline.results.variables.RESULT_VALUES`) with its unit and meaning, as
     :func:`pipeline.results.cube.describe` gives them to the cube's attributes.
 ``.. eskin-reexports:: module``
     The names a module's ``__all__`` imports from elsewhere (``pipeline.readout.level_crossings``,

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,7 +46,7 @@ from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.readout import real_train
 from pipeline.chain.spikes import Encoded, SpikeTrains
-from pipeline.chain.taxels import taxel_delays_s, taxel_signals
+from pipeline.chain.taxels import recording_taxels
 from pipeline.design.scene import ArraySpec, Deployment, ReadoutSpec
 from pipeline.recordings.recording_set import Recordings
 
@@ -66,19 +67,22 @@ class ChipTrains:
     real : SpikeTrains
         ``N * n_recordings`` rows, chip-major (row ``k * n_recordings + r``), ``duration_s``
         repeated per chip.
-    n_chips : int
-        ``N``.
     metrics : tuple of SpikeMetrics
-        Each chip's spike metrics against the TRUE trains, chip by chip.
+        Each chip's spike metrics against the TRUE trains, chip by chip: one per chip, so their
+        number is the chip count ``N`` (:attr:`n_chips`).
     reference : SpikeTrains or None
         ``(n_recordings, taxels)`` REAL trains the classifier of a ``shared`` (nominal chip) or
         ``robust`` (training chips) deployment trains on; None for ``per_chip``.
     """
 
     real: SpikeTrains
-    n_chips: int
     metrics: tuple[SpikeMetrics, ...]
     reference: SpikeTrains | None = None
+
+    @property
+    def n_chips(self) -> int:
+        """``N``, the number of chips."""
+        return len(self.metrics)
 
     @property
     def n_recordings(self) -> int:
@@ -119,31 +123,31 @@ def encode_chips(
     deployment: Deployment,
     encoded: Encoded,
     measure: Callable[[Encoded], SpikeMetrics],
-    stage: Callable[[str], object],
+    stage: Callable[[str], AbstractContextManager[object]],
 ) -> ChipTrains:
     """Encode chips ``1 .. count-1`` (chip 0 is ``encoded.real``) and the deployment's reference.
 
     Parameters
     ----------
     recordings, front_end, array, readout, seed
-        As for the scene's own encoding (``encode_trains`` of :mod:`pipeline.run.stages`).
+        As for the scene's own encoding (:func:`pipeline.run.encoding.encode_trains`).
     count, deployment
         ``chips.count`` and ``chips.deployment``.
     encoded
         The scene's TRUE trains and chip 0's REAL trains.
     measure
-        The spike metrics of TRUE and REAL trains (``spike_metrics`` of :mod:`pipeline.run.stages`).
+        The spike metrics of TRUE and REAL trains (:func:`pipeline.run.encoding.spike_metrics`).
     stage
         ``stage(step)`` a context manager timing ``step`` (``taxels``, ``readout``, ``metrics``).
+
+    The recordings and taxels are walked as the scene's own encoding walks them
+    (:func:`pipeline.chain.taxels.recording_taxels`).
     """
-    delays = taxel_delays_s(array)
     fs = recordings.fs_hz
     n_taxels = array.n_taxels
     per_chip: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in range(count - 1)]
     reference: list[tuple[np.ndarray, np.ndarray]] = []
-    for index, signal in enumerate(recordings.signals):
-        with stage("taxels"):
-            taxels = taxel_signals(front_end.apply(signal), fs, delays)
+    for index, taxels in recording_taxels(recordings, front_end, array, stage):
         with stage("readout"):
             rows = [taxels.taxel(taxel) for taxel in range(n_taxels)]
             chip = functools.partial(_chip_trains, rows, fs, readout, seed, index)
@@ -161,7 +165,7 @@ def encode_chips(
         ref = SpikeTrains.concatenate(reference, n_taxels, duration) if reference else None
     with stage("metrics"):
         metrics = tuple(measure(Encoded(encoded.true, chip)) for chip in chips)
-    return ChipTrains(stack_chips(chips), count, metrics, ref)
+    return ChipTrains(stack_chips(chips), metrics, ref)
 
 
 def _chip_trains(rows, fs_hz, readout, seed, recording, chip, pool=0):

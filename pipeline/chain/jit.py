@@ -22,7 +22,7 @@ One-off costs are kept apart from a step's work: :func:`one_off_seconds` is the 
 calling thread has spent importing numba, in numba's compiler lock (loading cached kernels or
 compiling them, nested calls counted once) and in blocks marked :func:`one_off` (importing torch
 and scikit-learn the first time), so a timer can book it as shared by every later call
-(:class:`pipeline.run.stages.Stopwatch` does); :func:`once` runs a warm-up once per process.
+(:class:`pipeline.run.stopwatch.Stopwatch` does); :func:`once` runs a warm-up once per process.
 """
 
 from __future__ import annotations

@@ -20,11 +20,15 @@ stored once (:class:`TaxelSignals` keeps one row per distinct delay and an index
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.chain.frontend import FrontEnd
 from pipeline.design.scene import ArraySpec
+from pipeline.recordings.recording_set import Recordings
 
 # A delay within this many samples of a whole number is that whole number: decimal pitches and
 # speeds (0.05 s * 2 kHz = 100.00000000000001) must not turn an exact shift into an interpolation.
@@ -121,3 +125,20 @@ def taxel_signals(signal: np.ndarray, fs_hz: float, delays_s: np.ndarray) -> Tax
         np.multiply(signal[q : q + n_out], 1.0 - frac, out=rows[k])
         rows[k] += frac * signal[q + 1 : q + 1 + n_out]
     return TaxelSignals(rows, taxel_row.astype(np.int64))
+
+
+def recording_taxels(
+    recordings: Recordings,
+    front_end: FrontEnd,
+    array: ArraySpec,
+    stage: Callable[[str], AbstractContextManager[object]],
+) -> Iterator[tuple[int, TaxelSignals]]:
+    """Each recording's index and the signals of every taxel of ``array`` on it, scaled by
+    ``front_end``, one recording at a time (a recording's taxel signals are as large as it times
+    the taxels: they are made when asked for and never kept); ``stage("taxels")`` times making
+    them."""
+    delays = taxel_delays_s(array)
+    for index, signal in enumerate(recordings.signals):
+        with stage("taxels"):
+            taxels = taxel_signals(front_end.apply(signal), recordings.fs_hz, delays)
+        yield index, taxels

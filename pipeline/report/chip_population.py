@@ -50,11 +50,10 @@ import xarray as xr
 from pipeline.design.scene import Deployment
 from pipeline.report.curves import Curve, sweep_curves
 from pipeline.report.panels import DEPLOYMENT
+from pipeline.results.chip_cube import CHIP_DIM
 from pipeline.results.yields import QUANTILE as YIELD_QUANTILE
 from pipeline.results.yields import quantile_estimate_rank
 
-#: The dimension of a cube whose points simulate several chips.
-CHIP_DIM = "chip"
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
 CHIP_COUNT = "chips.count"
 YIELD_TARGET = "chips.yield_target"

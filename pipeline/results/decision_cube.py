@@ -1,6 +1,6 @@
 """The cube's decisions during the touch: accuracy and cost against decision time.
 
-From the points' :class:`~pipeline.run.records.Decisions` (and their out-of-fold recordings),
+From the points' :class:`~pipeline.run.decisions.Decisions` (and their out-of-fold recordings),
 :func:`decision_variables` builds, on the ``decision_s`` dimension (the union of every point's
 decision times, s of touch) and the cube's ``model``, ``repeat`` and ``recording`` dimensions:
 
@@ -23,16 +23,53 @@ from typing import Any
 import numpy as np
 
 from pipeline.chain.operation_kinds import OPERATIONS
+from pipeline.results.point import PointResult
+from pipeline.results.variables import MODEL_DIM, RECORDING_DIM, REPEAT_DIM
 
-__all__ = ["DECODER_VARIABLES", "decision_variables"]
+__all__ = [
+    "DECISION_CONFIDENCE",
+    "DECISION_CORRECT",
+    "DECISION_CUBE_VARIABLES",
+    "DECISION_DIM",
+    "DECODER_VARIABLES",
+    "decision_variables",
+]
 
+#: The dimension of decision times (s of touch).
+DECISION_DIM = "decision_s"
+DECISION_CORRECT = "decision_correct"
+DECISION_CONFIDENCE = "decision_confidence"
 #: The cube variable of each kind of operation, in
 #: :data:`~pipeline.chain.operation_kinds.OPERATIONS` order.
 DECODER_VARIABLES = tuple(f"decoder_{kind}" for kind in OPERATIONS)
+#: ``units`` and ``long_name`` of the decision dimension and variables.
+DECISION_CUBE_VARIABLES: dict[str, dict[str, str]] = {
+    DECISION_DIM: {"units": "s", "long_name": "seconds of touch at which a decision is read"},
+    DECISION_CORRECT: {
+        "units": "1",
+        "long_name": "decision read at that time correct (1, 0; -1: no decision)",
+    },
+    DECISION_CONFIDENCE: {
+        "units": "1",
+        "long_name": "softmax probability of the class decided at that time (NaN: none)",
+    },
+    "decoder_acs": {
+        "units": "1",
+        "long_name": "mean accumulates (spike inputs) a decision read at that time cost",
+    },
+    "decoder_macs": {
+        "units": "1",
+        "long_name": "mean multiply-accumulates (real inputs) a decision read at that time cost",
+    },
+    "decoder_neuron_updates": {
+        "units": "1",
+        "long_name": "mean neuron state updates a decision read at that time cost",
+    },
+}
 
 
 def decision_variables(
-    results: Sequence[Any],
+    results: Sequence[PointResult],
     flat: np.ndarray,
     models: list[str],
     n_repeats: int,
@@ -49,7 +86,7 @@ def decision_variables(
     having = [
         i
         for i, result in enumerate(results)
-        if getattr(result, "decisions", None) is not None and result.out_of_fold is not None
+        if result.decisions is not None and result.out_of_fold is not None
     ]
     if not having or recordings is None:
         return None
@@ -76,14 +113,14 @@ def decision_variables(
             correct[index] = mark.transpose(1, 0, 2)
             confidence[index] = np.asarray(decisions.confidence[model]).transpose(1, 0, 2)
             operations[row, m, at] = decisions.operations[model]
-    along = (*dims, "model", "decision_s", "repeat", "recording")
+    along = (*dims, MODEL_DIM, DECISION_DIM, REPEAT_DIM, RECORDING_DIM)
     variables: dict[str, Any] = {
-        "decision_correct": (along, correct.reshape(*shape, *correct.shape[1:])),
-        "decision_confidence": (along, confidence.reshape(*shape, *confidence.shape[1:])),
+        DECISION_CORRECT: (along, correct.reshape(*shape, *correct.shape[1:])),
+        DECISION_CONFIDENCE: (along, confidence.reshape(*shape, *confidence.shape[1:])),
     }
     for k, name in enumerate(DECODER_VARIABLES):
         variables[name] = (
-            (*dims, "model", "decision_s"),
+            (*dims, MODEL_DIM, DECISION_DIM),
             operations[..., k].reshape(*shape, len(models), n_times),
         )
-    return variables, {"decision_s": ("decision_s", times)}
+    return variables, {DECISION_DIM: (DECISION_DIM, times)}

@@ -15,16 +15,19 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pipeline.chain import jit
+from pipeline.chain.chips import ChipTrains
 from pipeline.chain.coding import resolve_n_windows
 from pipeline.chain.decoders import DecoderInput, Reads, decoder_of, reads_of
 from pipeline.chain.spikes import SpikeTrains
 from pipeline.design.scene import CodingSpec, Model, Scene, SNNSpec, TrainingSpec
 from pipeline.recordings.sources import Recordings
+from pipeline.run.encoding import Spikes
+from pipeline.run.stopwatch import Stopwatch
 
 if TYPE_CHECKING:
     from pipeline.chain.training import CrossValidation
@@ -76,18 +79,18 @@ def reads_steps(scene: Scene) -> bool:
 
 def code_rates(
     *,
-    spikes: Any,
+    spikes: Spikes,
     recordings: Recordings,
     coding: CodingSpec,
     snn: SNNSpec | None,
-    watch: Any,
+    watch: Stopwatch,
 ) -> Rates:
     """Code the REAL trains (step ``coding``) as the scene's decoders read them, labelled by the
     recordings' classes: in windows, and per step of ``snn.step_s`` when a decoder reads steps
     (``snn`` is given to such scenes only, :func:`reads_steps`), over the windows' span.
 
     ``spikes`` is the ``spikes`` level's output (its ``encoded`` trains and, for a scene of
-    chips, its ``chips``); ``watch`` the level's stopwatch.
+    chips, its ``chips``).
     """
     with watch.stage("coding"):
         real = spikes.encoded.real
@@ -107,7 +110,7 @@ def code_rates(
 
 
 def _chip_frames(
-    reads: Reads, chips: Any, coding: CodingSpec, snn: SNNSpec | None, n_windows: int
+    reads: Reads, chips: ChipTrains | None, coding: CodingSpec, snn: SNNSpec | None, n_windows: int
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Every chip's frames ``(n_chips, n_recordings, C, taxels, columns)`` and the reference's
     (:class:`~pipeline.chain.chips.ChipTrains`); None for a scene of one chip (``chips`` None)
@@ -121,7 +124,9 @@ def _chip_frames(
     return tested, reads.code(chips.reference, coding, snn, n_windows)[0]
 
 
-def classify(*, rates: Rates, training: TrainingSpec, watch: Any) -> dict[Model, CrossValidation]:
+def classify(
+    *, rates: Rates, training: TrainingSpec, watch: Stopwatch
+) -> dict[Model, CrossValidation]:
     """Cross-validate every model ``training`` names (steps ``train_<m>``) on what its decoder
     reads: a :class:`~pipeline.chain.training.CrossValidation` per model."""
     accuracy = {}

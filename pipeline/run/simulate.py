@@ -29,7 +29,9 @@ from pipeline.design.grid import DatasetFacts, check_scene_fits
 from pipeline.design.scene import DatasetSpec, Model, Scene
 from pipeline.recordings.sources import Recordings
 from pipeline.run import stages
-from pipeline.run.stages import LEVELS, RATES, RECORDINGS, RESULTS, SPIKES, Stopwatch
+from pipeline.run.encoding import encode_trains
+from pipeline.run.stages import LEVELS, RATES, RECORDINGS, RESULTS, SPIKES
+from pipeline.run.stopwatch import Stopwatch
 
 __all__ = [
     "SceneResult",
@@ -135,6 +137,4 @@ def encode(
 ) -> Encoded:
     """TRUE and REAL spike trains of every taxel of every recording of ``scene``."""
     watch = stopwatch or Stopwatch(None)
-    return stages.encode_trains(
-        recordings, front_end, scene.array, scene.readout, scene.seed, watch
-    )
+    return encode_trains(recordings, front_end, scene.array, scene.readout, scene.seed, watch)

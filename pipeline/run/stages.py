@@ -35,22 +35,27 @@ it and every level before it read: ``recordings`` hashes ``dataset``; ``spikes``
 ``array``, ``readout`` (and ``seed`` if a named effect draws random numbers); ``rates`` those
 and ``coding``; ``results`` those and ``training``. Its compute function is called with exactly
 those parts, by keyword (the last name of each: ``dataset``, ``full_scale_v``, ``seed``, ...),
-the outputs of the levels it runs after (by level name) and a :class:`Stopwatch` ``watch``,
-never with the whole scene: it cannot use a field its key leaves out.
+the outputs of the levels it runs after (by level name) and a
+:class:`~pipeline.run.stopwatch.Stopwatch` ``watch``, never with the whole scene: it cannot use a
+field its key leaves out.
 A part read only under a condition (the seed) is passed as None when the condition fails.
 
 A stored level's entry holds the seconds of its own steps, of every stored level upstream of it
 (their entries' seconds) and of the in-memory levels upstream of it that no such stored level
 covers: a result entry holds every step of its point, which is all a cube reads.
 
-Seconds come in two kinds (:class:`Stopwatch`). *Work* seconds are what each step's work took,
-whichever point it was done for (the entries' ``seconds``). *Paid* seconds are what a worker
-spent computing for one point, each second charged to exactly one point
-(:class:`~pipeline.run.records.Charge`): ``own`` for the point's own work, ``shared`` for work
-the worker's later points reuse: the steps a level declares :attr:`Level.shared` (``load``,
-``front_end``) and the one-off :data:`SETUP_STEP` (importing numba, torch and scikit-learn;
-loading or compiling the numba kernels, wherever it happens), so that summed over a sweep's
-distinct points they count each second once.
+Seconds come in two kinds (:class:`~pipeline.run.stopwatch.Stopwatch`). *Work* seconds are what
+each step's work took, whichever point it was done for (the entries' ``seconds``). *Paid* seconds
+are what a worker spent computing for one point, each second charged to exactly one point
+(:class:`~pipeline.run.records.Charge`): ``own`` for the point's own work, ``shared`` for work the
+worker's later points reuse: the steps a level declares :attr:`Level.shared` (``load``,
+``front_end``) and the one-off :data:`~pipeline.run.stopwatch.SETUP_STEP` (importing numba, torch
+and scikit-learn; loading or compiling the numba kernels, wherever it happens), so that summed over
+a sweep's distinct points they count each second once.
+
+The spikes level's compute is :mod:`pipeline.run.encoding`; chips and decisions, which a
+point's entries keep beside its trains and accuracy, have their own modules
+(:mod:`pipeline.run.chips`, :mod:`pipeline.run.decisions`), joined to the levels' records here.
 
 Adding a stage: write its compute function (keyword-only arguments as above; it times each of
 its steps with ``watch.stage(step)``) and add one :class:`Level` to :data:`LEVELS`, after the
@@ -64,65 +69,46 @@ cube's ``seconds`` follow from the registry.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import hashlib
-import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pipeline.chain import jit
-from pipeline.chain.chips import ChipTrains, encode_chips
 from pipeline.chain.frontend import FrontEnd, fit_front_end
-from pipeline.chain.metrics import (
-    SpikeMetrics,
-    data_rate_bps,
-    equivalent_bits,
-    event_rate_hz,
-    pooled_ssnr_db,
-    ste_per_train,
-)
-from pipeline.chain.readout import real_train, true_train
-from pipeline.chain.spikes import Encoded, SpikeTrains
-from pipeline.chain.taxels import taxel_delays_s, taxel_signals
 from pipeline.design import fields
 from pipeline.design import scene as scene_module
 from pipeline.design.scene import (
-    ArraySpec,
     CanonicalMemo,
     DatasetSpec,
-    Deployment,
     Model,
-    ReadoutSpec,
     Scene,
 )
 from pipeline.recordings.sources import Recordings, load_recordings
+from pipeline.run.chips import chip_results
+from pipeline.run.decisions import decisions_of
 from pipeline.run.decoding import classify, code_rates, reads_steps
-from pipeline.run.records import (
-    CHIP_RESULT_VARIABLES,
-    CHIP_SPIKE_VARIABLES,
-    DECISION_VARIABLES,
-    METRICS_VARIABLE,
-    Charge,
-    ChipResults,
-    Decisions,
+from pipeline.run.encoding import Spikes, encode_spikes
+from pipeline.run.entries import (
+    RESULT_VARIABLES,
+    SPIKE_VARIABLES,
     OutOfFold,
-    Record,
     RecordingsInfo,
     ResultEntry,
     SpikeEntry,
-    StepSeconds,
-    Variable,
     decode_result_entry,
     decode_spike_entry,
     encode_result_entry,
     encode_spike_entry,
-    train_variables,
 )
+from pipeline.run.records import (
+    Charge,
+    Record,
+    StepSeconds,
+)
+from pipeline.run.stopwatch import SETUP_STEP, Stopwatch
 
 if TYPE_CHECKING:
     from pipeline.chain.training import CrossValidation
@@ -138,11 +124,8 @@ __all__ = [
     "RESULTS",
     "SETUP_STEP",
     "SPIKES",
-    "Charge",
     "Level",
     "Read",
-    "Spikes",
-    "Stopwatch",
     "cache_key",
     "interval_generator",
     "level_named",
@@ -152,89 +135,11 @@ __all__ = [
     "steps_of",
     "steps_through",
     "stored_levels",
-    "warm_kernels",
 ]
-
-
-#: A worker process's one-off work, charged ``shared`` to the point that paid it:
-#: importing numba, torch and scikit-learn (and scipy's filters, for the synthetic recordings),
-#: and loading (or, the first time, compiling) the numba kernels: the spikes level's warm-up
-#: (:func:`warm_kernels`), and every such second inside any other step
-#: (:func:`pipeline.chain.jit.one_off_seconds`).
-SETUP_STEP = "setup"
-
-
-class Stopwatch:
-    """Accumulates wall seconds per step and reports each step the first time it starts.
-
-    ``seconds`` is each step's work, its wall seconds less the one-off time within it (importing
-    a library, loading or compiling kernels: :func:`pipeline.chain.jit.one_off_seconds`);
-    ``paid`` is the same time by :class:`Charge`, each step's work under its declared charge
-    (:func:`step_charge`) and the one-off time under ``shared`` / :data:`SETUP_STEP`, so that
-    ``paid`` sums to the wall time of the steps.
-    """
-
-    def __init__(self, on_stage: Callable[[str], None] | None):
-        self.seconds: dict[str, float] = {}
-        self.paid: dict[Charge, dict[str, float]] = {charge: {} for charge in Charge}
-        self.on_stage = on_stage
-
-    @contextmanager
-    def stage(self, name: str) -> Iterator[None]:
-        """Time the ``with`` block as step ``name``, adding its wall seconds to ``seconds[name]``
-        (a step timed twice is summed); ``on_stage(name)`` is called when the step first starts."""
-        if self.on_stage is not None and name not in self.seconds:
-            self.on_stage(name)
-        one_off_before = jit.one_off_seconds()
-        start = time.perf_counter()
-        try:
-            yield
-        finally:
-            wall = time.perf_counter() - start
-            one_off = min(max(jit.one_off_seconds() - one_off_before, 0.0), wall)
-            work = wall - one_off
-            self.seconds[name] = self.seconds.get(name, 0.0) + work
-            _add(self.paid[step_charge(name)], name, work)
-            if one_off > 0.0:
-                _add(self.paid[Charge.SHARED], SETUP_STEP, one_off)
-
-    def paid_total(self) -> dict[str, float]:
-        """Paid seconds per step, both charges summed (the steps' wall time)."""
-        total: dict[str, float] = {}
-        for charge in Charge:
-            for step, value in self.paid[charge].items():
-                _add(total, step, value)
-        return total
-
-
-def _add(seconds: dict[str, float], step: str, value: float) -> None:
-    seconds[step] = seconds.get(step, 0.0) + value
 
 
 # ---------------------------------------------------------------------------------------------
 # Outputs
-
-
-@dataclass(frozen=True, eq=False)
-class Spikes:
-    """Output of the ``spikes`` level (its stored :class:`~pipeline.run.records.SpikeEntry` has the
-    same fields).
-
-    Attributes
-    ----------
-    encoded : Encoded
-        TRUE and REAL trains of every taxel of every recording; ``real is true`` for an ideal
-        readout.
-    metrics : SpikeMetrics
-        Scene-level SSNR, STE, rates and resolution.
-    chips : ChipTrains or None
-        Every chip's REAL trains and metrics and the deployment's reference trains, for a scene
-        that simulates chips (:attr:`pipeline.design.scene.ChipsSpec.simulated`); else None.
-    """
-
-    encoded: Encoded
-    metrics: SpikeMetrics
-    chips: ChipTrains | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -251,136 +156,6 @@ def fit(*, recordings: Recordings, full_scale_v: float, watch: Stopwatch) -> Fro
     """Fit one dataset-wide scaling to ``full_scale_v`` (:mod:`pipeline.chain.frontend`)."""
     with watch.stage("front_end"):
         return fit_front_end(recordings, full_scale_v)
-
-
-def encode_trains(
-    recordings: Recordings,
-    front_end: FrontEnd,
-    array: ArraySpec,
-    readout: ReadoutSpec,
-    seed: int | None,
-    watch: Stopwatch,
-) -> Encoded:
-    """TRUE and REAL spike trains of every taxel of every recording (steps ``taxels``, ``readout``).
-
-    Taxels that see the same signal share one TRUE train; an ideal readout returns the TRUE
-    trains as the REAL ones without encoding again. ``seed`` seeds the readout's random effects
-    (None if it names none).
-    """
-    delays = taxel_delays_s(array)
-    fs = recordings.fs_hz
-    true_trains, real_trains, durations = [], [], []
-    for index, signal in enumerate(recordings.signals):
-        with watch.stage("taxels"):
-            taxels = taxel_signals(front_end.apply(signal), fs, delays)
-        with watch.stage("readout"):
-            per_row = [true_train(row, fs, readout) for row in taxels.signals]
-            true = [per_row[row] for row in taxels.taxel_row]
-            true_trains.extend(true)
-            durations.append((taxels.n_samples - 1) / fs)
-            if readout.is_ideal:
-                continue
-            real_trains.extend(
-                real_train(
-                    taxels.taxel(taxel),
-                    fs,
-                    readout,
-                    seed=seed,
-                    taxel=taxel,
-                    recording=index,
-                )
-                for taxel in range(taxels.n_taxels)
-            )
-    n_taxels = array.n_taxels
-    true_set = SpikeTrains.concatenate(true_trains, n_taxels, np.asarray(durations))
-    if readout.is_ideal:
-        return Encoded(true_set, true_set)
-    return Encoded(true_set, SpikeTrains.concatenate(real_trains, n_taxels, true_set.duration_s))
-
-
-def spike_metrics(encoded: Encoded, readout: ReadoutSpec) -> SpikeMetrics:
-    """Scene-level SSNR (pooled), STE (mean over trains), rates and resolution."""
-    return SpikeMetrics(
-        ssnr_db=pooled_ssnr_db(encoded.true.count, encoded.real.count),
-        ste_s2=float(ste_per_train(encoded.true, encoded.real, "paper").mean()),
-        ste_sign_safe_s2=float(ste_per_train(encoded.true, encoded.real, "sign_safe").mean()),
-        event_rate_hz=event_rate_hz(encoded.real),
-        data_rate_bps=data_rate_bps(encoded.real),
-        equivalent_bits=equivalent_bits(readout.full_scale_v, readout.threshold_v),
-    )
-
-
-def encode_spikes(
-    *,
-    recordings: Recordings,
-    front_end: FrontEnd,
-    array: ArraySpec,
-    readout: ReadoutSpec,
-    seed: int | None,
-    count: int | None,
-    deployment: Deployment | None,
-    watch: Stopwatch,
-) -> Spikes:
-    """Warm the kernels up (step ``setup``), encode every taxel of every recording, then measure
-    the trains (step ``metrics``); for a scene that simulates chips (``count`` and
-    ``deployment`` given), every chip and the deployment's reference too
-    (:func:`pipeline.chain.chips.encode_chips`)."""
-    with watch.stage(SETUP_STEP):
-        warm_kernels(readout)
-    encoded = encode_trains(recordings, front_end, array, readout, seed, watch)
-    with watch.stage("metrics"):
-        metrics = spike_metrics(encoded, readout)
-    if count is None or deployment is None:
-        return Spikes(encoded, metrics)
-    chips = encode_chips(
-        recordings,
-        front_end,
-        array,
-        readout,
-        seed,
-        count,
-        deployment,
-        encoded,
-        functools.partial(spike_metrics, readout=readout),
-        watch.stage,
-    )
-    return Spikes(encoded, metrics, chips)
-
-
-# A tiny signal (samples, Hz, cycles per second) to warm the kernels up on: a few crossings.
-_WARM_SAMPLES, _WARM_FS_HZ, _WARM_HZ = 64, 1000.0, 25.0
-
-
-def warm_kernels(readout: ReadoutSpec) -> None:
-    """Run the kernels that a readout like ``readout`` calls (its encoder, the kernels of its
-    effects, the spike metrics) once per process on a tiny signal, through the same functions
-    and so with the same argument types as a point's encoding: loading or compiling them is
-    paid here, once per process and kind of readout (encoder and named effects), and not inside
-    the first point's ``readout`` and ``metrics`` steps. A warm-up that fails is given up
-    (and not tried again): the point's own encoding reports any real problem."""
-    kind = ("spikes", readout.encoder, tuple(sorted(str(effect) for effect in readout.effects)))
-    jit.once(kind, functools.partial(_encode_tiny, readout))
-
-
-def _encode_tiny(readout: ReadoutSpec) -> None:
-    # Only a speed-up: whatever a tiny signal makes of this readout must not fail a point.
-    with contextlib.suppress(Exception):
-        _encode_tiny_signal(readout)
-
-
-def _encode_tiny_signal(readout: ReadoutSpec) -> SpikeMetrics:
-    t_s = np.arange(_WARM_SAMPLES) / _WARM_FS_HZ
-    signal = 0.4 * readout.full_scale_v * np.sin(2 * np.pi * _WARM_HZ * t_s)
-    taxels = taxel_signals(signal, _WARM_FS_HZ, np.zeros(1))
-    duration = np.array([(taxels.n_samples - 1) / _WARM_FS_HZ])
-    true = SpikeTrains.concatenate(
-        [true_train(row, _WARM_FS_HZ, readout) for row in taxels.signals], 1, duration
-    )
-    real = true
-    if not readout.is_ideal:
-        train = real_train(taxels.taxel(0), _WARM_FS_HZ, readout, seed=0, taxel=0, recording=0)
-        real = SpikeTrains.concatenate([train], 1, duration)
-    return spike_metrics(Encoded(true, real), readout)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -572,45 +347,22 @@ def _result_entry(
     """A point's result: all a cube reads of it, so it also carries its spike metrics, what its
     recordings were and the number of windows its frames had."""
     recordings = made(RECORDINGS.name)
+    by_name = {model.value: cv for model, cv in accuracy.items()}
     return ResultEntry(
-        fold_accuracy={model.value: cv.fold_accuracy for model, cv in accuracy.items()},
+        fold_accuracy={model: cv.fold_accuracy for model, cv in by_name.items()},
         seconds=seconds.work,
         metrics=made(SPIKES.name).metrics,
         recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
         out_of_fold=OutOfFold(
             recording_names=tuple(recordings.names),
             labels=recordings.labels,
-            predicted={model.value: cv.predicted for model, cv in accuracy.items()},
+            predicted={model: cv.predicted for model, cv in by_name.items()},
             test_fold=next(iter(accuracy.values())).test_fold,
         ),
         n_windows_used=int(made(RATES.name).counts.shape[-1]),
         paid=seconds.paid,
-        chips=_chip_results(accuracy, made(SPIKES.name).chips),
-        decisions=Decisions.of(
-            {
-                model.value: (cv.decision_s, cv.decision_predicted, cv.decision_confidence)
-                for model, cv in accuracy.items()
-                if cv.decision_s is not None
-            },
-            {
-                model.value: cv.operations
-                for model, cv in accuracy.items()
-                if cv.operations is not None
-            },
-        ),
-    )
-
-
-def _chip_results(
-    accuracy: dict[Model, CrossValidation], chips: ChipTrains | None
-) -> ChipResults | None:
-    """Every chip's accuracy, predictions and spike metrics; None for a scene of one chip."""
-    if chips is None:
-        return None
-    return ChipResults(
-        fold_accuracy={model.value: cv.chip_accuracy for model, cv in accuracy.items()},
-        predicted={model.value: cv.chip_predicted for model, cv in accuracy.items()},
-        metrics=chips.metrics,
+        chips=chip_results(by_name, made(SPIKES.name).chips),
+        decisions=decisions_of(by_name),
     )
 
 
@@ -650,13 +402,7 @@ SPIKES = Level(
     record=Record(
         name="spikes",
         entry_type=SpikeEntry,
-        variables=(
-            *train_variables("true"),
-            *train_variables("real", optional=True),
-            Variable("duration_s", ("recording",), "float64", "s", "taxel time axis length"),
-            METRICS_VARIABLE,
-            *CHIP_SPIKE_VARIABLES,
-        ),
+        variables=SPIKE_VARIABLES,
         make=_spike_entry,
         encode=encode_spike_entry,
         decode=decode_spike_entry,
@@ -683,34 +429,7 @@ RESULTS = Level(
     record=Record(
         name="results",
         entry_type=ResultEntry,
-        variables=(
-            Variable("accuracy", ("model", "repeat", "fold"), "float64", "1", "fold accuracy"),
-            Variable("model", ("model",), "str", "1", "classifier"),
-            Variable(
-                "n_windows_used",
-                (),
-                "int64",
-                "1",
-                "rate-coding windows the point used (coding.n_windows resolved)",
-                optional=True,
-            ),
-            Variable(
-                "predicted",
-                ("model", "repeat", "recording"),
-                "int64",
-                "1",
-                "out-of-fold predicted class",
-                optional=True,
-            ),
-            Variable(
-                "test_fold", ("repeat", "recording"), "int64", "1", "testing fold", optional=True
-            ),
-            Variable("labels", ("recording",), "int64", "1", "class index", optional=True),
-            Variable("recording", ("recording",), "str", "1", "recording name", optional=True),
-            *DECISION_VARIABLES,
-            METRICS_VARIABLE,
-            *CHIP_RESULT_VARIABLES,
-        ),
+        variables=RESULT_VARIABLES,
         make=_result_entry,
         encode=encode_result_entry,
         decode=decode_result_entry,

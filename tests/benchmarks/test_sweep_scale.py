@@ -5,7 +5,7 @@ compute functions are back afterwards."""
 import pytest
 
 from benchmarks import sweep_scale
-from pipeline.run import decoding, stages
+from pipeline.run import decoding, encoding, stages
 
 
 def test_grids_have_the_points_asked_for_and_refuse_other_sizes():
@@ -33,7 +33,7 @@ def test_a_tiny_sweep_computes_and_assembles_every_point(tmp_path, client):
     real = {
         "recordings": stages.load,
         "front_end": stages.fit,
-        "spikes": stages.encode_spikes,
+        "spikes": encoding.encode_spikes,
         "rates": decoding.code_rates,
         "results": decoding.classify,
     }

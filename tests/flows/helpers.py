@@ -15,7 +15,7 @@ from typing import Any
 import xarray as xr
 
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.results.cube import MEASURED
+from pipeline.results.variables import MEASURED
 from storage import open_results
 
 BIN = Path(sys.executable).parent
@@ -165,7 +165,7 @@ def live_tree(root: Path) -> set[Path]:
 
 def assert_same_cubes(root_a: Path, root_b: Path) -> None:
     """The cubes of two roots are identical but for the measured wall times (``seconds``,
-    ``work_seconds``: :data:`pipeline.results.cube.MEASURED`)."""
+    ``work_seconds``: :data:`pipeline.results.variables.MEASURED`)."""
     a, b = open_results(root_a), open_results(root_b)
     assert a and set(a) == set(b)
     for name in a:

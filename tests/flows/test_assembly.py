@@ -7,7 +7,7 @@ import pytest
 from flows.assembly import assemble, assemble_cube, summarize
 from flows.planning import SweepPlan, plan_sweep
 from pipeline.design.grid import Grid
-from pipeline.run.records import RecordingsInfo, ResultEntry
+from pipeline.run.entries import RecordingsInfo, ResultEntry
 from pipeline.run.stages import RESULTS
 from storage import StoreError
 from storage.store import SweepStore

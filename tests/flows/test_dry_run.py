@@ -10,7 +10,7 @@ import pytest
 
 from flows.dry_run import SweepCounts, dry_run, format_dry_run
 from pipeline.design.grid import Grid
-from pipeline.run.records import ResultEntry
+from pipeline.run.entries import ResultEntry
 from pipeline.run.stages import RESULTS
 from storage import StoreError
 from storage.store import SweepStore

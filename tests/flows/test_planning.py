@@ -13,7 +13,7 @@ from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
 from flows.run import run_sweep
 from pipeline.design.grid import DatasetFacts, Grid, load_grid
 from pipeline.errors import DatasetError
-from pipeline.run.records import ResultEntry
+from pipeline.run.entries import ResultEntry
 from pipeline.run.stages import RECORDINGS, RESULTS
 from storage.store import SweepStore
 from tests.flows.helpers import METRICS, SMALL_GRID, count_grid_loads, hermetic_env

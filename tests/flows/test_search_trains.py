@@ -11,6 +11,7 @@ import flows.search as search_module
 from flows.api import Space
 from flows.scheduling import submit_missing
 from flows.search import Search, spent_seconds, trials_cube
+from pipeline.run import encoding as encoding_module
 from pipeline.run import stages
 from pipeline.run.records import Charge
 from storage import SweepStore
@@ -56,9 +57,9 @@ def test_two_running_trials_that_share_a_train_compute_it_once(two_threads, tmp_
         both.wait(120)
         return stages_encode_trains(*args, **kwargs)
 
-    stages_encode_trains = stages.encode_trains
+    stages_encode_trains = encoding_module.encode_trains
     monkeypatch.setattr(search_module, "submit_missing", submitting)
-    monkeypatch.setattr(stages, "encode_trains", encoding)
+    monkeypatch.setattr(encoding_module, "encode_trains", encoding)
     with concurrent.futures.ThreadPoolExecutor(2) as pool:
         computed = list(pool.map(lambda n: search.compute([n], lambda: two_threads), (0, 1)))
 
@@ -88,7 +89,7 @@ def test_a_trial_whose_train_fails_is_failed_with_the_reason(two_threads, tmp_pa
     def failing(*args, **kwargs):
         raise MemoryError("no room for the trains")
 
-    monkeypatch.setattr(stages, "encode_trains", failing)
+    monkeypatch.setattr(encoding_module, "encode_trains", failing)
     plan, failed = search.compute([0], lambda: two_threads)
     assert list(failed) == plan.missing and len(failed) == 1
     assert "MemoryError: no room for the trains" in failed[plan.missing[0]]

@@ -122,7 +122,7 @@ def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
     different positions and ``eskin run`` of it give the same interval."""
     from pipeline.design.grid import Grid
     from pipeline.results.cube import build_cube
-    from pipeline.run.records import OutOfFold, ResultEntry
+    from pipeline.run.entries import OutOfFold, ResultEntry
 
     repeats = {"training.repeats": 3}
     grid = Grid.from_dict(

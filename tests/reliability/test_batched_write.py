@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.stages import RESULTS
 from storage import SweepStore
 from tests.store_helpers import read_result, write_result

@@ -8,7 +8,7 @@ import pytest
 from flows.planning import plan_sweep
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import load_grid
-from pipeline.run.records import ResultEntry
+from pipeline.run.entries import ResultEntry
 from pipeline.run.stages import RESULTS
 from storage import SweepStore
 from tests.store_helpers import write_result

@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline.results.cube import build_cube
-from pipeline.run.records import RecordingsInfo
+from pipeline.run.entries import RecordingsInfo
 from storage.store import SweepStore
 from tests import golden_cubes as golden
 

@@ -29,7 +29,7 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.design.scene import Model
 from pipeline.errors import EskinError
-from pipeline.run.records import OutOfFold, RecordingsInfo, ResultEntry, SpikeEntry
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry, SpikeEntry
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import (
     CorruptEntryError,

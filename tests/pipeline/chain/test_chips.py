@@ -1,21 +1,13 @@
 """Chips as a population: common random numbers, the nominal chip, deployments, keys, entries."""
 
-from dataclasses import astuple
-
 import numpy as np
 import pytest
 
 from pipeline.chain import training
 from pipeline.chain.readout import effect_rng, level_crossings, real_train
 from pipeline.design.scene import Effect, ReadoutSpec, Scene
-from pipeline.run.records import (
-    decode_result_entry,
-    decode_spike_entry,
-    encode_result_entry,
-    encode_spike_entry,
-)
 from pipeline.run.simulate import run_scene
-from pipeline.run.stages import LEVELS, RESULTS, SPIKES, Stopwatch, cache_key
+from pipeline.run.stages import LEVELS, RESULTS, SPIKES, cache_key
 
 
 def readout(**effects) -> ReadoutSpec:
@@ -121,35 +113,3 @@ def test_a_deployed_classifier_trains_once_per_fold_whatever_the_chips(kind, mon
             right = cv.chip_predicted[k, r] == labels
             by_fold = [right[cv.test_fold[r] == f].mean() for f in range(scene.training.folds)]
             assert np.allclose(cv.chip_accuracy[k, r], by_fold)
-
-
-def test_chip_trains_and_results_round_trip_through_their_entries():
-    scene = SMOKE.replace(**{"chips.count": 3, "chips.deployment": "shared"})
-    outputs = {}
-    watch = Stopwatch(None)
-    for level in LEVELS:
-        outputs[level.name] = level.run(scene, outputs, watch)
-    spikes = outputs[SPIKES.name]
-    entry = SPIKES.record.make(spikes, _seconds(), outputs.get)
-    back = decode_spike_entry(*encode_spike_entry(entry))
-    for a, b in (
-        (entry.chips.real, back.chips.real),
-        (entry.chips.reference, back.chips.reference),
-    ):
-        for name in ("times_s", "polarity", "count", "duration_s"):
-            assert np.array_equal(getattr(a, name), getattr(b, name))
-    assert [astuple(m) for m in back.chips.metrics] == [astuple(m) for m in entry.chips.metrics]
-    assert back.chips.n_chips == 3
-    assert np.array_equal(back.chips.chip(0).times_s, spikes.encoded.real.times_s)
-    result = RESULTS.record.make(outputs[RESULTS.name], _seconds(), outputs.get)
-    again = decode_result_entry(*encode_result_entry(result))
-    for model, values in result.chips.fold_accuracy.items():
-        assert np.array_equal(again.chips.fold_accuracy[model], values)
-        assert np.array_equal(again.chips.predicted[model], result.chips.predicted[model])
-    assert [astuple(m) for m in again.chips.metrics] == [astuple(m) for m in result.chips.metrics]
-
-
-def _seconds():
-    from pipeline.run.records import StepSeconds
-
-    return StepSeconds({"readout": 1.0}, {}, "key")

@@ -58,7 +58,7 @@ _WARM_AND_COUNT = (
     "import numba\n"
     "from pipeline.chain import metrics, readout\n"
     "from pipeline.design.scene import Scene\n"
-    "from pipeline.run.stages import warm_kernels\n"
+    "from pipeline.run.encoding import warm_kernels\n"
     "scene = Scene.builtin('smoke')\n"
     "warm_kernels(scene.readout)\n"
     "warm_kernels(scene.replace(**{'readout.effects': {'comparator_noise': {'sigma_v': 0.01}}})"

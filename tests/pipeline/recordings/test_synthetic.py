@@ -50,19 +50,22 @@ _FIRST_LOAD = """
 import sys
 from pipeline.chain import jit
 from pipeline.design.scene import DatasetSpec
-from pipeline.run.stages import SETUP_STEP, Charge, Stopwatch, load
+from pipeline.run.stages import SETUP_STEP, load, step_charge
+from pipeline.run.records import Charge
+from pipeline.run.stopwatch import Stopwatch
 
 assert "scipy.signal" not in sys.modules and "scipy.ndimage" not in sys.modules
 dataset = DatasetSpec(recordings_per_class=1, duration_s=0.5)
 first, later = Stopwatch(None), Stopwatch(None)
 load(dataset=dataset, watch=first)
 assert "scipy.signal" in sys.modules and "scipy.ndimage" in sys.modules
-assert first.paid[Charge.SHARED].get(SETUP_STEP, 0.0) > 0.0, first.paid
-assert first.paid[Charge.SHARED]["load"] == first.seconds["load"], first.paid
+paid = first.paid(step_charge)
+assert paid[Charge.SHARED].get(SETUP_STEP, 0.0) > 0.0, paid
+assert paid[Charge.SHARED]["load"] == first.seconds["load"], paid
 booked = jit.one_off_seconds()
 load(dataset=dataset, watch=later)
 assert jit.one_off_seconds() == booked, "a later load booked one-off time"
-assert SETUP_STEP not in later.paid[Charge.SHARED], later.paid
+assert SETUP_STEP not in later.paid(step_charge)[Charge.SHARED], later.seconds
 """
 
 

@@ -11,7 +11,7 @@ from pipeline.errors import EskinError
 from pipeline.report import FrameReadout, Panel, build_report
 from pipeline.report.document import report_files
 from pipeline.report.figures import draw_report
-from pipeline.run.records import RecordingsInfo
+from pipeline.run.entries import RecordingsInfo
 from pipeline.run.stages import cache_key
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes, paper_like_accuracy
 

@@ -8,7 +8,7 @@ from pipeline.report import paper as paper_numbers
 from pipeline.report.document import report_blocks
 from pipeline.report.render import render_markdown
 from pipeline.report.tables import TABLE_COLUMNS, table_rows
-from pipeline.run.records import RecordingsInfo
+from pipeline.run.entries import RecordingsInfo
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 # The paper's Table I, as the paper gives it: reference, sensors, data rate, accuracy.

@@ -7,7 +7,8 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.results.cube import CUBE_VARIABLES, build_cube
 from pipeline.results.yields import yield_statistics
-from pipeline.run.records import ChipResults, OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.chips import ChipResults
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
 
 NAMES = tuple(f"c{c}/{i}" for c in range(2) for i in range(4))
 LABELS = np.array([0, 0, 0, 0, 1, 1, 1, 1])

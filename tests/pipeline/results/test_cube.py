@@ -24,7 +24,9 @@ from pipeline.results.cube import (
     field_coordinate,
     metric_attrs,
 )
-from pipeline.run.records import Charge, Decisions, OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.decisions import Decisions
+from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.records import Charge
 from pipeline.run.stages import RESULTS, interval_generator
 from tests import golden_cubes as golden
 
@@ -693,3 +695,11 @@ def test_a_sweep_of_the_grid_takes_the_points_the_grid_built():
     points = grid.points_of(other)
     assert points == sweep_points(grid.base, other)
     assert not any(a is b for a, b in zip(points, grid.points()[4:], strict=False))
+
+
+def test_a_cube_variable_declared_by_two_features_is_refused():
+    from pipeline.results.cube import _gathered
+
+    assert list(_gathered({"a": {}}, {"b": {}})) == ["a", "b"]
+    with pytest.raises(ValueError, match=r"declared twice: \['a'\]"):
+        _gathered({"a": {}}, {"a": {}, "b": {}})

@@ -3,7 +3,6 @@ reads, and a scene run reports exactly the registry's steps."""
 
 import enum
 import inspect
-import time
 from dataclasses import dataclass
 
 import pytest
@@ -21,12 +20,12 @@ from pipeline.run.stages import (
     SPIKES,
     Level,
     Read,
-    Stopwatch,
     _checked,
     cache_key,
     level_named,
     steps_through,
 )
+from pipeline.run.stopwatch import Stopwatch
 
 SMOKE = Scene.builtin("smoke")
 PAPER = Scene.paper()
@@ -264,25 +263,6 @@ def test_the_registry_refuses_a_level_before_its_inputs():
         _checked(FRONT_END, RECORDINGS)
 
 
-def test_the_stopwatch_books_kernel_compiles_as_shared_and_steps_by_their_charge(monkeypatch):
-    from pipeline.chain import jit
-    from pipeline.run.records import Charge
-
-    clock = iter([10.0, 10.5, 10.5, 10.5])  # 0.5 s of compiling inside "readout", none in "load"
-    monkeypatch.setattr(jit, "one_off_seconds", lambda: next(clock))
-    watch = Stopwatch(None)
-    with watch.stage("readout"):
-        time.sleep(0.6)
-    with watch.stage("load"):
-        pass
-    assert watch.seconds["readout"] == pytest.approx(watch.paid[Charge.OWN]["readout"])
-    assert watch.paid[Charge.SHARED]["setup"] == 0.5
-    assert watch.paid[Charge.SHARED]["load"] == watch.seconds["load"]  # a shared step
-    assert "load" not in watch.paid[Charge.OWN]
-    wall = watch.paid_total()
-    assert wall["readout"] + wall["setup"] == pytest.approx(watch.seconds["readout"] + 0.5)
-
-
 def test_shared_steps_are_declared_on_the_levels():
     from pipeline.run.records import Charge
     from pipeline.run.stages import shared_steps, step_charge
@@ -292,42 +272,3 @@ def test_shared_steps_are_declared_on_the_levels():
     bad = Level("odd", (Read("dataset"),), (), None, ("load2",), shared=("load3",))
     with pytest.raises(ValueError, match="shared steps"):
         _checked(bad)
-
-
-def test_paid_seconds_and_their_point_round_trip_and_older_entries_have_none():
-    from pipeline.chain.metrics import SpikeMetrics
-    from pipeline.run.records import (
-        Charge,
-        ResultEntry,
-        decode_result_entry,
-        encode_result_entry,
-    )
-
-    metrics = SpikeMetrics(1.0, 0.0, 0.0, 2.0, 3.0, 4.0)
-    paid = {Charge.OWN: {"train_ffnn": 1.5}, Charge.SHARED: {"load": 0.25, "setup": 0.75}}
-    entry = ResultEntry({"ffnn": [0.5, 0.5]}, {"train_ffnn": 1.5, "load": 0.25}, metrics, paid=paid)
-    values, attrs = encode_result_entry(entry)
-    assert attrs["paid_seconds"] == {
-        "own": {"train_ffnn": 1.5},
-        "shared": {"load": 0.25, "setup": 0.75},
-    }
-    assert decode_result_entry(values, attrs).paid == paid
-    del attrs["paid_seconds"]  # as written before paid seconds were kept
-    assert decode_result_entry(values, attrs).paid is None
-
-
-@pytest.mark.parametrize(
-    "readout",
-    [
-        PAPER.readout,
-        PAPER.replace(**{"readout.encoder": "decaying"}).readout,
-        NOISY.readout,
-        SATURATING.readout,
-    ],
-    ids=["ideal", "decaying", "noisy", "saturating"],
-)
-def test_the_kernels_warm_up_on_a_tiny_signal_through_the_encoders_own_path(readout):
-    from pipeline.run.stages import _encode_tiny_signal
-
-    # The warm-up gives up silently on failure: it must not fail where it is meant to work.
-    assert _encode_tiny_signal(readout).event_rate_hz > 0
