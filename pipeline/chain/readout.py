@@ -96,7 +96,6 @@ import math
 
 import numpy as np
 
-from pipeline.chain.jit import kernel
 from pipeline.design.scene import (
     AmplifierNoise,
     AmplifierOffset,
@@ -107,6 +106,7 @@ from pipeline.design.scene import (
     ThresholdMismatch,
 )
 from pipeline.errors import SimulationError
+from pipeline.jit import kernel
 
 THRESHOLD_FLOOR_REL = 0.1
 """Smallest effective threshold, as a fraction of the nominal one, unless the scene's

@@ -246,7 +246,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.errors import DatasetError
 from pipeline.numbers import positive_number, whole_number
 from pipeline.recordings.recording_set import Recordings
@@ -844,7 +844,7 @@ def _scipy_filters() -> tuple[Any, Any]:
 
     scipy.ndimage and scipy.signal take seconds to import; a sweep whose recordings are all
     cached, or that checks a grid on other recordings, never needs them. The import is one-off
-    time (:func:`pipeline.chain.jit.one_off`: a step's timer books it as shared set-up), not
+    time (:func:`pipeline.jit.one_off`: a step's timer books it as shared set-up), not
     the work of the first load of a process.
     """
     with jit.one_off():

@@ -135,9 +135,10 @@ import xarray as xr
 
 from pipeline.chain.metrics import CORRELATION_METHODS, SpikeMetrics, correlate_with_accuracy
 from pipeline.design import fields
-from pipeline.design.grid import Grid, GridPoint, Sweep
+from pipeline.design.grid import Grid, Sweep
 from pipeline.design.scene import Model, Scene, canonical_parts, part_left_out
 from pipeline.results.decision_cube import decision_variables
+from pipeline.run.grid_keys import KeyedPoint, keyed_points
 from pipeline.run.records import Charge, OutOfFold, Paid, RecordingsInfo
 from pipeline.run.stages import RESULTS, interval_generator, steps_of
 
@@ -309,7 +310,7 @@ def build_cube(
     read once per distinct scene part), so a cube costs some tens of microseconds per point;
     only a point with several repeats is still visited alone, for its bootstrap interval.
     """
-    points = grid.points_of(sweep)
+    points = keyed_points(grid, sweep)
     results = [records[point.key] for point in points]
     shape = sweep.shape
     # Where each point sits in the cube's flattened sweep dimensions: every per-point value is
@@ -619,7 +620,7 @@ def _accuracy_summary(
     correct: np.ndarray | None,
     label: np.ndarray | None,
     dims: tuple[str, ...],
-    points: list[GridPoint],
+    points: list[KeyedPoint],
     models: list[str],
 ) -> dict[str, Any]:
     """``accuracy_mean``, ``accuracy_low``, ``accuracy_high`` (axes..., model) of every point.
@@ -696,7 +697,7 @@ def _coordinate(values: Sequence[Any]) -> np.ndarray:
     return np.asarray([json.dumps(v, sort_keys=True) for v in values])
 
 
-def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
+def _axis_coordinates(sweep: Sweep, points: list[KeyedPoint]) -> dict[str, Any]:
     """The coordinate of each swept axis, named by its dimension (attribute ``field``), along
     the first dimension of a zipped sweep: each value as the points' parsed scenes hold it (as
     :meth:`pipeline.design.scene.Scene.to_dict` writes it), read once per value."""
@@ -705,7 +706,7 @@ def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
     for position, axis in enumerate(sweep.axes):
         along = 0 if sweep.mode == "zip" else position
         # The first point (C order) at each index along the axis's dimension.
-        first: dict[int, GridPoint] = {}
+        first: dict[int, KeyedPoint] = {}
         for point in points:
             first.setdefault(point.index[along], point)
         values = [
@@ -716,7 +717,7 @@ def _axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
 
 
 def _scene_coordinates(
-    points: list[GridPoint], flat: np.ndarray, sweep: Sweep
+    points: list[KeyedPoint], flat: np.ndarray, sweep: Sweep
 ) -> dict[str, xr.Variable]:
     """Every scene field that every point has, along the dims it varies with.
 
@@ -846,7 +847,7 @@ class _ChipCell:
 
 def _chip_variables(
     results: Sequence[PointResult],
-    points: list[GridPoint],
+    points: list[KeyedPoint],
     flat: np.ndarray,
     shape: tuple[int, ...],
     dims: tuple[str, ...],

@@ -75,7 +75,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.chain.chips import ChipTrains, encode_chips
 from pipeline.chain.coding import frames, resolve_n_windows
 from pipeline.chain.frontend import FrontEnd, fit_front_end
@@ -165,7 +165,7 @@ __all__ = [
 #: importing numba, torch and scikit-learn (and scipy's filters, for the synthetic recordings),
 #: and loading (or, the first time, compiling) the numba kernels: the spikes level's warm-up
 #: (:func:`warm_kernels`), and every such second inside any other step
-#: (:func:`pipeline.chain.jit.one_off_seconds`).
+#: (:func:`pipeline.jit.one_off_seconds`).
 SETUP_STEP = "setup"
 
 
@@ -173,7 +173,7 @@ class Stopwatch:
     """Accumulates wall seconds per step and reports each step the first time it starts.
 
     ``seconds`` is each step's work, its wall seconds less the one-off time within it (importing
-    a library, loading or compiling kernels: :func:`pipeline.chain.jit.one_off_seconds`);
+    a library, loading or compiling kernels: :func:`pipeline.jit.one_off_seconds`);
     ``paid`` is the same time by :class:`Charge`, each step's work under its declared charge
     (:func:`step_charge`) and the one-off time under ``shared`` / :data:`SETUP_STEP`, so that
     ``paid`` sums to the wall time of the steps.

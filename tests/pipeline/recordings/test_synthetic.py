@@ -48,7 +48,7 @@ def test_same_seed_gives_identical_recordings():
 # books no one-off time at all.
 _FIRST_LOAD = """
 import sys
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.design.scene import DatasetSpec
 from pipeline.run.stages import SETUP_STEP, Charge, Stopwatch, load
 

@@ -7,6 +7,7 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.results.cube import CUBE_VARIABLES, build_cube
 from pipeline.results.yields import yield_statistics
+from pipeline.run.grid_keys import keyed_points
 from pipeline.run.records import ChipResults, OutOfFold, RecordingsInfo, ResultEntry
 
 NAMES = tuple(f"c{c}/{i}" for c in range(2) for i in range(4))
@@ -58,7 +59,7 @@ def entry(n_chips: int) -> ResultEntry:
 def cube():
     grid = Grid.from_dict(GRID)
     (sweep,) = grid.sweeps
-    records = {p.key: entry(p.scene.chips.count) for p in grid.points_of(sweep)}
+    records = {p.key: entry(p.scene.chips.count) for p in keyed_points(grid, sweep)}
     return build_cube(grid, sweep, records)
 
 

@@ -265,7 +265,7 @@ def test_the_registry_refuses_a_level_before_its_inputs():
 
 
 def test_the_stopwatch_books_kernel_compiles_as_shared_and_steps_by_their_charge(monkeypatch):
-    from pipeline.chain import jit
+    from pipeline import jit
     from pipeline.run.records import Charge
 
     clock = iter([10.0, 10.5, 10.5, 10.5])  # 0.5 s of compiling inside "readout", none in "load"

@@ -1,0 +1,47 @@
+"""The result cache keys of a grid's points: which points are the same scene.
+
+A grid (:mod:`pipeline.design.grid`) says which scenes its sweeps hold; the run layer says what
+each one's result is stored under, ``cache_key(scene, "results")``
+(:func:`pipeline.run.stages.cache_key`).
+Two points with equal keys are one design, computed once: :func:`unique_points`. The points of a
+sweep share their scene parts, so the keys of a sweep's points are written with one canonical
+memo (:meth:`pipeline.design.scene.Scene.canonical`) and each shared part is serialised once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from pipeline.design.grid import Grid, GridPoint, Sweep
+from pipeline.design.scene import CanonicalMemo, Scene
+from pipeline.run.stages import RESULTS
+
+
+@dataclass(frozen=True)
+class KeyedPoint(GridPoint):
+    """A grid point and its scene's result cache key (``cache_key(scene, "results")``)."""
+
+    key: str = field(compare=False, repr=False)
+
+
+def keyed_points(grid: Grid, sweep: Sweep | None = None) -> list[KeyedPoint]:
+    """The points of ``grid`` (every point of every sweep, as :meth:`Grid.points
+    <pipeline.design.grid.Grid.points>`), or of ``sweep`` (:meth:`Grid.points_of
+    <pipeline.design.grid.Grid.points_of>`), each with its result key."""
+    sweeps = grid.sweeps if sweep is None else (sweep,)
+    keyed = []
+    for one in sweeps:
+        memo: CanonicalMemo = {}
+        keyed.extend(
+            KeyedPoint(p.sweep, p.index, p.scene, RESULTS.key(p.scene, memo))
+            for p in grid.points_of(one)
+        )
+    return keyed
+
+
+def unique_points(grid: Grid) -> dict[str, Scene]:
+    """The distinct scenes of ``grid`` by result key, in first-seen order."""
+    unique: dict[str, Scene] = {}
+    for point in keyed_points(grid):
+        unique.setdefault(point.key, point.scene)
+    return unique
