@@ -85,6 +85,11 @@ class Range:
         return " or ".join([*(repr(v) for v in self.also), words])
 
 
+#: Numbers above 0, and numbers from 0 up: the ranges most fields accept.
+POSITIVE = Range(0, low_open=True)
+NONNEGATIVE = Range(0)
+
+
 @dataclass(frozen=True)
 class NonEmpty:
     """Accepted values of a list: any but the empty one."""

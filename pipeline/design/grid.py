@@ -43,7 +43,7 @@ cache key, which tells which points are the same scene, is the run layer's
 (:mod:`pipeline.run.grid_keys`); what a point and a plan cost is :mod:`pipeline.design.grid_cost`.
 
 Expanding and checking a grid costs a few tens of microseconds per point, linear in the points:
-a sweep's scenes are built by :class:`pipeline.design.scene.SceneVariants` (each scene part
+a sweep's scenes are built by :class:`pipeline.design.variants.SceneVariants` (each scene part
 validated once per distinct combination of the swept values in it, and shared by the points that
 have it), and a grid builds its points once.
 """
@@ -66,11 +66,8 @@ from typing import Any
 
 from pipeline.design import fields
 from pipeline.design.grid_cost import PLAN_BYTES_PER_POINT, PLAN_SECONDS_PER_POINT, TYPICAL_POINT_S
-from pipeline.design.scene import (
-    Scene,
-    SceneVariants,
-    with_dataset_path_from,
-)
+from pipeline.design.scene import Scene, with_dataset_path_from
+from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
 
 NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
@@ -264,9 +261,9 @@ def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
     """The scenes of one sweep (already validated when the grid loaded).
 
     Each point's scene is ``base.replace(**sweep.fixed).replace(**values)`` with the point's
-    ``values``, built as :class:`pipeline.design.scene.SceneVariants` builds it: each scene part is
-    validated once per distinct combination of the swept values in it, and the points share
-    equal parts (so that their keys write each part's canonical form once).
+    ``values``, built as :class:`pipeline.design.variants.SceneVariants` builds it: each scene
+    part is validated once per distinct combination of the swept values in it, and the points
+    share equal parts (so that their keys write each part's canonical form once).
     """
     fixed = base.replace(**sweep.fixed) if sweep.fixed else base
     variants = _variants(fixed, sweep)

@@ -96,8 +96,9 @@ from pipeline.design.grid import (
     _read_base,
     _valid_name,
 )
-from pipeline.design.scene import Model, Scene, SceneVariants
+from pipeline.design.scene import Model, Scene
 from pipeline.design.transforms import Transform
+from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
 
 #: The name of the trial cube's sweep.

@@ -87,7 +87,7 @@ from pipeline.chain.metrics import (
     pooled_ssnr_db,
     ste_per_train,
 )
-from pipeline.chain.readout import real_train, true_train
+from pipeline.chain.readout_effects import real_train, true_train
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.chain.taxels import taxel_delays_s, taxel_signals
 from pipeline.design import fields

@@ -6,8 +6,10 @@ import json
 import pytest
 
 from pipeline.design import fields
+from pipeline.design.effects import Effect
 from pipeline.design.grid import Grid, SweepMode, load_grid, sweep_points
-from pipeline.design.scene import Effect, Scene, SceneVariants
+from pipeline.design.scene import Scene
+from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
 from pipeline.run.grid_keys import unique_points
 from tests.grid_helpers import MANY_AXES, keyed_dict, reference_points

@@ -14,9 +14,10 @@ import xarray as xr
 from scipy import stats
 
 from pipeline.chain.metrics import SpikeMetrics
+from pipeline.design.effects import ThresholdMismatch
 from pipeline.design.fields import flatten
 from pipeline.design.grid import Grid, sweep_points
-from pipeline.design.scene import ReadoutSpec, ThresholdMismatch
+from pipeline.design.scene import ReadoutSpec
 from pipeline.results.cube import (
     CUBE_VARIABLES,
     build_cube,
