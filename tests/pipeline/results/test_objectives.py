@@ -6,21 +6,12 @@ import math
 import numpy as np
 import xarray as xr
 
-from pipeline.design.space import MISMATCH_FIELD, Direction, Metric, Objective, Space
+from pipeline.design.space import MISMATCH_FIELD, Direction, Metric, Objective
 from pipeline.results.hardware import array_area_m2, decoder_energy_j
 from pipeline.results.latency import EXIT_CONFIDENCE, exit_objectives
 from pipeline.results.objectives import objective_values
 from tests.latency_helpers import SPIKING_ACS, SPIKING_UPDATES, TIMES, with_decisions
 from tests.report_helpers import make_cubes
-
-
-def space(objectives: dict) -> dict:
-    return {
-        "name": "s",
-        "base": "smoke",
-        "space": {"readout.threshold_v": {"low": 0.02, "high": 0.3, "log": True}},
-        "objectives": objectives,
-    }
 
 
 def _chip_trials():
@@ -71,10 +62,12 @@ def test_area_and_yield_objectives_read_the_cube_over_chips():
 
 def test_objective_values_are_the_early_exits_at_the_declared_confidence():
     cube = with_decisions(make_cubes({"t": {"axes": {"readout.threshold_v": [0.09, 0.2]}}})["t"])
-    loaded = Space.from_dict(
-        space({"decision_s.cnn": "min", "decoder_energy_j.cnn": "min", "accuracy.cnn": "max"})
-    )
-    values = objective_values(cube, loaded.objectives)
+    objectives = [
+        Objective(Metric.DECISION_TIME, Direction.MIN, "cnn"),
+        Objective(Metric.DECODER_ENERGY, Direction.MIN, "cnn"),
+        Objective(Metric.ACCURACY, Direction.MAX, "cnn"),
+    ]
+    values = objective_values(cube, objectives)
     assert values.shape == (2, 3)
     # At 0.9 a right CNN decision exits at 0.75 s (confidence 0.92), a wrong one at the full
     # touch: at 0.09 V 76 of 78 right recordings are right at 0.75 s, 2 more at 1 s, 42 wrong.
