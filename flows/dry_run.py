@@ -15,7 +15,7 @@ from typing import Any
 
 from pipeline.design.grid import Grid
 from pipeline.design.grid_cost import cost_kind
-from pipeline.run.grid_keys import keyed_points, unique_points
+from pipeline.run.grid_keys import distinct_scenes, keyed_points, keys_by_sweep
 from pipeline.run.stages import RESULTS
 from storage import SweepStore
 
@@ -121,7 +121,8 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     store = SweepStore.open_readonly(root)
-    scenes = unique_points(grid)
+    points = keyed_points(grid)  # each key computed once
+    scenes = distinct_scenes(points)
     totals: dict[str, float] = {}
     if store is not None:
         for key, entry in store.peek_many(RESULTS.record, scenes).items():
@@ -141,11 +142,8 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
             unknown += 1
         else:
             estimated += median
-    sweep_keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
-    for point in keyed_points(grid):
-        sweep_keys[point.sweep][point.key] = None
     counts = []
-    for name, keys in sweep_keys.items():
+    for name, keys in keys_by_sweep(points, grid.sweeps).items():
         n_cached = sum(key in totals for key in keys)
         counts.append(SweepCounts(name, len(keys), n_cached, len(keys) - n_cached))
     return DryRun(

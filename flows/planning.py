@@ -34,7 +34,7 @@ from pipeline.design.grid_cost import plannable_points
 from pipeline.design.scene import DatasetSpec, Scene
 from pipeline.recordings.sources import resolve_dataset_argument
 from pipeline.run.fit import DatasetLimits, check_fits
-from pipeline.run.grid_keys import keyed_points, unique_points
+from pipeline.run.grid_keys import distinct_scenes, keyed_points, keys_by_sweep
 from pipeline.run.records import ResultEntry
 from pipeline.run.stages import RECORDINGS, RESULTS
 from storage import SweepStore
@@ -79,10 +79,7 @@ class SweepPlan:
 
 def sweep_keys(grid: Grid) -> dict[str, tuple[str, ...]]:
     """The distinct result keys of each named sweep of ``grid``, in the order of its points."""
-    keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
-    for point in keyed_points(grid):
-        keys[point.sweep][point.key] = None
-    return {name: tuple(found) for name, found in keys.items()}
+    return keys_by_sweep(keyed_points(grid), grid.sweeps)
 
 
 def default_root(grid: Grid, dataset: str | None = None) -> Path:
@@ -186,8 +183,10 @@ def plan_sweep(grid: Grid, root: str | Path, tidy: bool = True) -> SweepPlan:
     store = SweepStore.open(root)
     if tidy:
         store.clean_partials()
-    scenes = unique_points(grid)
-    keys = sweep_keys(grid)
+    points = keyed_points(grid)  # each key computed once
+    scenes = distinct_scenes(points)
+    keys = keys_by_sweep(points, grid.sweeps)
+    del points  # not kept while the store is read: a point each, as many as the grid has
     records: dict[str, ResultEntry] = {}
     while True:
         batches = store.entry_batches(RESULTS.record)

@@ -10,6 +10,7 @@ memo (:meth:`pipeline.design.scene.Scene.canonical`) and each shared part is ser
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from pipeline.design.grid import Grid, GridPoint, Sweep
@@ -41,7 +42,24 @@ def keyed_points(grid: Grid, sweep: Sweep | None = None) -> list[KeyedPoint]:
 
 def unique_points(grid: Grid) -> dict[str, Scene]:
     """The distinct scenes of ``grid`` by result key, in first-seen order."""
+    return distinct_scenes(keyed_points(grid))
+
+
+def distinct_scenes(points: Iterable[KeyedPoint]) -> dict[str, Scene]:
+    """The distinct scenes of keyed ``points`` by result key, in first-seen order (for a caller
+    that holds the points already: their keys are not computed again)."""
     unique: dict[str, Scene] = {}
-    for point in keyed_points(grid):
+    for point in points:
         unique.setdefault(point.key, point.scene)
     return unique
+
+
+def keys_by_sweep(
+    points: Iterable[KeyedPoint], sweeps: Iterable[Sweep]
+) -> dict[str, tuple[str, ...]]:
+    """The distinct result keys of each of ``sweeps`` among keyed ``points``, in the order of
+    its points."""
+    keys: dict[str, dict[str, None]] = {s.name: {} for s in sweeps}
+    for point in points:
+        keys[point.sweep][point.key] = None
+    return {name: tuple(found) for name, found in keys.items()}

@@ -6,7 +6,13 @@ from pathlib import Path
 
 from pipeline.design.grid import Grid, load_grid
 from pipeline.design.scene import Scene
-from pipeline.run.grid_keys import KeyedPoint, keyed_points, unique_points
+from pipeline.run.grid_keys import (
+    KeyedPoint,
+    distinct_scenes,
+    keyed_points,
+    keys_by_sweep,
+    unique_points,
+)
 from pipeline.run.stages import LEVELS, cache_key
 from tests.grid_helpers import MANY_AXES, reference_key
 
@@ -60,6 +66,12 @@ def test_equal_scenes_at_several_points_are_one_point_by_key():
     assert len(unique) == 3
     assert unique[keys[0]] is points[0].scene
     assert keys[0] == keys[2] and keys[1] == keys[3] == keys[4] == cache_key(grid.base, "results")
+    assert distinct_scenes(points) == unique
+    # Each sweep's distinct keys, in the order of its points.
+    assert keys_by_sweep(points, grid.sweeps) == {
+        "seeds": (keys[0], keys[1]),
+        "threshold": (keys[4], keys[5]),
+    }
 
 
 def test_the_encoder_example_sweeps_both_encoders_with_the_decay_keyed_for_one():
