@@ -431,7 +431,7 @@ def decaying_crossings(
 
 def decaying_train(v, fs_hz, up, down, tau_s, max_spikes, floor_v=0.0, noise=None):
     """The decaying encoder's train with UP/DOWN ``(theta_0, theta_min)`` pairs, a threshold
-    floor and decision noise (see :func:`_decaying_kernel` and :func:`run_noisy`)."""
+    floor and decision noise (see ``_decaying_kernel`` and :func:`run_noisy`)."""
 
     def call(rng, sigma_v, times, polarity):
         tau = tau_s * fs_hz
@@ -514,7 +514,7 @@ def _check_positive(**values: float) -> None:
 
 
 def run_noisy(call, noise, fs_hz: float, max_spikes: int, v: np.ndarray) -> tuple:
-    """:func:`_run` of a kernel ``call(rng, sigma_v, times, polarity) -> count`` with decision
+    """``_run`` of a kernel ``call(rng, sigma_v, times, polarity) -> count`` with decision
     ``noise`` (``(sigma_v, rng factory)``, or None for none)."""
     sigma_v, new_rng = (0.0, None) if noise is None else noise
 

@@ -138,7 +138,7 @@ def _general_kernel(
     from ``noise_rng`` (``None``: no comparator noise) for that comparator. The two directions
     share one code path: ``(r - a) / (b - a)`` and ``r + (-down)`` are bit for bit
     ``(a - r) / (a - b)`` and ``r - down``. Writes while the buffers have room and returns the
-    full count, as :func:`_ideal_kernel`, or stops at the first count above ``limit`` (a step
+    full count, as ``_ideal_kernel``, or stops at the first count above ``limit`` (a step
     far below the signal, or too small to move ``r`` at all, would otherwise loop for ever).
     """
     n = v.shape[0]
@@ -210,7 +210,8 @@ def real_train(
     Returns
     -------
     times_s : float64 (n_spikes,), polarity : int8 (n_spikes,)
-        As :func:`level_crossings`. For an ideal readout, exactly its TRUE train.
+        As :func:`~pipeline.chain.readout.level_crossings`. For an ideal readout, exactly its
+        TRUE train.
     """
     effects = readout.effects
     if not effects:
@@ -282,8 +283,10 @@ _NOMINAL = _Nominal()
 def true_train(
     v: np.ndarray, fs_hz: float, readout: ReadoutSpec, *, max_spikes: int = MAX_SPIKES_PER_TRAIN
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The TRUE train of ``v`` by the readout's ideal encoder (:func:`level_crossings` or
-    :func:`decaying_crossings`, by ``readout.encoder``) at its nominal thresholds."""
+    """The TRUE train of ``v`` by the readout's ideal encoder
+    (:func:`~pipeline.chain.readout.level_crossings` or
+    :func:`~pipeline.chain.readout.decaying_crossings`, by ``readout.encoder``) at its nominal
+    thresholds."""
     nominal = (readout.threshold_v, readout.theta_min_v)
     return _encode(v, fs_hz, readout, nominal, None, 0.0, None, max_spikes)
 
@@ -292,8 +295,8 @@ def _encode(v, fs_hz, readout, up, down, floor_v, noise, max_spikes):
     """Encode ``v`` with the readout's encoder at UP and DOWN ``(theta_0, theta_min)``
     thresholds (equal for a fixed encoder), floor ``floor_v`` and decision ``noise``
     (``(sigma_v, rng factory)`` or None). ``down=None`` (no comparator effect): both
-    comparators at ``up`` without noise, which :func:`level_crossings` computes for the fixed
-    encoder."""
+    comparators at ``up`` without noise, which :func:`~pipeline.chain.readout.level_crossings`
+    computes for the fixed encoder."""
     if readout.encoder is Encoder.DECAYING:
         v = checked_signal(v)  # the decaying kernel does not look for non-finite samples
         down = up if down is None else down

@@ -85,8 +85,9 @@ class Range:
         return " or ".join([*(repr(v) for v in self.also), words])
 
 
-#: Numbers above 0, and numbers from 0 up: the ranges most fields accept.
+#: The range of numbers above 0.
 POSITIVE = Range(0, low_open=True)
+#: The range of numbers from 0 up.
 NONNEGATIVE = Range(0)
 
 

@@ -248,8 +248,8 @@ class ReadoutSpec:
 
     @property
     def draws_fixed_effects(self) -> bool:
-        """Whether a named effect is drawn once per chip (:data:`FIXED_EFFECTS`), so that
-        chips of the design differ."""
+        """Whether a named effect is drawn once per chip
+        (:data:`~pipeline.design.effects.FIXED_EFFECTS`), so that chips of the design differ."""
         return any(e in FIXED_EFFECTS for e in self.effects)
 
     @property
@@ -496,8 +496,9 @@ class Scene:
         left out, so that a field added with such a default changes no existing key.
 
         ``memo`` holds the canonical form of part objects already written: give the same dict
-        for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
-        each part is written once. The text does not depend on it.
+        for many scenes that share part objects (the scenes of a
+        :class:`~pipeline.design.variants.SceneVariants`) and each part is written once. The text
+        does not depend on it.
         """
         # The JSON of a dict with sorted keys is its items' JSON in key order, so each part can
         # be written (and remembered) on its own: the text is that of the whole selection.

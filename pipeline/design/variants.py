@@ -27,7 +27,7 @@ class SceneVariants:
     distinct combination of the value indices of the fields in it (a part no field is in, once),
     and the scenes share their parts. A grid whose fields take a few values each thus validates a
     few parts, not every point, and its scenes' canonical forms can be written once per part
-    (:meth:`Scene.canonical` with a memo).
+    (:meth:`~pipeline.design.scene.Scene.canonical` with a memo).
 
     Parameters
     ----------
@@ -80,7 +80,8 @@ class SceneVariants:
         Raises
         ------
         SceneError
-            The values the scene refuses, exactly as :meth:`Scene.replace` says.
+            The values the scene refuses, exactly as
+            :meth:`~pipeline.design.scene.Scene.replace` says.
         """
         parts: dict[str, Any] = {}
         problems: list[str] = []
@@ -104,8 +105,8 @@ class SceneVariants:
         return found
 
     def _read(self, top: str, changes: list[tuple[str, Any]]) -> tuple[Any, list[str]]:
-        """Part ``top`` with ``changes`` made as :meth:`Scene.replace` makes them, and what the
-        reader found wrong with it."""
+        """Part ``top`` with ``changes`` made as :meth:`~pipeline.design.scene.Scene.replace`
+        makes them, and what the reader found wrong with it."""
         data = {top: _copy_plain(self._data.get(top))}
         for dotted, value in changes:
             fields.put(data, dotted, value)
@@ -115,7 +116,8 @@ class SceneVariants:
 
 
 def _refused_together(scene: Scene) -> list[str]:
-    """What a scene's parts refuse together (:meth:`Scene.refusals`), as reading says it."""
+    """What a scene's parts refuse together (:meth:`~pipeline.design.scene.Scene.refusals`), as
+    reading says it."""
     refusals = getattr(scene, "refusals", None)
     return [] if refusals is None else [f"{name}: {text}" for name, text in refusals()]
 
