@@ -112,7 +112,7 @@ class ThresholdMismatch:
     )
 
 
-#: The parameters of each effect: the frozen class a scene reads its table into.
+#: The frozen class that holds each effect's parameters, read from the scene's table.
 EFFECT_TYPES: dict[Effect, type] = {
     Effect.AMPLIFIER_OFFSET: AmplifierOffset,
     Effect.AMPLIFIER_NOISE: AmplifierNoise,
@@ -121,7 +121,7 @@ EFFECT_TYPES: dict[Effect, type] = {
     Effect.COMPARATOR_NOISE: ComparatorNoise,
     Effect.THRESHOLD_MISMATCH: ThresholdMismatch,
 }
-#: Effects that draw random numbers (all but saturation): naming one puts the scene seed into
+#: Effects that draw random numbers (all but saturation); naming one puts the scene seed into
 #: the spike-train key.
 RANDOM_EFFECTS = frozenset(EFFECT_TYPES) - {Effect.SATURATION}
 #: Effects drawn once per chip (fixed-pattern, the same for every recording); the others are
