@@ -8,13 +8,10 @@ import numpy as np
 
 from benchmarks.timing import median_seconds
 from pipeline.chain.frontend import fit_front_end
-from pipeline.chain.readout import (
-    decaying_crossings,
-    level_crossings,
-    real_train,
-    reference_level_crossings,
-)
-from pipeline.design.scene import Effect, Scene
+from pipeline.chain.readout import decaying_crossings, level_crossings, reference_level_crossings
+from pipeline.chain.readout_effects import real_train
+from pipeline.design.effects import Effect
+from pipeline.design.scene import Scene
 from pipeline.recordings.synthetic import synthetic_recordings
 
 FS_HZ = 2000.0

@@ -46,8 +46,10 @@ from pathlib import Path
 from benchmarks.timing import median_seconds
 from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
 from pipeline.design import fields
-from pipeline.design.grid import DatasetFacts, Grid, check_scene_fits, load_grid
+from pipeline.design.grid import Grid, load_grid
 from pipeline.design.scene import MODEL_REVISION, Scene
+from pipeline.run.fit import DatasetLimits, check_scene_fits
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.stages import RECORDINGS, RESULTS, Level
 
 SIZES = (1_000, 10_000, 100_000)
@@ -113,16 +115,16 @@ def reference_key(scene: Scene, level: Level) -> str:
 def reference_plan(grid: Grid) -> dict[str, Scene]:
     """The baseline: every point built with ``Scene.replace``, its keys from the whole
     canonical form, its fit checked on its own; the distinct scenes by result key."""
-    facts: dict[str, DatasetFacts] = {}
+    limits: dict[str, DatasetLimits] = {}
     unique: dict[str, Scene] = {}
     for sweep in grid.sweeps:
         fixed = grid.base.replace(**sweep.fixed) if sweep.fixed else grid.base
         for _, values in sweep.index_values():
             scene = fixed.replace(**values)
             recordings = reference_key(scene, RECORDINGS)
-            if recordings not in facts:
-                facts[recordings] = DatasetFacts.describe(scene.dataset)
-            check_scene_fits(scene, facts[recordings])
+            if recordings not in limits:
+                limits[recordings] = DatasetLimits.describe(scene.dataset)
+            check_scene_fits(scene, limits[recordings])
             unique.setdefault(reference_key(scene, RESULTS), scene)
     return unique
 
@@ -131,7 +133,7 @@ def shared_parts_plan(grid: Grid) -> dict[str, Scene]:
     """The same from a fresh copy of ``grid`` (nothing cached): check, then distinct points."""
     fresh = dataclasses.replace(grid)
     check_grid(fresh)
-    return fresh.unique_points()
+    return unique_points(fresh)
 
 
 def timed(function: Callable[[], object]) -> float:
@@ -148,7 +150,7 @@ def phases(grid_path: str, root: str) -> dict[str, float]:
     seconds["load_grid"] = time.perf_counter() - start
     seconds["points()"] = timed(grid.points)
     seconds["check_grid"] = timed(lambda: check_grid(grid))
-    seconds["unique_points()"] = timed(grid.unique_points)
+    seconds["unique_points()"] = timed(lambda: unique_points(grid))
     store = open_root(grid, root)
     seconds["plan_sweep"] = timed(lambda: plan_sweep(grid, store.root))
     return seconds

@@ -22,6 +22,7 @@ from pipeline.chain.training import CrossValidation, cross_validate
 from pipeline.design.grid import load_grid
 from pipeline.design.scene import Model, Scene
 from pipeline.run.decoding import rate_frames
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.simulate import encode, prepare
 
 WORKER_MEMORY_BYTES = 1.5 * 2**30
@@ -43,7 +44,7 @@ def largest_point(grid: str = "paper") -> Scene:
         n_windows = scene.coding.n_windows
         return scene.array.rows * scene.array.cols * (40 if n_windows == "auto" else n_windows)
 
-    return max(load_grid(grid).unique_points().values(), key=cells)
+    return max(unique_points(load_grid(grid)).values(), key=cells)
 
 
 def _accuracy(cv: CrossValidation) -> str:

@@ -5,6 +5,7 @@
   give what ``eskin run --json`` and ``eskin run`` print.
 - Sweep a grid: :func:`run_sweep` on a ``distributed.Client`` you give (or a local cluster it
   starts), without Prefect; the Prefect flow ``flows.sweep.sweep`` does the same with a UI.
+  :func:`unique_points` gives a grid's distinct points (scenes by result cache key).
 - Search a design space: :func:`run_optimize` (a space file or a
   :class:`pipeline.design.space.Space`, a budget in trials or stage seconds), without Prefect;
   the Prefect flow ``flows.optimize.optimize`` does the same with a UI.
@@ -31,6 +32,7 @@ from pipeline.design.scene import Scene
 from pipeline.design.space import Space, load_space
 from pipeline.errors import EskinError
 from pipeline.report.evidence import compare_points as compare
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.simulate import SceneResult, run_scene
 from storage import open_results, open_tree
 
@@ -55,5 +57,6 @@ __all__ = [
     "run_optimize",
     "run_scene",
     "run_sweep",
+    "unique_points",
     "write_run_report",
 ]

@@ -2,7 +2,7 @@
 
 :func:`dry_run` counts a grid's cached and missing points in a root (which need not exist) and
 estimates the missing points' cost from the measured seconds of cached points of the same kind
-(:func:`pipeline.design.grid.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
+(:func:`pipeline.design.grid_cost.cost_kind`); :func:`format_dry_run` is the table ``eskin sweep
 --dry-run`` prints.
 """
 
@@ -13,7 +13,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.design.grid import Grid, cost_kind
+from pipeline.design.grid import Grid
+from pipeline.design.grid_cost import cost_kind
+from pipeline.run.grid_keys import distinct_scenes, keyed_points, keys_by_sweep
 from pipeline.run.stages import RESULTS
 from storage import SweepStore
 
@@ -92,10 +94,10 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     cached and is not created; partial entries are left alone, and a corrupt result is counted
     as missing (the sweep would recompute it) but not removed.
 
-    The estimate: points of the same *kind* (:func:`pipeline.design.grid.cost_kind`) cost about the
-    same. A missing point is estimated at the median, over the cached points of this grid of its
-    kind, of the total of their measured stage seconds
-    (:attr:`pipeline.run.entries.ResultEntry.seconds`); a missing point whose kind has no cached
+    The estimate: points of the same *kind* (:func:`pipeline.design.grid_cost.cost_kind`) cost
+    about the same. A missing point is estimated at the median, over the cached points of this
+    grid of its kind, of the total of their measured stage seconds
+    (:attr:`pipeline.run.records.ResultEntry.seconds`); a missing point whose kind has no cached
     point is counted in ``unknown`` and left out. Stage seconds are as measured when each stage ran,
     so a spike train or a dataset that several points share counts in each of them: the estimate
     leans high for points that will share work with cached ones. The wall estimate,
@@ -119,7 +121,8 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     store = SweepStore.open_readonly(root)
-    scenes = grid.unique_points()
+    points = keyed_points(grid)  # each key computed once
+    scenes = distinct_scenes(points)
     totals: dict[str, float] = {}
     if store is not None:
         for key, entry in store.peek_many(RESULTS.record, scenes).items():
@@ -139,11 +142,8 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
             unknown += 1
         else:
             estimated += median
-    sweep_keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
-    for point in grid.points():
-        sweep_keys[point.sweep][point.key] = None
     counts = []
-    for name, keys in sweep_keys.items():
+    for name, keys in keys_by_sweep(points, grid.sweeps).items():
         n_cached = sum(key in totals for key in keys)
         counts.append(SweepCounts(name, len(keys), n_cached, len(keys) - n_cached))
     return DryRun(

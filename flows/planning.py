@@ -29,10 +29,13 @@ from typing import Any
 import pipeline
 import storage
 from flows.environment import machine_memory_bytes
-from pipeline.design.grid import DatasetFacts, Grid, check_fits, load_grid, plannable_points
+from pipeline.design.grid import Grid, load_grid
+from pipeline.design.grid_cost import plannable_points
 from pipeline.design.scene import DatasetSpec, Scene
 from pipeline.recordings.sources import resolve_dataset_argument
 from pipeline.run.entries import ResultEntry
+from pipeline.run.fit import DatasetLimits, check_fits
+from pipeline.run.grid_keys import distinct_scenes, keyed_points, keys_by_sweep
 from pipeline.run.stages import RECORDINGS, RESULTS
 from storage import SweepStore
 
@@ -76,10 +79,7 @@ class SweepPlan:
 
 def sweep_keys(grid: Grid) -> dict[str, tuple[str, ...]]:
     """The distinct result keys of each named sweep of ``grid``, in the order of its points."""
-    keys: dict[str, dict[str, None]] = {s.name: {} for s in grid.sweeps}
-    for point in grid.points():
-        keys[point.sweep][point.key] = None
-    return {name: tuple(found) for name, found in keys.items()}
+    return keys_by_sweep(keyed_points(grid), grid.sweeps)
 
 
 def default_root(grid: Grid, dataset: str | None = None) -> Path:
@@ -111,7 +111,7 @@ def load_sweep_grid(grid_ref: str | Path, dataset: str | Path | None = None) -> 
     ------
     SceneError
         The grid is invalid, larger than this machine can plan
-        (:func:`pipeline.design.grid.plannable_points`), or a sweep sets a ``dataset.*`` field
+        (:func:`pipeline.design.grid_cost.plannable_points`), or a sweep sets a ``dataset.*`` field
         while ``dataset`` is given.
     DatasetError
         ``dataset`` names no dataset.
@@ -123,12 +123,12 @@ def load_sweep_grid(grid_ref: str | Path, dataset: str | Path | None = None) -> 
     return grid
 
 
-def check_grid(grid: Grid) -> dict[str, DatasetFacts]:
+def check_grid(grid: Grid) -> dict[str, DatasetLimits]:
     """Check every point against its recordings (each dataset described once); raise on misfits.
 
-    Returns the facts of each dataset, by recordings cache key.
+    Returns the limits of each dataset, by recordings cache key.
     """
-    facts: dict[str, DatasetFacts] = {}
+    limits: dict[str, DatasetLimits] = {}
     seen: set[DatasetSpec] = set()
     for point in grid.points():
         # The recordings key is a function of the dataset alone: one key per distinct dataset.
@@ -136,10 +136,10 @@ def check_grid(grid: Grid) -> dict[str, DatasetFacts]:
             continue
         seen.add(point.scene.dataset)
         key = RECORDINGS.key(point.scene)
-        if key not in facts:
-            facts[key] = DatasetFacts.describe(point.scene.dataset)
-    check_fits(grid, facts)
-    return facts
+        if key not in limits:
+            limits[key] = DatasetLimits.describe(point.scene.dataset)
+    check_fits(grid, limits)
+    return limits
 
 
 def checked_grid(grid: str | Path | Grid, dataset: str | Path | None = None) -> Grid:
@@ -183,8 +183,10 @@ def plan_sweep(grid: Grid, root: str | Path, tidy: bool = True) -> SweepPlan:
     store = SweepStore.open(root)
     if tidy:
         store.clean_partials()
-    scenes = grid.unique_points()
-    keys = sweep_keys(grid)
+    points = keyed_points(grid)  # each key computed once
+    scenes = distinct_scenes(points)
+    keys = keys_by_sweep(points, grid.sweeps)
+    del points  # not kept while the store is read: a point each, as many as the grid has
     records: dict[str, ResultEntry] = {}
     while True:
         batches = store.entry_batches(RESULTS.record)

@@ -1,7 +1,7 @@
 """Scheduling a plan's missing points on Dask: the cost model, batches of points, their tasks.
 
-Points are ordered by their estimated cost (:func:`pipeline.design.grid.training_cost`), largest
-first, batched into tasks of :func:`flows.work.ensure_entries` (:func:`submit_missing`), and
+Points are ordered by their estimated cost (:func:`pipeline.design.grid_cost.training_cost`),
+largest first, batched into tasks of :func:`flows.work.ensure_entries` (:func:`submit_missing`), and
 each point goes with its cache keys, computed here once, so that workers never hash a scene.
 No cluster starts for a plan with nothing missing (:func:`sweep_client`).
 """
@@ -18,7 +18,7 @@ from typing import Any
 from flows.cluster import dask_client
 from flows.environment import hermetic_environment
 from flows.planning import SweepPlan
-from pipeline.design.grid import training_cost
+from pipeline.design.grid_cost import training_cost
 from pipeline.design.scene import CanonicalMemo, Scene
 from pipeline.run import stages
 from pipeline.run.stages import RESULTS, SPIKES, Level

@@ -63,9 +63,11 @@ from flows.progress import SweepFailed, completed_points, failure_message
 from flows.refill import refill
 from flows.samplers import Proposer, seed_for
 from flows.scheduling import submit_missing
-from pipeline.design.space import TRIALS, Sampler, Space, load_space, objective_values
+from pipeline.design.space import TRIALS, Sampler, Space, load_space
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
+from pipeline.results.objectives import objective_values
+from pipeline.run.grid_keys import keyed_points, unique_points
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
 from storage.objects import is_object_url, run_root
@@ -193,7 +195,7 @@ class Search:
         in ``failed_keys`` failed), from the cube of every trial so far."""
         outcome = TrialsOutcome(numbers)
         outcome.cache_hits, outcome.computed = len(plan.cached), len(plan.missing)
-        keys = [point.key for point in plan.grid.points()]
+        keys = [point.key for point in keyed_points(plan.grid)]
         for number, key in zip(numbers, keys, strict=True):
             if key in failed_keys:
                 outcome.failed[number] = failed_keys[key]
@@ -293,7 +295,7 @@ def trials_cube(
 
     grid = space.trial_grid(params)
     records = {} if records is None else records
-    wanted = [key for key in grid.unique_points() if key not in records]
+    wanted = [key for key in unique_points(grid) if key not in records]
     if wanted:
         records |= SweepStore.open(root).read_many(RESULTS.record, wanted, discard_corrupt=False)
     missing = [key for key in wanted if key not in records]
@@ -597,7 +599,7 @@ def _run_trials(
     def finish(number: int, future: concurrent.futures.Future) -> None:
         nonlocal cache_hits, computed
         plan, failed_keys = future.result()
-        keys = {point.key for point in plan.grid.points()}
+        keys = {point.key for point in keyed_points(plan.grid)}
         repeat = keys <= told
         told.update(keys)
         outcome = search.tell([number], plan, failed_keys)

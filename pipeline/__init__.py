@@ -17,6 +17,8 @@ recordings, no Prefect, no Dask and no global state (:mod:`storage` keeps the re
 - :mod:`pipeline.report`: the report on the cubes, which design to build, the paper's claims
   judged by tests and what accuracy costs.
 
-Beside them: :mod:`pipeline.errors` (bad user input), :mod:`pipeline.numbers` (checks of the
-numbers a user gives) and the contract names :mod:`pipeline.readout` and :mod:`pipeline.coding`.
+Beside them, foundations every sub-package may import: :mod:`pipeline.errors` (bad user input),
+:mod:`pipeline.numbers` (checks of the numbers a user gives) and :mod:`pipeline.jit` (numba
+kernels compiled on first use, for the generated recordings and the chain alike); and the contract
+names :mod:`pipeline.readout` and :mod:`pipeline.coding`.
 """

@@ -29,6 +29,7 @@ from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import CHARGE_DIM, CUBE_VARIABLES
 from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.stages import SETUP_STEP
 
 DATA = Path(__file__).parent / "data"
@@ -212,7 +213,7 @@ def entry(scene: Scene) -> ResultEntry:
 
 
 def entries(g: Grid) -> dict[str, ResultEntry]:
-    return {key: entry(scene) for key, scene in g.unique_points().items()}
+    return {key: entry(scene) for key, scene in unique_points(g).items()}
 
 
 def rich_entry(scene: Scene) -> ResultEntry:
@@ -234,7 +235,7 @@ def rich_entry(scene: Scene) -> ResultEntry:
 
 
 def rich_entries(g: Grid) -> dict[str, ResultEntry]:
-    return {key: rich_entry(scene) for key, scene in g.unique_points().items()}
+    return {key: rich_entry(scene) for key, scene in unique_points(g).items()}
 
 
 def grids() -> dict[str, Grid]:

@@ -19,6 +19,7 @@ from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import build_cube
 from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.records import Charge
 
 N_RECORDINGS = 120
@@ -119,7 +120,7 @@ def make_cubes(
     grid = Grid.from_dict({"name": "t", "base": base, "sweeps": sweeps or PAPER_LIKE_SWEEPS})
     n_classes = len(recordings.class_names) if recordings and recordings.class_names else 12
     records = {}
-    for key, scene in grid.unique_points().items():
+    for key, scene in unique_points(grid).items():
         noise = sum(getattr(p, "sigma_v", 0.0) for p in scene.readout.effects.values())
         a = accuracy(scene)
         event_rate, data_rate = (

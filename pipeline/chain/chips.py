@@ -1,9 +1,9 @@
 r"""Chips as a population: the REAL trains of ``chips.count`` chips built from one design.
 
 A design is built into many chips. Each chip ``k = 0 .. N-1`` draws every *fixed* random effect
-of the readout (:data:`pipeline.design.scene.FIXED_EFFECTS`: amplifier and comparator offsets,
+of the readout (:data:`pipeline.design.effects.FIXED_EFFECTS`: amplifier and comparator offsets,
 threshold mismatch) once, from the scene seed and ``k``
-(:func:`pipeline.chain.readout.effect_rng` with ``chip=k``); per-sample noise belongs to the
+(:func:`pipeline.chain.readout_effects.effect_rng` with ``chip=k``); per-sample noise belongs to the
 recording and is the same on every chip. Chip 0 is the chip a scene of one chip simulates, draw
 for draw.
 
@@ -44,7 +44,7 @@ import numpy as np
 
 from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.chain.readout import real_train
+from pipeline.chain.readout_effects import real_train
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.chain.taxels import recording_taxels
 from pipeline.design.scene import ArraySpec, Deployment, ReadoutSpec

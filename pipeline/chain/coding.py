@@ -11,7 +11,7 @@ neighbours stay neighbours, one channel with both polarities merged (the paper) 
 (+1 spikes, then -1 spikes).
 
 ``n_windows = "auto"`` takes as many whole windows as every recording's taxel signal holds, at
-most :data:`MAX_AUTO_WINDOWS` (the paper's 40 x 0.1 s = 4 s).
+most :data:`~pipeline.design.windows.MAX_AUTO_WINDOWS` (the paper's 40 x 0.1 s = 4 s).
 """
 
 from __future__ import annotations
@@ -20,26 +20,16 @@ import math
 
 import numpy as np
 
-from pipeline.chain.jit import kernel
 from pipeline.chain.spikes import SpikeTrains
 from pipeline.design.scene import CodingSpec, Polarity
+from pipeline.design.windows import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.errors import SimulationError
-
-#: Most windows ``n_windows = "auto"`` takes (the paper's 40 x 0.1 s = 4 s).
-MAX_AUTO_WINDOWS = 40
+from pipeline.jit import kernel
 
 
 def window_edges_s(window_s: float, n_windows: int) -> np.ndarray:
     """float64 (n_windows + 1,): the explicit edges ``k * window_s``."""
     return np.arange(n_windows + 1, dtype=np.float64) * window_s
-
-
-def whole_windows(duration_s: float, window_s: float) -> int:
-    """How many whole windows fit in ``duration_s`` (edges as in :func:`window_edges_s`)."""
-    k = math.floor(duration_s / window_s) + 1
-    while k > 0 and k * window_s > duration_s:  # floor division can round up across an edge
-        k -= 1
-    return k
 
 
 def resolve_n_windows(coding: CodingSpec, durations_s: np.ndarray) -> int:

@@ -47,8 +47,8 @@ from typing import Literal
 
 import numpy as np
 
-from pipeline.chain.jit import kernel
 from pipeline.chain.spikes import SpikeTrains
+from pipeline.jit import kernel
 
 
 def _about(units: str, long_name: str) -> dict[str, str]:

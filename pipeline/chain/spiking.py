@@ -59,7 +59,7 @@ import numpy as np
 import torch
 
 from pipeline.chain.folded import FoldModel, two_layers
-from pipeline.chain.jit import kernel
+from pipeline.jit import kernel
 
 
 @kernel()

@@ -85,6 +85,12 @@ class Range:
         return " or ".join([*(repr(v) for v in self.also), words])
 
 
+#: The range of numbers above 0.
+POSITIVE = Range(0, low_open=True)
+#: The range of numbers from 0 up.
+NONNEGATIVE = Range(0)
+
+
 @dataclass(frozen=True)
 class NonEmpty:
     """Accepted values of a list: any but the empty one."""

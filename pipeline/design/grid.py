@@ -36,16 +36,16 @@ sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).
 
 Everything that can be checked without the recordings is checked when the grid loads, and every
 problem is reported at once: unknown fields, empty axes, duplicate values, zipped axes of unequal
-length, and values a scene refuses. :func:`check_fits` then checks the points against the
-recordings (windows longer than a recording, arrays whose delays eat it, classes smaller than
-the folds) before any work starts, naming the shortest recording; :func:`check_scene_fits` is
-the same check for one scene (``eskin run``).
+length, and values a scene refuses. :func:`pipeline.run.fit.check_fits` then checks the points
+against the recordings (windows longer than a recording, arrays whose delays eat it, classes
+smaller than the folds) before any work starts, naming the shortest recording. A point's result
+cache key, which tells which points are the same scene, is the run layer's
+(:mod:`pipeline.run.grid_keys`); what a point and a plan cost is :mod:`pipeline.design.grid_cost`.
 
 Expanding and checking a grid costs a few tens of microseconds per point, linear in the points:
-a sweep's scenes are built by :class:`pipeline.design.scene.SceneVariants` (each scene part
+a sweep's scenes are built by :class:`pipeline.design.variants.SceneVariants` (each scene part
 validated once per distinct combination of the swept values in it, and shared by the points that
-have it), a grid builds its points and their result keys once, and :func:`check_fits` checks each
-distinct combination of recordings, array, coding and folds once.
+have it), and a grid builds its points once.
 """
 
 from __future__ import annotations
@@ -62,28 +62,13 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-import numpy as np
-
-from pipeline.chain.coding import MAX_AUTO_WINDOWS, whole_windows
-from pipeline.chain.taxels import cut_samples, taxel_delays_s
 from pipeline.design import fields
-from pipeline.design.scene import (
-    ArraySpec,
-    CanonicalMemo,
-    CodingSpec,
-    DatasetKind,
-    DatasetSpec,
-    Scene,
-    SceneVariants,
-    with_dataset_path_from,
-)
+from pipeline.design.grid_cost import PLAN_BYTES_PER_POINT, PLAN_SECONDS_PER_POINT, TYPICAL_POINT_S
+from pipeline.design.scene import Scene, with_dataset_path_from
+from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
-from pipeline.run.stages import cache_key
-
-if TYPE_CHECKING:
-    from pipeline.recordings.sources import Recordings
 
 NAME_PATTERN = "letters, digits, '_' or '-', at most 64 characters"
 
@@ -146,22 +131,12 @@ class Sweep:
 
 @dataclass(frozen=True)
 class GridPoint:
-    """One point of a sweep: where it sits in the cube and the scene it simulates.
-
-    ``key`` is the scene's result cache key (``cache_key(scene, "results")``), computed once
-    when the point is made; ``memo`` (not kept) is as for
-    :meth:`~pipeline.design.scene.Scene.canonical`, for points made by the many that share scene
-    parts.
-    """
+    """One point of a sweep: where it sits in the cube and the scene it simulates (with its
+    result cache key: :class:`pipeline.run.grid_keys.KeyedPoint`)."""
 
     sweep: str
     index: tuple[int, ...]
     scene: Scene
-    memo: dataclasses.InitVar[CanonicalMemo | None] = None
-    key: str = dataclasses.field(init=False, compare=False, repr=False)
-
-    def __post_init__(self, memo: CanonicalMemo | None) -> None:
-        object.__setattr__(self, "key", cache_key(self.scene, "results", memo))
 
 
 @dataclass(frozen=True)
@@ -214,13 +189,6 @@ class Grid:
     def _points(self) -> tuple[GridPoint, ...]:
         # Built once per grid: checking, planning and counting a sweep all walk its points.
         return tuple(point for sweep in self.sweeps for point in sweep_points(self.base, sweep))
-
-    def unique_points(self) -> dict[str, Scene]:
-        """Distinct scenes by result key, in first-seen order."""
-        unique: dict[str, Scene] = {}
-        for point in self._points:
-            unique.setdefault(point.key, point.scene)
-        return unique
 
     def with_dataset(self, fields: Mapping[str, Any]) -> Grid:
         """This grid with the base scene's ``dataset`` table replaced, so every point uses it.
@@ -293,18 +261,16 @@ def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
     """The scenes of one sweep (already validated when the grid loaded).
 
     Each point's scene is ``base.replace(**sweep.fixed).replace(**values)`` with the point's
-    ``values``, built as :class:`pipeline.design.scene.SceneVariants` builds it: each scene part is
-    validated once per distinct combination of the swept values in it, and the points share
-    equal parts, whose canonical forms their keys write once.
+    ``values``, built as :class:`pipeline.design.variants.SceneVariants` builds it: each scene
+    part is validated once per distinct combination of the swept values in it, and the points
+    share equal parts (so that their keys write each part's canonical form once).
     """
     fixed = base.replace(**sweep.fixed) if sweep.fixed else base
     variants = _variants(fixed, sweep)
-    memo: CanonicalMemo = {}
-    points = []
-    for index, indices in _positions(sweep):
-        scene = variants.scene(indices)
-        points.append(GridPoint(sweep.name, index, scene, memo))
-    return points
+    return [
+        GridPoint(sweep.name, index, variants.scene(indices))
+        for index, indices in _positions(sweep)
+    ]
 
 
 def _variants(fixed: Scene, sweep: Sweep) -> SceneVariants:
@@ -321,57 +287,6 @@ def _positions(sweep: Sweep) -> Iterator[tuple[tuple[int, ...], tuple[int, ...]]
         return
     for index in itertools.product(*(range(len(axis.values)) for axis in sweep.axes)):
         yield index, index
-
-
-def training_cost(scene: Scene) -> int:
-    """A point's relative cost: the product of the fields declared to scale it
-    (:attr:`pipeline.design.fields.Cost.SIZE`: taxel rows and columns, windows, models trained).
-
-    Training dominates a point, and its cost grows with the frame size (taxels x windows) per
-    model; ``auto`` windows count as the most they can be, a list as its length. Only the order
-    in which points run depends on it, never a result.
-    """
-    _, sizes = fields.cost_parts(scene)
-    return math.prod(_size(value) for value in sizes)
-
-
-def _size(value: Any) -> int:
-    if value == "auto":
-        return MAX_AUTO_WINDOWS
-    return len(value) if isinstance(value, tuple | list) else int(value)
-
-
-def cost_kind(scene: Scene) -> str:
-    """What a point's cost depends on: its plain form without the fields declared free of cost
-    (:attr:`pipeline.design.fields.Cost.FREE`: the threshold, the effects' parameter values, every
-    seed) and without its name, as canonical JSON. The names of the effects that run stay; what
-    is left (dataset, taxels, windows, models, epochs, folds, ...) decides how long encoding and
-    training take, so points of one kind cost about the same."""
-    form, _ = fields.cost_parts(scene)
-    return json.dumps(form, sort_keys=True, separators=(",", ":"))
-
-
-#: Memory planning takes per point (load, check, distinct points, cache keys, cached entries),
-#: in bytes, measured at 1,000,000 points by ``benchmarks/planning.py`` (peak resident memory
-#: above the interpreter's), rounded up.
-PLAN_BYTES_PER_POINT = 1_000
-#: Time planning takes per point, in CPU seconds, measured and rounded up likewise.
-PLAN_SECONDS_PER_POINT = 20e-6
-#: The share of the machine's memory a plan may take (the sweep needs the rest).
-PLAN_MEMORY_SHARE = 0.5
-#: The longest a command may plan before it says anything (s).
-PLAN_MAX_S = 120.0
-#: Stage seconds of a typical point, for the cost of a grid too large to plan. The ``paper``
-#: grid's mean (483 stage seconds over 48 points, 2 cores).
-TYPICAL_POINT_S = 10.0
-
-
-def plannable_points(memory_bytes: int) -> int:
-    """The most points a machine of ``memory_bytes`` plans: in :data:`PLAN_MEMORY_SHARE` of its
-    memory at :data:`PLAN_BYTES_PER_POINT`, and in :data:`PLAN_MAX_S` at
-    :data:`PLAN_SECONDS_PER_POINT` (6,000,000 points on a machine of 12 GB or more)."""
-    by_memory = memory_bytes * PLAN_MEMORY_SHARE / PLAN_BYTES_PER_POINT
-    return int(min(by_memory, round(PLAN_MAX_S / PLAN_SECONDS_PER_POINT)))
 
 
 def sweep_sizes(sweeps: Any) -> dict[str, int]:
@@ -449,187 +364,6 @@ def load_grid(name_or_path: str | Path, max_points: int | None = None) -> Grid:
         raise SceneError([f"not valid TOML: {exc}"], str(path), "grid") from None
     data.setdefault("name", path.stem)
     return Grid.from_dict(data, source=str(path), base_dir=path.parent, max_points=max_points)
-
-
-@dataclass(frozen=True)
-class DatasetFacts:
-    """What :func:`check_scene_fits` needs to know of a dataset; build it with :meth:`of`.
-
-    Attributes
-    ----------
-    fs_hz : float
-        Sampling rate (Hz).
-    min_samples : int
-        Samples of the shortest recording.
-    min_class_size : int
-        Recordings of the smallest class.
-    shortest : str
-        Name of the shortest recording (the first of equally short ones) as
-        :attr:`pipeline.recordings.recording_set.Recordings.names` gives it:
-        ``"<class>/<file name>"`` for a folder dataset (its path relative to the dataset folder),
-        ``"Texture3/segment07"``, ``"<class>/rec03"``; empty if unknown.
-    dataset : str
-        Name of the dataset (:attr:`pipeline.recordings.recording_set.Recordings.name`); empty if
-        unknown.
-    smallest_class : str
-        Name of the smallest class (the first of equally small ones); empty if unknown.
-    """
-
-    fs_hz: float
-    min_samples: int
-    min_class_size: int
-    shortest: str = ""
-    dataset: str = ""
-    smallest_class: str = ""
-
-    @classmethod
-    def of(cls, recordings: Recordings) -> DatasetFacts:
-        """The facts of loaded recordings."""
-        lengths = recordings.lengths
-        shortest = int(np.argmin(lengths))
-        sizes = np.bincount(recordings.labels, minlength=len(recordings.class_names))
-        smallest = int(np.argmin(sizes))
-        return cls(
-            fs_hz=recordings.fs_hz,
-            min_samples=int(lengths[shortest]),
-            min_class_size=int(sizes[smallest]),
-            shortest=recordings.names[shortest],
-            dataset=recordings.name,
-            smallest_class=recordings.class_names[smallest],
-        )
-
-    @classmethod
-    def describe(cls, spec: DatasetSpec) -> DatasetFacts:
-        """The facts of the recordings ``spec`` names; the built-in ones are not generated.
-
-        Raises
-        ------
-        DatasetError
-            As :func:`pipeline.recordings.sources.load_recordings`.
-        """
-        from pipeline.recordings.sources import load_recordings, synthetic_arguments
-        from pipeline.recordings.synthetic import synthetic_layout
-
-        if DatasetKind(spec.kind) is not DatasetKind.SYNTHETIC:
-            return cls.of(load_recordings(spec))
-
-        layout = synthetic_layout(**synthetic_arguments(spec))
-        return cls(
-            fs_hz=layout.fs_hz,
-            min_samples=layout.n_samples,
-            min_class_size=spec.recordings_per_class,
-            shortest=layout.names[0],
-            dataset="synthetic",
-            smallest_class=layout.class_names[0],
-        )
-
-    def shortest_recording(self) -> str:
-        """``"the shortest recording, <name> of dataset '<dataset>' (<n> samples)"``."""
-        named = f", {self.shortest}" if self.shortest else ""
-        of = f" of dataset {self.dataset!r}" if self.dataset else ""
-        return f"the shortest recording{named}{of} ({self.min_samples} samples)"
-
-
-def scene_misfits(scene: Scene, facts: DatasetFacts) -> list[tuple[str, str]]:
-    """Every way ``scene`` does not fit its recordings, as ``(scene field, problem)`` pairs.
-
-    A scene fits when its taxel delays leave at least 2 samples of the shortest recording, the
-    remaining duration holds at least one window (and a fixed ``coding.n_windows``), and every
-    class has at least ``training.folds`` recordings: the same conditions the simulation needs.
-    Each problem names the shortest recording where it is the culprit. Empty if the scene fits.
-    """
-    return _misfits(scene.array, scene.coding, scene.training.folds, facts)
-
-
-def _misfits(
-    array: ArraySpec, coding: CodingSpec, folds: int, facts: DatasetFacts
-) -> list[tuple[str, str]]:
-    """:func:`scene_misfits` of a scene with this ``array``, ``coding`` and ``training.folds``:
-    all it depends on, so that a grid checks each distinct combination once."""
-    problems: list[tuple[str, str]] = []
-    cut = cut_samples(taxel_delays_s(array), facts.fs_hz)
-    remaining = facts.min_samples - cut
-    if remaining < 2:
-        problems.append(
-            (
-                "array",
-                f"the delays of a {array.rows}x{array.cols} array (pitch {array.pitch_mm:g} mm "
-                f"at {array.speed_mm_s:g} mm/s: {cut / facts.fs_hz:.3g} s, {cut} samples at "
-                f"{facts.fs_hz:g} Hz) use up {facts.shortest_recording()}; at least "
-                f"{cut + 2} samples are needed",
-            )
-        )
-    else:
-        usable_s = (remaining - 1) / facts.fs_hz  # as SpikeTrains.duration_s
-        fit = whole_windows(usable_s, coding.window_s)
-        wanted = coding.n_windows
-        if fit < 1 or (wanted != "auto" and wanted > fit):
-            n = 1 if wanted == "auto" else wanted
-            field = "coding.window_s" if fit < 1 else "coding.n_windows"
-            problems.append(
-                (
-                    field,
-                    f"{n} window(s) of {coding.window_s} s do not fit "
-                    f"{facts.shortest_recording()}: {usable_s:.3g} s after taxel delays "
-                    f"hold {fit}",
-                )
-            )
-    if facts.min_class_size < folds:
-        problems.append(
-            (
-                "training.folds",
-                f"{folds} folds need at least that many recordings per class; "
-                + (f"class {facts.smallest_class!r}" if facts.smallest_class else "a class")
-                + f" has fewer ({facts.min_class_size})",
-            )
-        )
-    return problems
-
-
-def check_scene_fits(scene: Scene, facts: DatasetFacts) -> None:
-    """Raise :class:`~pipeline.errors.SceneError` listing every misfit of ``scene``
-    (:func:`scene_misfits`)."""
-    problems = scene_misfits(scene, facts)
-    if problems:
-        raise SceneError([f"{field}: {text}" for field, text in problems], repr(scene.name))
-
-
-def check_fits(grid: Grid, facts: Mapping[str, DatasetFacts]) -> None:
-    """Check every point against its recordings; raise :class:`~pipeline.errors.SceneError`
-    listing all misfits.
-
-    Parameters
-    ----------
-    facts
-        For each dataset of the grid, keyed by ``cache_key(scene, "recordings")``.
-    """
-    # Points sharing a problem (every threshold of a too-short dataset, say) are listed once.
-    places: dict[str, list[str]] = {}
-    recordings: dict[DatasetSpec, str] = {}
-    misfits: dict[tuple[str, ArraySpec, CodingSpec, int], list[str]] = {}
-    for point in grid.points():
-        scene = point.scene
-        key = recordings.get(scene.dataset)
-        if key is None:  # the recordings key is a function of the dataset alone
-            key = recordings[scene.dataset] = cache_key(scene, "recordings")
-        combination = (key, scene.array, scene.coding, scene.training.folds)
-        texts = misfits.get(combination)
-        if texts is None:
-            texts = misfits[combination] = [
-                text for _, text in _misfits(*combination[1:], facts[key])
-            ]
-        if texts:
-            where = f"sweeps.{point.sweep}[{', '.join(map(str, point.index))}]"
-            for text in texts:
-                places.setdefault(text, []).append(where)
-    problems = [
-        ", ".join(wheres[:3])
-        + (f" and {len(wheres) - 3} more" if len(wheres) > 3 else "")
-        + f": {text}"
-        for text, wheres in places.items()
-    ]
-    if problems:
-        raise SceneError(problems, repr(grid.name), "grid")
 
 
 # ---------------------------------------------------------------------------------------------

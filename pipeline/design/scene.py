@@ -9,12 +9,12 @@ Every field is declared once, on its dataclass (:func:`pipeline.design.fields.pa
 default, units, accepted range, description, whether its default is neutral and what it does to a
 point's cost. Reading and validation, the canonical form, dotted paths, result cubes' coordinate
 labels and the listing of fields (:func:`scene_fields`) follow from those declarations. The
-canonical form leaves out a field at a neutral default, so a field added with a neutral default that
-reproduces what was simulated before it existed changes no existing cache key.
+canonical form leaves out a field at a neutral default, so a field added with a neutral default
+that reproduces what was simulated before it existed changes no existing cache key.
 
-Readout *effects* are a mapping from effect name to parameters. An effect that is not named is not
-simulated and is not part of any cache key; an ideal scene names none. The scene seed enters the
-spike-train key only when a named effect draws random numbers.
+Readout *effects* are a mapping from effect name to parameters (:mod:`pipeline.design.effects`). An
+effect that is not named is not simulated and is not part of any cache key; an ideal scene names
+none. The scene seed enters the spike-train key only when a named effect draws random numbers.
 
 Cache keys (:func:`pipeline.run.stages.cache_key`) hash exactly the fields a stage depends on; which
 fields those are is declared with the stages themselves, in :mod:`pipeline.run.stages`::
@@ -25,10 +25,11 @@ fields those are is declared with the stages themselves, in :mod:`pipeline.run.s
     rates      : spikes fields + coding
     results    : rates fields + training
 
-Many scenes that differ in a few fields (a grid's points) are built by :class:`SceneVariants`,
-which reads each part once per distinct combination of the values in it and shares the part
-between the scenes. The canonical form is written part by part (the JSON of a dict with sorted
-keys is its items' JSON in key order), so a memo writes a shared part once for all its scenes.
+Many scenes that differ in a few fields (a grid's points) are built by
+:class:`pipeline.design.variants.SceneVariants`, which reads each part once per distinct
+combination of the values in it and shares the part between the scenes. The canonical form is
+written part by part (the JSON of a dict with sorted keys is its items' JSON in key order), so a
+memo writes a shared part once for all its scenes.
 """
 
 from __future__ import annotations
@@ -37,22 +38,25 @@ import enum
 import functools
 import json
 import math
-import operator
 import tomllib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
 from pipeline.design import fields
-from pipeline.design.fields import Cost, NonEmpty, Range, Seed, param, part
+from pipeline.design.effects import (
+    EFFECT_TYPES,
+    FIXED_EFFECTS,
+    RANDOM_EFFECTS,
+    Effect,
+)
+from pipeline.design.fields import POSITIVE, Cost, NonEmpty, Range, Seed, param, part
 from pipeline.errors import SceneError
 
 MAX_TAXELS_PER_SIDE = 256
 
-_POSITIVE = Range(0, low_open=True)
-_NONNEGATIVE = Range(0)
 _TAU = Range(0, 3600, low_open=True)
 
 
@@ -117,117 +121,6 @@ class Deployment(enum.StrEnum):
     ROBUST = "robust"  # one classifier, trained on chips drawn apart from the tested ones
 
 
-class Effect(enum.StrEnum):
-    """Non-ideal readout effects, in the order they act on the signal."""
-
-    AMPLIFIER_OFFSET = "amplifier_offset"
-    AMPLIFIER_NOISE = "amplifier_noise"
-    SATURATION = "saturation"
-    COMPARATOR_OFFSET = "comparator_offset"
-    COMPARATOR_NOISE = "comparator_noise"
-    THRESHOLD_MISMATCH = "threshold_mismatch"
-
-
-# ---------------------------------------------------------------------------------------------
-# Effect parameters: their values do not change what a point costs, only which effects run.
-
-
-@dataclass(frozen=True)
-class AmplifierOffset:
-    """Static input offset per taxel, ``N(0, sigma_v)`` V; matters through saturation."""
-
-    sigma_v: float = param(
-        0.01,
-        "V",
-        "standard deviation of the amplifier offset per taxel",
-        within=_NONNEGATIVE,
-        cost=Cost.FREE,
-    )
-
-
-@dataclass(frozen=True)
-class AmplifierNoise:
-    """White Gaussian noise on every sample, ``sigma_v`` V rms."""
-
-    sigma_v: float = param(
-        0.005, "V", "rms amplifier noise per sample", within=_NONNEGATIVE, cost=Cost.FREE
-    )
-
-
-@dataclass(frozen=True)
-class Saturation:
-    """Clip the amplified signal at the rails ``+-rail_v``; ``None`` means half the full scale."""
-
-    rail_v: float | None = param(
-        None, "V", "saturation rail of the amplified signal", within=_POSITIVE, cost=Cost.FREE
-    )
-
-
-@dataclass(frozen=True)
-class ComparatorOffset:
-    """Static offsets of the UP and DOWN comparators per taxel, each ``N(0, sigma_v)`` V."""
-
-    sigma_v: float = param(
-        0.005,
-        "V",
-        "standard deviation of the comparator offsets per taxel",
-        within=_NONNEGATIVE,
-        cost=Cost.FREE,
-    )
-
-
-@dataclass(frozen=True)
-class ComparatorNoise:
-    """Gaussian noise on each comparator decision (per sample), ``sigma_v`` V rms."""
-
-    sigma_v: float = param(
-        0.005, "V", "rms comparator noise per decision", within=_NONNEGATIVE, cost=Cost.FREE
-    )
-
-
-@dataclass(frozen=True)
-class ThresholdMismatch:
-    """Fixed-pattern threshold per taxel, ``threshold_v * (1 + sigma_rel * z)``, ``z ~ N(0, 1)``.
-
-    A draw that would push a threshold below ``floor_rel * threshold_v`` (zero or negative
-    included) is clipped to that floor: a comparator cannot resolve a smaller step. For the
-    decaying encoder one draw scales its whole curve, ``threshold_v`` and ``decay.theta_min_v``
-    alike, and the floor is ``floor_rel * decay.theta_min_v``, so a taxel's first threshold is
-    never below its lowest (equal when ``threshold_v`` is ``decay.theta_min_v``).
-    """
-
-    sigma_rel: float = param(
-        0.05,
-        "1",
-        "relative standard deviation of the threshold per taxel",
-        within=_NONNEGATIVE,
-        cost=Cost.FREE,
-    )
-    floor_rel: float = param(
-        0.1,
-        "1",
-        "lowest threshold per taxel, relative to threshold_v",
-        within=Range(0, 1, low_open=True),
-        cost=Cost.FREE,
-    )
-
-
-EFFECT_TYPES: dict[Effect, type] = {
-    Effect.AMPLIFIER_OFFSET: AmplifierOffset,
-    Effect.AMPLIFIER_NOISE: AmplifierNoise,
-    Effect.SATURATION: Saturation,
-    Effect.COMPARATOR_OFFSET: ComparatorOffset,
-    Effect.COMPARATOR_NOISE: ComparatorNoise,
-    Effect.THRESHOLD_MISMATCH: ThresholdMismatch,
-}
-RANDOM_EFFECTS = frozenset(EFFECT_TYPES) - {Effect.SATURATION}
-#: Effects drawn once per chip (fixed-pattern, the same for every recording); the others are
-#: drawn per recording (noise) or draw nothing (saturation).
-FIXED_EFFECTS = frozenset(
-    {Effect.AMPLIFIER_OFFSET, Effect.COMPARATOR_OFFSET, Effect.THRESHOLD_MISMATCH}
-)
-
-
 # ---------------------------------------------------------------------------------------------
 # Scene parts
 
@@ -244,7 +137,7 @@ class DatasetSpec:
     kind: DatasetKind = param(DatasetKind.SYNTHETIC, "1", "source of the recordings")
     path: str | None = param(None, "1", "folder of the recordings")
     sampling_rate_hz: float | None = param(
-        None, "Hz", "sampling rate of the VibTac-12 recordings", within=_POSITIVE
+        None, "Hz", "sampling rate of the VibTac-12 recordings", within=POSITIVE
     )
     axis: Axis = param(Axis.Z, "1", "accelerometer axis of the VibTac-12 recordings")
     segments: int = param(
@@ -273,8 +166,8 @@ class ArraySpec:
 
     rows: int = param(3, "1", "taxel rows of the array", within=_SIDE, cost=Cost.SIZE)
     cols: int = param(3, "1", "taxel columns of the array", within=_SIDE, cost=Cost.SIZE)
-    pitch_mm: float = param(1.0, "mm", "distance between neighbouring taxels", within=_POSITIVE)
-    speed_mm_s: float = param(20.0, "mm/s", "scan speed across the array", within=_POSITIVE)
+    pitch_mm: float = param(1.0, "mm", "distance between neighbouring taxels", within=POSITIVE)
+    speed_mm_s: float = param(20.0, "mm/s", "scan speed across the array", within=POSITIVE)
     direction: ScanDirection = param(ScanDirection.Y, "1", "scan direction across the taxel grid")
 
     @property
@@ -289,7 +182,7 @@ class DecaySpec:
     decays toward ``theta_min_v`` with time constant ``tau_s``."""
 
     theta_min_v: float = param(
-        0.03, "V", "lowest threshold of the decaying encoder", within=_POSITIVE, cost=Cost.FREE
+        0.03, "V", "lowest threshold of the decaying encoder", within=POSITIVE, cost=Cost.FREE
     )
     tau_s: float = param(
         0.02, "s", "time constant of the decaying threshold", within=_TAU, cost=Cost.FREE
@@ -305,10 +198,10 @@ class ReadoutSpec:
         0.09,
         "V",
         "comparator threshold (level-crossing step)",
-        within=_POSITIVE,
+        within=POSITIVE,
         cost=Cost.FREE,
     )
-    full_scale_v: float = param(1.0, "V", "full-scale input range of the readout", within=_POSITIVE)
+    full_scale_v: float = param(1.0, "V", "full-scale input range of the readout", within=POSITIVE)
     encoder: Encoder = param(
         Encoder.LCS, "1", "encoder architecture (threshold_v is its first threshold)", neutral=True
     )
@@ -355,8 +248,8 @@ class ReadoutSpec:
 
     @property
     def draws_fixed_effects(self) -> bool:
-        """Whether a named effect is drawn once per chip (:data:`FIXED_EFFECTS`), so that
-        chips of the design differ."""
+        """Whether a named effect is drawn once per chip
+        (:data:`~pipeline.design.effects.FIXED_EFFECTS`), so that chips of the design differ."""
         return any(e in FIXED_EFFECTS for e in self.effects)
 
     @property
@@ -403,14 +296,14 @@ class SNNSpec:
         1.0,
         "1",
         "firing threshold of the spiking decoder's membrane (input current units)",
-        within=_POSITIVE,
+        within=POSITIVE,
         cost=Cost.FREE,
     )
     surrogate_slope: float = param(
         25.0,
         "1",
         "slope of the fast-sigmoid surrogate gradient of a spike (per unit of membrane)",
-        within=_POSITIVE,
+        within=POSITIVE,
         cost=Cost.FREE,
     )
     epochs: int = param(
@@ -595,8 +488,9 @@ class Scene:
         left out, so that a field added with such a default changes no existing key.
 
         ``memo`` holds the canonical form of part objects already written: give the same dict
-        for many scenes that share part objects (the scenes of a :class:`SceneVariants`) and
-        each part is written once. The text does not depend on it.
+        for many scenes that share part objects (the scenes of a
+        :class:`~pipeline.design.variants.SceneVariants`) and each part is written once. The text
+        does not depend on it.
         """
         # The JSON of a dict with sorted keys is its items' JSON in key order, so each part can
         # be written (and remembered) on its own: the text is that of the whole selection.
@@ -743,118 +637,3 @@ def builtin_scene_names() -> tuple[str, ...]:
     """Names of the built-in scenes (the TOML files of :mod:`pipeline.design.scenes`), sorted."""
     files = resources.files("pipeline.design.scenes").iterdir()
     return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
-
-
-# ---------------------------------------------------------------------------------------------
-# Many variants of one scene
-
-
-class SceneVariants:
-    """Copies of one scene with the same dotted fields replaced, each field from its own list.
-
-    ``variants.scene(indices)`` is ``scene.replace(**{field: values[i] ...})`` over ``axes``
-    and ``indices``: the same scene, or a :class:`~pipeline.errors.SceneError` with the same
-    problems, but each scene part (``dataset``, ``array``, ...) is read and validated once per
-    distinct combination of the value indices of the fields in it (a part no field is in, once),
-    and the scenes share their parts. A grid whose fields take a few values each thus validates a
-    few parts, not every point, and its scenes' canonical forms can be written once per part
-    (:meth:`Scene.canonical` with a memo).
-
-    Parameters
-    ----------
-    scene : Scene
-        The scene the variants start from.
-    axes : sequence of (str, sequence)
-        Dotted scene fields (``"readout.threshold_v"``), each with its values. A field must
-        start with a top-level scene field (``dataset``, ..., ``name``, ``seed``).
-
-    Raises
-    ------
-    ValueError
-        A field does not start with a top-level scene field.
-    """
-
-    def __init__(self, scene: Scene, axes: Sequence[tuple[str, Sequence[Any]]]):
-        self._cls = type(scene)
-        self._data = scene.to_dict()
-        self._fields = [name for name, _ in axes]
-        self._values = [values for _, values in axes]
-        self.source = f"scene {scene.name!r} with {sorted(self._fields)}"
-        tops = [name.split(".")[0] for name in self._fields]
-        order = [slot.name for slot in fields.read_order(self._cls)]
-        unknown = sorted(set(tops) - set(order))
-        if unknown:
-            raise ValueError(f"not top-level scene fields: {', '.join(unknown)}")
-        self._positions = {top: tuple(i for i, t in enumerate(tops) if t == top) for top in order}
-        # The memo key of a part: the indices of the values in it (none for an untouched part).
-        self._part_indices = [
-            (top, operator.itemgetter(*positions) if positions else lambda _: ())
-            for top, positions in self._positions.items()
-        ]
-        self._parts: dict[tuple[str, Any], tuple[Any, list[str]]] = {}
-
-    def problems(self, indices: Sequence[int]) -> list[str]:
-        """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
-        parts: dict[str, Any] = {}
-        problems: list[str] = []
-        parts: dict[str, Any] = {}
-        for top, part_indices in self._part_indices:
-            parts[top], found = self._part(top, part_indices(indices), indices)
-            problems += found
-        if not problems:
-            problems += _refused_together(self._cls(**parts))
-        return problems
-
-    def scene(self, indices: Sequence[int]) -> Scene:
-        """The scene with each field set to ``values[indices[axis]]``.
-
-        Raises
-        ------
-        SceneError
-            The values the scene refuses, exactly as :meth:`Scene.replace` says.
-        """
-        parts: dict[str, Any] = {}
-        problems: list[str] = []
-        for top, part_indices in self._part_indices:
-            value, found = self._part(top, part_indices(indices), indices)
-            parts[top] = value
-            problems += found
-        scene = None if problems else self._cls(**parts)
-        if scene is not None:
-            problems += _refused_together(scene)
-        if problems:
-            raise SceneError(problems, self.source)
-        return scene
-
-    def _part(self, top: str, part_indices: Any, indices: Sequence[int]) -> tuple[Any, list[str]]:
-        found = self._parts.get((top, part_indices))
-        if found is None:
-            positions = self._positions[top]
-            changes = [(self._fields[i], self._values[i][indices[i]]) for i in positions]
-            found = self._parts[top, part_indices] = self._read(top, changes)
-        return found
-
-    def _read(self, top: str, changes: list[tuple[str, Any]]) -> tuple[Any, list[str]]:
-        """Part ``top`` with ``changes`` made as :meth:`Scene.replace` makes them, and what the
-        reader found wrong with it."""
-        data = {top: _copy_plain(self._data.get(top))}
-        for dotted, value in changes:
-            fields.put(data, dotted, value)
-        problems: list[str] = []
-        part = fields.read_slot(fields.slot_named(self._cls)[top], data[top], top, problems)
-        return part, problems
-
-
-def _refused_together(scene: Scene) -> list[str]:
-    """What a scene's parts refuse together (:meth:`Scene.refusals`), as reading says it."""
-    refusals = getattr(scene, "refusals", None)
-    return [] if refusals is None else [f"{name}: {text}" for name, text in refusals()]
-
-
-def _copy_plain(value: Any) -> Any:
-    """A copy of a plain nested dict/list, so that changing it leaves the original alone."""
-    if isinstance(value, dict):
-        return {k: _copy_plain(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_copy_plain(v) for v in value]
-    return value

@@ -29,7 +29,8 @@ reported at once (:class:`pipeline.errors.SceneError`): unknown keys and fields,
 ranges, bounds and choices the field refuses (each checked at the base scene), unknown models,
 fewer than two or more than three objectives.
 
-Objectives (:class:`Metric`), read per trial from its result cube:
+Objectives (:class:`Metric`), read per trial from its result cube
+(:func:`pipeline.results.objectives.objective_values`):
 
 * ``accuracy.<model>``: ``accuracy_mean`` of that model (fraction);
 * ``data_rate_bps``: the address-event data rate (bit/s);
@@ -84,7 +85,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import xarray as xr
 
 from pipeline.design import fields
 from pipeline.design.grid import (
@@ -96,12 +96,10 @@ from pipeline.design.grid import (
     _read_base,
     _valid_name,
 )
-from pipeline.design.scene import Model, Scene, SceneVariants
+from pipeline.design.scene import Model, Scene
 from pipeline.design.transforms import Transform
+from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
-from pipeline.results.early_exit import exit_objectives
-from pipeline.results.matched_area import array_area_m2
-from pipeline.results.readout_power import event_power_w
 
 #: The name of the trial cube's sweep.
 TRIALS = "trials"
@@ -147,8 +145,6 @@ _PER_MODEL = frozenset({Metric.ACCURACY, Metric.YIELD, Metric.DECISION_TIME, Met
 #: comparators' devices, and the chips a yield is taken over).
 MISMATCH_FIELD = "readout.effects.threshold_mismatch"
 CHIPS_COUNT_FIELD = "chips.count"
-#: The chip dimension of a cube whose points simulate several chips.
-CHIP_DIM = "chip"
 
 
 #: The transform each metric's values go through before a sampler is told them (the floor of a
@@ -351,79 +347,6 @@ def load_space(path: str | Path) -> Space:
         raise SceneError([f"not valid TOML: {exc}"], str(path), "space") from None
     data.setdefault("name", path.stem)
     return Space.from_dict(data, source=str(path), base_dir=path.parent)
-
-
-# ---------------------------------------------------------------------------------------------
-# Objective values of trials
-
-
-def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.ndarray:
-    """float64 (points, objectives): each objective of every point of a cube with one sweep
-    dimension (a trial cube), NaN where the point does not state it."""
-    (dim,) = [d for d in cube["result_key"].dims]
-    cube = _over_chips(cube)
-    columns = []
-    for objective in objectives:
-        match objective.metric:
-            case Metric.ACCURACY:
-                values = cube["accuracy_mean"].sel(model=objective.model)
-            case Metric.YIELD:
-                values = (
-                    cube["accuracy_p05"].sel(model=objective.model)
-                    if "accuracy_p05" in cube
-                    else xr.DataArray(np.full(cube.sizes[dim], np.nan), dims=(dim,))
-                )
-            case Metric.AREA:
-                values = xr.DataArray(_array_area(cube, dim), dims=(dim,))
-            case Metric.DATA_RATE:
-                values = cube["data_rate_bps"]
-            case Metric.POWER:
-                rates = (cube["event_rate_hz"].values, cube["data_rate_bps"].values)
-                ok = np.all([np.isfinite(r) & (r >= 0) for r in rates], axis=0)
-                power = event_power_w(*(np.where(ok, r, 0.0) for r in rates))
-                values = xr.DataArray(np.where(ok, power, np.nan), dims=(dim,))
-            case Metric.COMPUTE:
-                values = cube["seconds"].sum("stage", min_count=1)
-            case Metric.DECISION_TIME | Metric.DECODER_ENERGY:
-                time_s, energy_j = exit_objectives(cube, objective.model)
-                chosen = time_s if objective.metric is Metric.DECISION_TIME else energy_j
-                values = xr.DataArray(chosen, dims=cube["result_key"].dims)
-        columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
-    return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
-
-
-def _over_chips(cube: xr.Dataset) -> xr.Dataset:
-    """A cube of several chips per point as one of one: ``accuracy_mean`` the mean over chips
-    (``accuracy_chip_mean``), every other variable along ``chip`` its mean over the chips."""
-    if CHIP_DIM not in cube.dims:
-        return cube
-    chipped = [name for name, v in cube.data_vars.items() if CHIP_DIM in v.dims]
-    means = {name: cube[name].mean(CHIP_DIM, skipna=True) for name in chipped}
-    if "accuracy_chip_mean" in cube:
-        means["accuracy_mean"] = cube["accuracy_chip_mean"]
-    return cube.assign(means)
-
-
-def _array_area(cube: xr.Dataset, dim: str) -> np.ndarray:
-    """float64 (points,): each point's :func:`~pipeline.results.matched_area.array_area_m2`, NaN
-    where the cube does not state its mismatch."""
-    from pipeline.results.cube import field_coordinate
-
-    def values(field: str) -> np.ndarray:
-        name = field_coordinate(cube, field)
-        if name is None:
-            return np.full(cube.sizes[dim], np.nan)
-        found = cube[name].broadcast_like(cube["result_key"]).transpose(dim).values
-        return np.asarray(found, dtype=np.float64)
-
-    rows, cols = values("array.rows"), values("array.cols")
-    sigma_rel = values(f"{MISMATCH_FIELD}.sigma_rel")
-    threshold_v = values("readout.threshold_v")
-    known = np.isfinite(rows * cols * sigma_rel * threshold_v)
-    area = np.full(known.shape, np.nan)
-    if known.any():
-        area[known] = array_area_m2((rows * cols)[known], sigma_rel[known], threshold_v[known])
-    return area
 
 
 # ---------------------------------------------------------------------------------------------

@@ -4,7 +4,7 @@
 
 - facts: classes and their recordings, sampling rate, units, durations, and how many whole
   windows of the paper's ``window_s`` (0.1 s) the shortest recording holds, at most the paper's
-  :data:`pipeline.chain.coding.MAX_AUTO_WINDOWS` (40, i.e. 4 s);
+  :data:`pipeline.design.windows.MAX_AUTO_WINDOWS` (40, i.e. 4 s);
 - the statistics of :mod:`pipeline.recordings.touch_statistics` over those windows, each beside its
   value on real touches (:data:`pipeline.recordings.touch_statistics.REAL_TOUCHES`) and judged
   inside or outside the real range (undefined when the dataset cannot give it); a per-class spectrum
@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.chain.coding import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.design.scene import Scene
+from pipeline.design.windows import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.recordings.sources import MAX_LISTED, Recordings
 from pipeline.recordings.touch_statistics import (
     CONTACT_S,
@@ -60,8 +60,8 @@ __all__ = [
     "CLASS_MEDIANS",
     "SEGMENT_MARGIN",
     "Comparison",
+    "DatasetContents",
     "DatasetDescription",
-    "DatasetFacts",
     "FolderLayout",
     "Verdict",
     "class_median_range",
@@ -109,7 +109,7 @@ class Comparison:
 
 
 @dataclass(frozen=True)
-class DatasetFacts:
+class DatasetContents:
     """What a dataset holds.
 
     ``recordings_per_class[c]`` counts the recordings of ``class_names[c]``; durations in s;
@@ -140,7 +140,7 @@ class DatasetDescription:
     comparison is then undefined.
     """
 
-    facts: DatasetFacts
+    facts: DatasetContents
     statistics: TouchStatistics | None
     comparisons: tuple[Comparison, ...]
     warnings: tuple[str, ...]
@@ -234,7 +234,7 @@ def describe_dataset(recordings: Recordings, *, folds: int | None = None) -> Dat
     durations = recordings.durations_s
     counts = np.bincount(recordings.labels, minlength=recordings.n_classes)
     n_windows = min(whole_windows(float(durations.min()), window_s), MAX_AUTO_WINDOWS)
-    facts = DatasetFacts(
+    facts = DatasetContents(
         name=recordings.name,
         n_recordings=recordings.n_recordings,
         class_names=recordings.class_names,
@@ -285,7 +285,7 @@ def _compare(name: str, reference: Reference, stats: TouchStatistics | None) -> 
 
 
 def _warnings(
-    recordings: Recordings, facts: DatasetFacts, stats: TouchStatistics | None
+    recordings: Recordings, facts: DatasetContents, stats: TouchStatistics | None
 ) -> tuple[str, ...]:
     out = []
     silent = np.array([np.ptp(s) == 0 for s in recordings.signals])

@@ -28,9 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.design.space import TRIAL_DIM, Metric, Objective, objective_values
+from pipeline.design.space import TRIAL_DIM, Metric, Objective
 from pipeline.report.evidence import ALPHA, gather_evidence
 from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
+from pipeline.results.objectives import objective_values
 from pipeline.run.records import Charge
 
 OBJECTIVE_ATTRS = {"units": "1", "long_name": "objective"}

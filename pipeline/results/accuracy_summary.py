@@ -25,7 +25,7 @@ __all__ = ["Cell", "accuracy_summary"]
 class Cell(Protocol):
     """A cell of the summary: its index along the cube's sweep dimensions (and any more, as a
     chip) and the result key its bootstrap interval is seeded from
-    (:class:`pipeline.design.grid.GridPoint` is one)."""
+    (:class:`pipeline.run.grid_keys.KeyedPoint` is one)."""
 
     @property
     def index(self) -> tuple[int, ...]:

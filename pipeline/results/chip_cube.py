@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.design.grid import GridPoint
 from pipeline.results.accuracy_summary import accuracy_summary
 from pipeline.results.point import PointResult
 from pipeline.results.variables import (
@@ -46,6 +45,7 @@ from pipeline.results.variables import (
     REPEAT_DIM,
 )
 from pipeline.results.yields import yield_statistics
+from pipeline.run.grid_keys import KeyedPoint
 
 __all__ = ["CHIP_CUBE_VARIABLES", "CHIP_DIM", "CHIP_METRICS", "chip_variables"]
 
@@ -84,7 +84,7 @@ class _ChipCell:
 
 def chip_variables(
     results: Sequence[PointResult],
-    points: list[GridPoint],
+    points: list[KeyedPoint],
     flat: np.ndarray,
     shape: tuple[int, ...],
     dims: tuple[str, ...],

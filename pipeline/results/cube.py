@@ -145,6 +145,7 @@ from pipeline.results.variables import (
     STAGE_DIM,
     WORK_SECONDS,
 )
+from pipeline.run.grid_keys import keyed_points
 from pipeline.run.records import Charge, Paid
 from pipeline.run.stages import RESULTS, steps_of
 
@@ -205,7 +206,7 @@ def build_cube(
     read once per distinct scene part), so a cube costs some tens of microseconds per point;
     only a point with several repeats is still visited alone, for its bootstrap interval.
     """
-    points = grid.points_of(sweep)
+    points = keyed_points(grid, sweep)
     results = [records[point.key] for point in points]
     shape = sweep.shape
     # Where each point sits in the cube's flattened sweep dimensions: every per-point value is

@@ -19,8 +19,9 @@ import numpy as np
 import xarray as xr
 
 from pipeline.design import fields
-from pipeline.design.grid import GridPoint, Sweep
+from pipeline.design.grid import Sweep
 from pipeline.design.scene import canonical_parts, part_left_out
+from pipeline.run.grid_keys import KeyedPoint
 
 __all__ = ["axis_coordinates", "scene_coordinates"]
 
@@ -34,7 +35,7 @@ def _coordinate(values: Sequence[Any]) -> np.ndarray:
     return np.asarray([json.dumps(v, sort_keys=True) for v in values])
 
 
-def axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
+def axis_coordinates(sweep: Sweep, points: list[KeyedPoint]) -> dict[str, Any]:
     """The coordinate of each swept axis, named by its dimension (attribute ``field``), along
     the first dimension of a zipped sweep: each value as the points' parsed scenes hold it (as
     :meth:`pipeline.design.scene.Scene.to_dict` writes it), read once per value."""
@@ -43,7 +44,7 @@ def axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
     for position, axis in enumerate(sweep.axes):
         along = 0 if sweep.mode == "zip" else position
         # The first point (C order) at each index along the axis's dimension.
-        first: dict[int, GridPoint] = {}
+        first: dict[int, KeyedPoint] = {}
         for point in points:
             first.setdefault(point.index[along], point)
         values = [
@@ -54,7 +55,7 @@ def axis_coordinates(sweep: Sweep, points: list[GridPoint]) -> dict[str, Any]:
 
 
 def scene_coordinates(
-    points: list[GridPoint], flat: np.ndarray, sweep: Sweep
+    points: list[KeyedPoint], flat: np.ndarray, sweep: Sweep
 ) -> dict[str, xr.Variable]:
     """Every scene field that every point has, along the dims it varies with.
 

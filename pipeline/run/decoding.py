@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.chain.chips import ChipTrains
 from pipeline.chain.coding import resolve_n_windows
 from pipeline.chain.decoders import DecoderInput, Reads, decoder_of, reads_of

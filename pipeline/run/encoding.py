@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline import jit
 from pipeline.chain import chips as chain_chips
-from pipeline.chain import jit
 from pipeline.chain.chips import ChipTrains
 from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import (
@@ -31,7 +31,7 @@ from pipeline.chain.metrics import (
     pooled_ssnr_db,
     ste_per_train,
 )
-from pipeline.chain.readout import real_train, true_train
+from pipeline.chain.readout_effects import real_train, true_train
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.chain.taxels import recording_taxels, taxel_signals
 from pipeline.design.scene import ArraySpec, Deployment, ReadoutSpec

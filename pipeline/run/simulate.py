@@ -25,11 +25,11 @@ from pipeline.chain.frontend import FrontEnd
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded
 from pipeline.chain.training import CrossValidation
-from pipeline.design.grid import DatasetFacts, check_scene_fits
 from pipeline.design.scene import DatasetSpec, Model, Scene
 from pipeline.recordings.sources import Recordings
 from pipeline.run import stages
 from pipeline.run.encoding import encode_trains
+from pipeline.run.fit import DatasetLimits, check_scene_fits
 from pipeline.run.stages import LEVELS, RATES, RECORDINGS, RESULTS, SPIKES
 from pipeline.run.stopwatch import Stopwatch
 
@@ -81,7 +81,7 @@ def run_scene(
     Raises
     ------
     SceneError
-        The scene does not fit its recordings (:func:`pipeline.design.grid.check_scene_fits`): taxel
+        The scene does not fit its recordings (:func:`pipeline.run.fit.check_scene_fits`): taxel
         delays that use up the shortest recording, windows that do not fit it, classes smaller
         than the folds. Checked right after loading, before any simulation.
     """
@@ -91,7 +91,7 @@ def run_scene(
         if level is SPIKES:
             # Before the long stages, and naming the recording: the taxel and coding stages
             # would only fail deep inside, on whichever recording came first.
-            check_scene_fits(scene, DatasetFacts.of(outputs[RECORDINGS.name]))
+            check_scene_fits(scene, DatasetLimits.of(outputs[RECORDINGS.name]))
         outputs[level.name] = level.run(scene, outputs, watch)
     recordings: Recordings = outputs[RECORDINGS.name]
     rates = outputs[RATES.name]

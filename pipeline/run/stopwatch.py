@@ -2,7 +2,7 @@
 
 Seconds come in two kinds. *Work* seconds (:attr:`Stopwatch.seconds`) are what each step's work
 took, whichever point it was done for: a step's wall seconds less the one-off time within it
-(importing a library, loading or compiling kernels: :func:`pipeline.chain.jit.one_off_seconds`).
+(importing a library, loading or compiling kernels: :func:`pipeline.jit.one_off_seconds`).
 *Paid* seconds (:meth:`Stopwatch.paid`) are the same time by
 :class:`~pipeline.run.records.Charge`: each step's work under the charge the stage registry
 declares for it (:func:`pipeline.run.stages.step_charge`) and every one-off second under
@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.run.records import Charge, Paid
 
 __all__ = ["SETUP_STEP", "Stopwatch"]
@@ -25,7 +25,7 @@ __all__ = ["SETUP_STEP", "Stopwatch"]
 #: importing numba, torch and scikit-learn (and scipy's filters, for the synthetic recordings),
 #: and loading (or, the first time, compiling) the numba kernels: the spikes level's warm-up
 #: (:func:`pipeline.run.encoding.warm_kernels`), and every such second inside any other step
-#: (:func:`pipeline.chain.jit.one_off_seconds`).
+#: (:func:`pipeline.jit.one_off_seconds`).
 SETUP_STEP = "setup"
 
 

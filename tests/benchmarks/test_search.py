@@ -19,6 +19,7 @@ from benchmarks.search import (
     scaled_costs,
 )
 from pipeline.design.space import Sampler, Space
+from pipeline.run.grid_keys import unique_points
 
 
 def test_the_benchmark_spaces_grid_into_192_and_576_distinct_points():
@@ -26,7 +27,7 @@ def test_the_benchmark_spaces_grid_into_192_and_576_distinct_points():
     assert len(rows.dimensions) == 3 and len(encoder.dimensions) == 5
     for space, n in ((rows, 192), (encoder, 576)):
         params = grid_params(space)
-        assert len(params) == n == len(space.exhaustive_grid(10).unique_points())
+        assert len(params) == n == len(unique_points(space.exhaustive_grid(10)))
         assert len({point_label(p) for p in params}) == n
 
 

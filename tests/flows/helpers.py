@@ -47,13 +47,13 @@ METRICS = SpikeMetrics(
 def count_grid_loads(patch) -> dict[str, int]:
     """Count the grid loads and dataset checks from now on: calls of
     :func:`pipeline.design.grid.load_grid` (as :mod:`flows.planning` calls it) and of
-    :meth:`pipeline.design.grid.DatasetFacts.describe`, patched with ``patch(owner, name, value)``
+    :meth:`pipeline.run.fit.DatasetLimits.describe`, patched with ``patch(owner, name, value)``
     (``monkeypatch.setattr``, or ``setattr`` in a subprocess). Returns the live counts."""
     from flows import planning
-    from pipeline.design.grid import DatasetFacts
+    from pipeline.run.fit import DatasetLimits
 
     calls = {"load_grid": 0, "describe": 0}
-    load, describe = planning.load_grid, DatasetFacts.describe
+    load, describe = planning.load_grid, DatasetLimits.describe
 
     def counted_load(*args):
         calls["load_grid"] += 1
@@ -64,7 +64,7 @@ def count_grid_loads(patch) -> dict[str, int]:
         return describe(spec)
 
     patch(planning, "load_grid", counted_load)
-    patch(DatasetFacts, "describe", counted_describe)
+    patch(DatasetLimits, "describe", counted_describe)
     return calls
 
 

@@ -8,6 +8,7 @@ from flows.assembly import assemble, assemble_cube, summarize
 from flows.planning import SweepPlan, plan_sweep
 from pipeline.design.grid import Grid
 from pipeline.run.entries import RecordingsInfo, ResultEntry
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.stages import RESULTS
 from storage import StoreError
 from storage.store import SweepStore
@@ -20,7 +21,7 @@ def test_cubes_state_the_recordings_their_results_state_and_refuse_a_missing_poi
         {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
     )
     store = SweepStore.open_or_create(tmp_path / "run")
-    scenes = grid.unique_points()
+    scenes = unique_points(grid)
     first, second = scenes
     plan = SweepPlan(grid, str(store.root), scenes, {})
     own = RecordingsInfo("mine", ("bark", "cloth"), 250.0)
@@ -51,7 +52,7 @@ def test_a_cube_equal_to_the_stored_one_is_not_written_again(tmp_path, monkeypat
         {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
     )
     store = SweepStore.open_or_create(tmp_path / "run")
-    scenes = grid.unique_points()
+    scenes = unique_points(grid)
     for key in scenes:
         write_result(store, key, ResultEntry({"ffnn": np.array([0.5])}, {"x": 1.0}, METRICS))
     plan = SweepPlan(grid, str(store.root), scenes, {})
@@ -90,7 +91,7 @@ def test_a_re_run_keeps_a_current_cube_and_takes_its_summary_without_building_it
         {"base": "smoke", "sweeps": {"t": {"axes": {"readout.threshold_v": [0.05, 0.1]}}}}
     )
     store = SweepStore.open_or_create(tmp_path / "run")
-    scenes = grid.unique_points()
+    scenes = unique_points(grid)
     first_key = next(iter(scenes))
     for i, key in enumerate(scenes):
         write_result(store, key, ResultEntry({"ffnn": np.array([0.25 + i / 2])}, {}, METRICS))

@@ -11,6 +11,7 @@ import pytest
 from flows.dry_run import SweepCounts, dry_run, format_dry_run
 from pipeline.design.grid import Grid
 from pipeline.run.entries import ResultEntry
+from pipeline.run.grid_keys import keyed_points
 from pipeline.run.stages import RESULTS
 from storage import StoreError
 from storage.store import SweepStore
@@ -39,7 +40,7 @@ def dry_run_grid() -> Grid:
 
 
 def point_key(grid: Grid, sweep: str, i: int) -> str:
-    return next(p.key for p in grid.points() if p.sweep == sweep and p.index == (i,))
+    return next(p.key for p in keyed_points(grid) if p.sweep == sweep and p.index == (i,))
 
 
 def tree(root: Path) -> dict[str, tuple]:

@@ -11,9 +11,11 @@ import pytest
 
 from flows.planning import check_grid, load_sweep_grid, open_root, plan_sweep
 from flows.run import run_sweep
-from pipeline.design.grid import DatasetFacts, Grid, load_grid
+from pipeline.design.grid import Grid, load_grid
 from pipeline.errors import DatasetError
 from pipeline.run.entries import ResultEntry
+from pipeline.run.fit import DatasetLimits
+from pipeline.run.grid_keys import keyed_points, unique_points
 from pipeline.run.stages import RECORDINGS, RESULTS
 from storage.store import SweepStore
 from tests.flows.helpers import METRICS, SMALL_GRID, count_grid_loads, hermetic_env
@@ -51,13 +53,13 @@ def test_check_grid_describes_each_distinct_dataset_once(monkeypatch):
         }
     )
     described = []
-    real = DatasetFacts.describe
+    real = DatasetLimits.describe
 
     def describe(spec):
         described.append(spec.seed)
         return real(spec)
 
-    monkeypatch.setattr(DatasetFacts, "describe", describe)
+    monkeypatch.setattr(DatasetLimits, "describe", describe)
     facts = check_grid(grid)
     assert described == [0, 1, 2]
     assert list(facts) == list(dict.fromkeys(RECORDINGS.key(p.scene) for p in grid.points()))
@@ -66,7 +68,7 @@ def test_check_grid_describes_each_distinct_dataset_once(monkeypatch):
 def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path):
     grid = load_grid("smoke")
     store = SweepStore.open_or_create(tmp_path / "run")
-    keys = list(grid.unique_points())
+    keys = list(unique_points(grid))
     assert not store.complete_keys(RESULTS.record) & set(keys)
     assert SweepStore(tmp_path / "absent").complete_keys(RESULTS.record) == frozenset()
     for key in (keys[2], keys[0]):
@@ -79,7 +81,7 @@ def test_plan_reads_the_stored_results_only_and_keeps_the_points_order(tmp_path)
     assert list(plan.records) == [keys[0], keys[2]]
     assert plan.missing == [k for k in keys if k not in (keys[0], keys[2])]
     assert plan.sweep_keys == {
-        s.name: tuple(dict.fromkeys(p.key for p in grid.points() if p.sweep == s.name))
+        s.name: tuple(dict.fromkeys(p.key for p in keyed_points(grid) if p.sweep == s.name))
         for s in grid.sweeps
     }
     assert not (store.path / "results" / ".partial-batch-0").exists()

@@ -1,38 +1,12 @@
-"""Tests of flows.scheduling: the cost model it orders points by, the batches in which points
-are submitted, and the cache keys sent with each point."""
+"""Tests of flows.scheduling: the batches in which points are submitted, and the cache keys sent
+with each point (the cost model it orders points by: tests/pipeline/design/test_grid_cost.py)."""
 
 import pytest
 
 from flows import scheduling
 from flows.scheduling import default_points_per_task, point_keys
-from pipeline.chain.coding import MAX_AUTO_WINDOWS
-from pipeline.design.grid import cost_kind, training_cost
 from pipeline.design.scene import Scene
 from pipeline.run.stages import LEVELS
-
-
-def test_training_cost_is_frame_size_per_model_with_auto_windows_at_their_most():
-    paper = Scene.paper()  # 3x3 taxels, auto windows, FFNN and CNN
-    assert training_cost(paper) == 9 * MAX_AUTO_WINDOWS * 2
-    assert training_cost(paper.replace(**{"coding.n_windows": 160})) == 9 * 160 * 2
-    assert training_cost(paper.replace(**{"array.rows": 5, "array.cols": 5})) == 25 * 40 * 2
-    assert training_cost(paper.replace(**{"training.models": ["ffnn"]})) == 9 * 40
-
-
-def test_cost_kind_ignores_threshold_effect_values_and_seeds_but_not_effect_names():
-    base = Scene.builtin("smoke")
-    noisy = base.replace(**{"readout.effects.amplifier_noise.sigma_v": 0.01})
-    same = [
-        base.replace(**{"readout.threshold_v": 0.05}),
-        base.replace(**{"seed": 3, "dataset.seed": 4, "training.seed": 5}),
-    ]
-    assert all(cost_kind(s) == cost_kind(base) for s in same)
-    assert cost_kind(noisy) != cost_kind(base)
-    assert cost_kind(noisy.replace(**{"readout.effects.amplifier_noise.sigma_v": 0.5})) == (
-        cost_kind(noisy)
-    )
-    for change in ({"coding.window_s": 0.2}, {"array.rows": 1}, {"training.models": ["ffnn"]}):
-        assert cost_kind(base.replace(**change)) != cost_kind(base)
 
 
 def test_point_keys_are_every_levels_key_whatever_the_memo():

@@ -13,6 +13,7 @@ from flows.work import ensure_entries
 from pipeline.chain.coding import resolve_n_windows
 from pipeline.design.grid import Grid
 from pipeline.results.cube import build_cube
+from pipeline.run.grid_keys import keyed_points
 from pipeline.run.records import Record, Variable, read_seconds, seconds_attr
 from storage import SweepStore
 
@@ -106,7 +107,7 @@ def test_a_level_registered_in_a_test_is_computed_stored_read_back_and_timed(reg
         }
     )
     sweep = grid.sweeps[0]
-    points = grid.points_of(sweep)
+    points = keyed_points(grid, sweep)
     store = SweepStore.open_or_create(tmp_path / "run")
     with_keys = [(p.scene, point_keys(p.scene)) for p in points]
     keys = ensure_entries(str(store.root), "results", with_keys)

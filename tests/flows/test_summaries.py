@@ -16,6 +16,7 @@ from flows.summaries import (
 )
 from pipeline.chain.training import CrossValidation
 from pipeline.design.scene import Model, Scene
+from pipeline.run.grid_keys import unique_points
 
 
 def fake_result(ssnr_db: float, labels=None) -> SimpleNamespace:
@@ -148,7 +149,7 @@ def test_a_design_gets_one_bootstrap_interval_in_any_sweep_and_in_a_run():
         None,
         OutOfFold(names, labels, {"ffnn": predicted}, folds),
     )
-    records = {key: entry for key in grid.unique_points()}
+    records = {key: entry for key in unique_points(grid)}
     cubes = {sweep.name: build_cube(grid, sweep, records) for sweep in grid.sweeps}
     wide = cubes["wide"].sel(threshold_v=0.09, model="ffnn")
     one = cubes["one"].sel(threshold_v=0.09, model="ffnn")

@@ -11,6 +11,7 @@ from flows.scheduling import point_keys
 from flows.work import ensure_entries
 from pipeline.design.grid import Grid
 from pipeline.run import stages
+from pipeline.run.grid_keys import keyed_points
 from pipeline.run.records import Charge
 from storage import SweepStore
 
@@ -31,7 +32,7 @@ GRID = Grid.from_dict(
         },
     }
 )
-POINTS = GRID.points_of(GRID.sweeps[0])
+POINTS = keyed_points(GRID, GRID.sweeps[0])
 SPIKE_STEPS = ("taxels", "readout", "metrics")
 
 

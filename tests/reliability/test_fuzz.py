@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from pipeline.chain.coding import rate_code
-from pipeline.chain.readout import level_crossings, real_train
+from pipeline.chain.readout import level_crossings
+from pipeline.chain.readout_effects import real_train
 from pipeline.design.grid import Grid, load_grid
 from pipeline.design.scene import Scene
 from pipeline.errors import SceneError, SimulationError

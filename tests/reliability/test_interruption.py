@@ -18,6 +18,7 @@ import psutil
 import pytest
 
 from flows import server
+from pipeline.run.grid_keys import unique_points
 from storage import SweepStore
 from storage.batches import BATCH_PREFIX, read_batch_keys
 from tests.flows.helpers import assert_same_cubes, eskin, live_tree, stop, wait_for
@@ -231,7 +232,7 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     store = SweepStore.open(root)
     for name in store.cube_names():
         shutil.rmtree(store.path / "cubes" / name)
-    scene = next(iter(load_grid("smoke").unique_points().values()))
+    scene = next(iter(unique_points(load_grid("smoke")).values()))
     result_key, spikes_key = cache_key(scene, "results"), cache_key(scene, "spikes")
     chunk = first_file(store.entry_location(RESULTS.record, result_key) / "accuracy")
     data = bytearray(chunk.read_bytes())

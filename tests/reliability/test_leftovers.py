@@ -9,6 +9,7 @@ from flows.planning import plan_sweep
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import load_grid
 from pipeline.run.entries import ResultEntry
+from pipeline.run.grid_keys import unique_points
 from pipeline.run.stages import RESULTS
 from storage import SweepStore
 from tests.store_helpers import write_result
@@ -16,7 +17,7 @@ from tests.store_helpers import write_result
 
 def test_plan_removes_partials_and_replans_corrupt_results(tmp_path):
     store = SweepStore.open_or_create(tmp_path / "run")
-    keys = list(load_grid("smoke").unique_points())
+    keys = list(unique_points(load_grid("smoke")))
     metrics = SpikeMetrics(*([1.0] * 6))
     for key in keys[:2]:
         write_result(store, key, ResultEntry({"ffnn": np.array([0.5, 0.5])}, {"x": 1.0}, metrics))

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 from pipeline.chain import training
-from pipeline.chain.readout import effect_rng, level_crossings, real_train
-from pipeline.design.scene import Effect, ReadoutSpec, Scene
+from pipeline.chain.readout import level_crossings
+from pipeline.chain.readout_effects import effect_rng, real_train
+from pipeline.design.effects import Effect
+from pipeline.design.scene import ReadoutSpec, Scene
 from pipeline.run.simulate import run_scene
 from pipeline.run.stages import LEVELS, RESULTS, SPIKES, cache_key
 

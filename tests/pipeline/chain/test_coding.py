@@ -6,16 +6,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from pipeline.chain.coding import (
-    MAX_AUTO_WINDOWS,
-    frames,
-    rate_code,
-    resolve_n_windows,
-    whole_windows,
-    window_edges_s,
-)
+from pipeline.chain.coding import frames, rate_code, resolve_n_windows, window_edges_s
 from pipeline.chain.spikes import SpikeTrains
 from pipeline.design.scene import CodingSpec, Polarity
+from pipeline.design.windows import MAX_AUTO_WINDOWS
 from pipeline.errors import SimulationError
 
 
@@ -71,14 +65,6 @@ def test_every_spike_is_counted_once_or_dropped(times, window, n_windows):
     k = np.searchsorted(edges, times, side="right") - 1
     inside = (k >= 0) & (k < n_windows)
     np.testing.assert_array_equal(counts, np.bincount(k[inside], minlength=n_windows))
-
-
-@settings(max_examples=100, deadline=None)
-@given(duration=st.floats(1e-3, 100.0), window=st.floats(1e-3, 10.0))
-def test_whole_windows_fit(duration, window):
-    k = whole_windows(duration, window)
-    assert k * window <= duration or k == 0
-    assert (k + 1) * window > duration
 
 
 def test_resolve_n_windows():

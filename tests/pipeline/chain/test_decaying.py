@@ -15,15 +15,10 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from pipeline.chain.readout import (
-    THRESHOLD_FLOOR_REL,
-    decaying_crossings,
-    effect_rng,
-    level_crossings,
-    real_train,
-    true_train,
-)
-from pipeline.design.scene import Effect, Scene
+from pipeline.chain.readout import decaying_crossings, level_crossings
+from pipeline.chain.readout_effects import THRESHOLD_FLOOR_REL, effect_rng, real_train, true_train
+from pipeline.design.effects import Effect
+from pipeline.design.scene import Scene
 from pipeline.errors import SimulationError
 
 FS = 1000.0

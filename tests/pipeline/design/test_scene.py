@@ -5,15 +5,8 @@ import math
 import pytest
 
 from pipeline.design import scene as scene_module
-from pipeline.design.scene import (
-    AmplifierNoise,
-    Effect,
-    Model,
-    Scene,
-    ThresholdMismatch,
-    builtin_scene_names,
-    scene_fields,
-)
+from pipeline.design.effects import AmplifierNoise, Effect, ThresholdMismatch
+from pipeline.design.scene import Model, Scene, builtin_scene_names, scene_fields
 from pipeline.errors import SceneError
 from pipeline.run.stages import cache_key, stage_fields
 

@@ -10,12 +10,11 @@ from pipeline.design.space import (
     DimensionKind,
     Direction,
     Metric,
-    Objective,
     Space,
     load_space,
-    objective_values,
 )
 from pipeline.errors import SceneError
+from pipeline.run.grid_keys import keyed_points, unique_points
 
 EXAMPLE = Path(__file__).parents[3] / "examples" / "design_space.toml"
 
@@ -115,7 +114,7 @@ def test_trials_are_the_points_of_one_zipped_sweep():
     ]
     grid = loaded.trial_grid(trials)
     points = grid.points()
-    assert len(points) == 3 and len(grid.unique_points()) == 2  # one design, computed once
+    assert len(points) == 3 and len(unique_points(grid)) == 2  # one design, computed once
     assert points[2].scene == loaded.base.replace(**trials[2])
     assert grid.sweeps[0].dims == ("threshold_v",)
 
@@ -145,64 +144,11 @@ def test_the_encoder_is_a_categorical_dimension_of_its_choices():
     encoder, _ = loaded.dimensions
     assert encoder.kind is DimensionKind.CATEGORICAL and encoder.choices == ("lcs", "decaying")
     trials = [{"readout.encoder": e, "readout.threshold_v": 0.1} for e in ("lcs", "decaying")]
-    points = loaded.trial_grid(trials).points()
+    points = keyed_points(loaded.trial_grid(trials))
     assert [p.scene.readout.encoder.value for p in points] == ["lcs", "decaying"]
     assert len({p.key for p in points}) == 2
     (found,) = problems(space(space={"readout.encoder": {"choices": ["lcs", "decay"]}}))
     assert "readout.encoder: 'decay' is not one of 'lcs', 'decaying'" in found
-
-
-def _chip_trials():
-    """A hand-made trial cube of two trials, each of three chips, as the contract lays it out."""
-    import numpy as np
-    import xarray as xr
-
-    per_chip = np.array([[[0.5, 0.6, 0.7]], [[0.8, 0.8, 0.2]]])  # (trial, model, chip)
-    return xr.Dataset(
-        {
-            "accuracy_mean": (("trial", "model", "chip"), per_chip),
-            "accuracy_chip_mean": (("trial", "model"), per_chip.mean(axis=-1)),
-            "accuracy_p05": (("trial", "model"), per_chip.min(axis=-1)),
-            "data_rate_bps": (("trial", "chip"), [[10.0, 20.0, 30.0], [1.0, 2.0, 3.0]]),
-        },
-        coords={
-            "trial": [0, 1],
-            "model": ["ffnn"],
-            "chip": [0, 1, 2],
-            "result_key": ("trial", ["a", "b"]),
-            "sigma_rel": ("trial", [0.1, 0.2], {"field": f"{MISMATCH_FIELD}.sigma_rel"}),
-            "readout.threshold_v": 0.09,
-            "array.rows": ("trial", [1, 3]),
-            "array.cols": 3,
-        },
-    )
-
-
-def test_area_and_yield_objectives_read_the_cube_over_chips():
-    import numpy as np
-
-    from pipeline.results.matched_area import array_area_m2
-
-    objectives = [
-        Objective(Metric.ACCURACY, Direction.MAX, "ffnn"),
-        Objective(Metric.YIELD, Direction.MAX, "ffnn"),
-        Objective(Metric.AREA, Direction.MIN),
-        Objective(Metric.DATA_RATE, Direction.MIN),
-    ]
-    found = objective_values(_chip_trials(), objectives)
-    np.testing.assert_allclose(found[:, 0], [0.6, 0.6])  # the mean over chips
-    np.testing.assert_allclose(found[:, 1], [0.5, 0.2])  # the cube's accuracy_p05
-    expected = [array_area_m2(3, 0.1, 0.09), array_area_m2(9, 0.2, 0.09)]
-    np.testing.assert_allclose(found[:, 2], expected, rtol=1e-12)
-    np.testing.assert_allclose(found[:, 3], [20.0, 2.0])
-    assert [o.name for o in objectives[:3]] == [
-        "accuracy.ffnn",
-        "accuracy_p05.ffnn",
-        "array_area_m2",
-    ]
-    # No mismatch stated: no area; no chips: no yield.
-    plain = _chip_trials().drop_vars(["sigma_rel", "accuracy_p05"])
-    assert np.isnan(objective_values(plain, objectives[1:3])).all()
 
 
 def test_area_needs_a_mismatch_and_yield_needs_chips():

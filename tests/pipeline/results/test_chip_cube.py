@@ -9,6 +9,7 @@ from pipeline.results.cube import CUBE_VARIABLES, build_cube
 from pipeline.results.yields import yield_statistics
 from pipeline.run.chips import ChipResults
 from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
+from pipeline.run.grid_keys import keyed_points
 
 NAMES = tuple(f"c{c}/{i}" for c in range(2) for i in range(4))
 LABELS = np.array([0, 0, 0, 0, 1, 1, 1, 1])
@@ -59,7 +60,7 @@ def entry(n_chips: int) -> ResultEntry:
 def cube():
     grid = Grid.from_dict(GRID)
     (sweep,) = grid.sweeps
-    records = {p.key: entry(p.scene.chips.count) for p in grid.points_of(sweep)}
+    records = {p.key: entry(p.scene.chips.count) for p in keyed_points(grid, sweep)}
     return build_cube(grid, sweep, records)
 
 

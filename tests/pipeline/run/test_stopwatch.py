@@ -2,7 +2,7 @@ import time
 
 import pytest
 
-from pipeline.chain import jit
+from pipeline import jit
 from pipeline.run.records import Charge
 from pipeline.run.stages import step_charge
 from pipeline.run.stopwatch import Stopwatch

@@ -97,7 +97,7 @@ def test_a_second_process_finds_the_kernels_cached(tmp_path):
 
 
 def test_the_kernels_are_warmed_once_per_process_and_kind():
-    from pipeline.chain import jit
+    from pipeline import jit
 
     calls = []
     jit.once(("test", 1), lambda: calls.append(1))
@@ -107,7 +107,7 @@ def test_the_kernels_are_warmed_once_per_process_and_kind():
 
 
 def test_a_failed_warm_up_is_tried_again():
-    from pipeline.chain import jit
+    from pipeline import jit
 
     def fail():
         raise RuntimeError("no")
