@@ -234,9 +234,11 @@ def suite_server_db(suite_prefect_server, migrated_prefect_db) -> None:
 @pytest.fixture(scope="session")
 def smoke_sweep(tmp_path_factory, suite_server_db):
     """The smoke grid swept once a run on the default local cluster (:func:`once`): (root, JSON
-    summary, env). The root is read, never written: a test that sweeps it again copies it."""
+    summary, env: this worker's own Prefect home and scratch folders). The root is read, never
+    written: a test that sweeps it again copies it."""
     base = once(tmp_path_factory, "smoke-sweep", _sweep_smoke)
-    return base / "run", json.loads((base / "summary.json").read_text()), hermetic_env(base)
+    env = hermetic_env(tmp_path_factory.mktemp("smoke-env"))
+    return base / "run", json.loads((base / "summary.json").read_text()), env
 
 
 def _sweep_smoke(base: Path) -> None:
