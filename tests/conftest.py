@@ -46,6 +46,7 @@ END_TO_END_COMMANDS = frozenset({"sweep", "optimize", "serve", "server"})
 STARTS_NOTHING = frozenset({"--help", "-h", "--dry-run", "status", "stop"})
 
 
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Slow tests: :data:`SLOW_TIMEOUT_S` and, for pytest-xdist's ``loadgroup``, one group per
     module (its module-scoped sweeps are made once, and its sweeps run one at a time)."""
