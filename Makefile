@@ -3,7 +3,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test bench lint docs lock clean
+.PHONY: run test test-quick bench lint docs lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,8 +32,17 @@ $(VENV)/.installed-test: pyproject.toml $(LOCK) | $(BIN)/python
 run: $(VENV)/.installed
 	$(BIN)/eskin sweep --grid paper --root runs/paper --report
 
+# The suite on TEST_WORKERS pytest-xdist workers; the slow (end-to-end) tests of a module run on
+# one worker in order (tests/conftest.py). The ten slowest tests are listed at the end.
+# test-quick leaves the slow tests out.
+TEST_WORKERS ?= 2
+PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
+
 test: $(VENV)/.installed-test
-	$(BIN)/python -m pytest -q
+	$(PYTEST)
+
+test-quick: $(VENV)/.installed-test
+	$(PYTEST) -m "not slow"
 
 bench: $(VENV)/.installed-test
 	$(BIN)/python -m benchmarks

@@ -20,7 +20,7 @@ from prefect import flow, get_run_logger, task
 from prefect.cache_policies import NO_CACHE
 
 from flows.planning import SweepPlan
-from flows.record import Record, run_recorded
+from flows.record import PrefectRecord, run_recorded
 from flows.search import Search, TrialsOutcome, check_budget, default_search_root, run_optimize
 from flows.sweep import artifact_key, flow_run_url
 from pipeline.design.space import Space
@@ -62,7 +62,7 @@ def optimize(
 
         return trial_task(quote(search), numbers, quote(client_for), numbers[0])
 
-    def on_told(record: Record, search: Search, outcome: TrialsOutcome) -> None:
+    def on_told(record: PrefectRecord, search: Search, outcome: TrialsOutcome) -> None:
         name = search.space.name
         done = search.told / budget if budget else min(1.0, search.seconds_spent() / budget_s)
         record.progress(
@@ -102,7 +102,7 @@ def optimize(
         else:
             logger.info(note)
 
-    def body(record: Record) -> dict[str, Any]:
+    def body(record: PrefectRecord) -> dict[str, Any]:
         summary = run_optimize(
             space,
             root,

@@ -2,8 +2,8 @@
 
 The run root's store is the truth and Prefect a window on it: a sweep (or a search) computes,
 stores and writes its cubes whether its Prefect server answers or not. What the run tells
-Prefect goes through one :class:`Record`, which sends it from a thread of its own, so that no
-step of the run waits for the server or fails with it:
+Prefect goes through one :class:`PrefectRecord`, which sends it from a thread of its own, so that
+no step of the run waits for the server or fails with it:
 
 - artifacts (progress, tables, links) are kept by key, the newest of each, and sent in order;
 - run-logger lines are kept (at most :data:`MAX_HELD_LOGS`, the oldest dropped beyond) and sent
@@ -12,6 +12,13 @@ step of the run waits for the server or fails with it:
   asks the server's health check every :data:`PROBE_S` seconds and sends it all once the server
   answers again (the local server restarts on the port it had, :mod:`flows.server`); what an
   answering server refuses (a bad request) is dropped and counted as lost;
+- a busy server is not a gone one: an answer "busy, try again" (:data:`BUSY_STATUSES`) or a
+  request that timed out is kept and sent again after :data:`BUSY_RETRY_S`, and the health check
+  that tells a gone server from a slow one waits up to :data:`HEALTH_TIMEOUT_S`. A local server
+  on its first start, on a machine whose cores a sweep keeps busy, took 3 s to answer its health
+  check, and about 2 s every few seconds while its services set up their state: a 2 s check
+  took it for gone, and at the end of the run the record then gave up on it at once, as it gave
+  up after 15 s on a server that was still taking what it held;
 - task-run states travel as Prefect events over a websocket: Prefect's events client keeps the
   events the server has not confirmed and sends them again when it next connects, which an
   event of the record's own starts once the server answers again. Events the client reports
@@ -31,8 +38,9 @@ line on stderr each time); the server still busy after the last, the run fails i
 (exit status 1) with nothing computed. A flow run the engine had made before the busy answer is
 left pending on the server.
 
-A run that ends with its record incomplete says so in one line (:meth:`Record.incomplete_note`);
-its results are complete and its exit status is that of the run (0 for a sweep that finished).
+A run that ends with its record incomplete says so in one line
+(:meth:`PrefectRecord.incomplete_note`); its results are complete and its exit status is that of
+the run (0 for a sweep that finished).
 """
 
 from __future__ import annotations
@@ -58,8 +66,17 @@ SEND_EVERY_S = 1.0
 MAX_HELD_LOGS = 20_000
 #: Lines per request.
 LOG_BATCH = 500
-#: At the end of a run, how long an answering server is given to take what the record holds.
+#: How long the health check that tells a gone server from a slow one waits for its answer (a
+#: gone server's port refuses at once).
+HEALTH_TIMEOUT_S = 30.0
+#: Seconds before what a busy server did not take (a busy answer, a time-out) is sent again.
+BUSY_RETRY_S = 1.0
+#: At the end of a run, how long an answering server is given to take the next of what the record
+#: holds: the wait goes on while it takes something within each such period (a busy server takes
+#: a batch of lines in seconds), up to :data:`FLUSH_LIMIT_S` in all.
 FLUSH_TIMEOUT_S = 15.0
+#: At the end of a run, the longest wait for an answering server to take all the record holds.
+FLUSH_LIMIT_S = 120.0
 #: The same for a run that was interrupted (Ctrl-C, SIGTERM), which must end within seconds.
 INTERRUPTED_FLUSH_S = 2.0
 #: Retries of the flow engine's own requests while a record is active (Prefect's default, 5,
@@ -82,7 +99,7 @@ _QUIETED_LOGGERS = (
 )
 
 T = TypeVar("T")
-_active: Record | None = None
+_active: PrefectRecord | None = None
 
 
 @dataclass
@@ -94,7 +111,7 @@ class Outcome:
     error: BaseException | None = None
 
 
-class Record:
+class PrefectRecord:
     """What a run tells its Prefect server, sent from a thread of its own (module docstring).
 
     Use :func:`recording` to make one active; the flows find it there.
@@ -117,6 +134,8 @@ class Record:
         self._artifacts: dict[str, Any] = {}
         self._sending = False
         self._closed = False
+        #: Monotonic time the server last took something (or the wait for it began).
+        self._taken_at = time.monotonic()
         context = contextvars.copy_context()  # the settings of the run: API URL, auth string
         self._thread = threading.Thread(
             target=context.run, args=(self._run,), name="eskin-prefect-record", daemon=True
@@ -178,22 +197,26 @@ class Record:
 
     # Its end --------------------------------------------------------------------------------
 
-    def close(self, timeout_s: float = FLUSH_TIMEOUT_S) -> bool:
-        """Send what is held if the server answers (for at most ``timeout_s``); return whether
-        the record is complete. A server that does not answer now is not waited for."""
-        deadline = time.monotonic() + timeout_s
-        if self.down_since is not None and self.api_url and healthy(self.api_url):
+    def close(self, timeout_s: float = FLUSH_TIMEOUT_S, limit_s: float = FLUSH_LIMIT_S) -> bool:
+        """Send what is held if the server answers, for as long as it takes something within
+        each ``timeout_s``, ``limit_s`` at most; return whether the record is complete. A server
+        that does not answer now is not waited for."""
+        start = time.monotonic()
+        if self.down_since is not None and self._answers(min(timeout_s, HEALTH_TIMEOUT_S)):
             self.down_since = None  # back: send at once rather than at the next probe
             self._reconnected()
         with self._cond:
-            while (self._held() or self._sending) and time.monotonic() < deadline:
-                if self.down_since is not None:
+            self._taken_at = time.monotonic()
+            while self._held() or self._sending:
+                now = time.monotonic()
+                if self.down_since is not None or now - self._taken_at > timeout_s:
+                    break
+                if now - start > limit_s:
                     break
                 self._cond.wait(0.1)
-        with self._cond:
             self._closed = True  # what is still held stays so: nothing waits for it now
             self._cond.notify_all()
-        self._drain_events(max(0.5, min(5.0, deadline - time.monotonic())))
+        self._drain_events(max(0.5, min(5.0, timeout_s - (time.monotonic() - self._taken_at))))
         return self.complete
 
     @property
@@ -243,7 +266,7 @@ class Record:
                 if self._closed:
                     return
                 if self.down_since is not None:
-                    if not (self.api_url and healthy(self.api_url)):
+                    if not self._answers():
                         with self._cond:
                             self._cond.wait(PROBE_S)
                         continue
@@ -271,7 +294,12 @@ class Record:
                         else:
                             item[1](client)
                     except Exception as error:  # whatever it was: kept, or counted lost
-                        self._failed(error, logs, item)
+                        if self._failed(error, logs, item):
+                            return  # busy: the next round sends it again
+                    else:
+                        with self._cond:
+                            self._taken_at = time.monotonic()
+                            self._cond.notify_all()
         except Exception as error:  # the client itself could not be made
             self._failed(error, [], None)
         finally:
@@ -279,20 +307,30 @@ class Record:
                 self._sending = False
                 self._cond.notify_all()
 
-    def _failed(self, error: Exception, logs: list[dict[str, Any]], item: Any) -> None:
-        """Keep what did not go if the server does not answer; count it lost if it does."""
-        if self.api_url and healthy(self.api_url):
+    def _failed(self, error: Exception, logs: list[dict[str, Any]], item: Any) -> bool:
+        """Keep what did not go if the server is busy or does not answer, count it lost if it
+        refused it; return whether it was busy (then wait :data:`BUSY_RETRY_S`)."""
+        busy = busy_status(error) is not None or _timed_out(error)
+        if not busy and self._answers():
             self.lost += len(logs) + (item is not None)
             logging.getLogger(__name__).debug("Prefect refused part of the record: %s", error)
-            return
+            return False
         with self._cond:
             self._logs.extendleft(reversed(logs))
             if item is not None and item[0] not in self._items:
                 self._items[item[0]] = item[1]
                 self._items.move_to_end(item[0], last=False)
+            if busy:
+                self._cond.wait(BUSY_RETRY_S)
+                return True
         if self.down_since is None:
             self.down_since = time.time()
             self.was_down = True
+        return False
+
+    def _answers(self, timeout_s: float = HEALTH_TIMEOUT_S) -> bool:
+        """Whether the server answers its health check within ``timeout_s``."""
+        return bool(self.api_url) and healthy(self.api_url, timeout_s=timeout_s)
 
     def _reconnected(self) -> None:
         """The server answers again: have Prefect's events client send what it kept."""
@@ -328,6 +366,14 @@ class Record:
             self._cond.notify_all()
 
 
+def _timed_out(error: BaseException) -> bool:
+    """Whether ``error`` is a request that got no answer in time: a busy server, not a gone one
+    (whose port refuses at once)."""
+    import httpx
+
+    return isinstance(error, httpx.TimeoutException)
+
+
 def _run_ids() -> tuple[Any, Any]:
     """The task run and flow run this call is made in (Prefect's run context)."""
     from prefect.utilities.context import get_task_and_flow_run_ids
@@ -356,7 +402,7 @@ class _ServerGoneFilter(logging.Filter):
     """Drops Prefect's lines (and tracebacks) about a server that does not answer, which the
     record's one line replaces, and tells the record."""
 
-    def __init__(self, record: Record):
+    def __init__(self, record: PrefectRecord):
         super().__init__()
         self.record = record
 
@@ -367,18 +413,19 @@ class _ServerGoneFilter(logging.Filter):
             self.record._event_lost()
             return False
         error = entry.exc_info[1] if entry.exc_info else None
-        if isinstance(error, httpx.TransportError) or "ConnectError(" in entry.getMessage():
+        gone = isinstance(error, httpx.TransportError) and not _timed_out(error)
+        if gone or "ConnectError(" in entry.getMessage():
             self.record._server_gone()
             return False
         return True
 
 
 @contextlib.contextmanager
-def recording(api_url: str | None = None) -> Iterator[Record]:
-    """Make a :class:`Record` of the Prefect server at ``api_url`` (default: Prefect's
+def recording(api_url: str | None = None) -> Iterator[PrefectRecord]:
+    """Make a :class:`PrefectRecord` of the Prefect server at ``api_url`` (default: Prefect's
     ``PREFECT_API_URL``) active for the block; yield it, or the one already active.
 
-    The record is closed (:meth:`Record.close`) at the end of the block that made it.
+    The record is closed (:meth:`PrefectRecord.close`) at the end of the block that made it.
     """
     global _active
     if _active is not None:
@@ -392,7 +439,7 @@ def recording(api_url: str | None = None) -> Iterator[Record]:
     api_url = api_url or names.PREFECT_API_URL.value()
     filters = []
     with names.temporary_settings({names.PREFECT_CLIENT_MAX_RETRIES: ENGINE_RETRIES}):
-        record = Record(api_url)
+        record = PrefectRecord(api_url)
         _active = record
         set_api_log_sink(record.log)
         if api_url:
@@ -404,16 +451,16 @@ def recording(api_url: str | None = None) -> Iterator[Record]:
         for name in _QUIETED_LOGGERS:
             filters.append((logging.getLogger(name), _ServerGoneFilter(record)))
             filters[-1][0].addFilter(filters[-1][1])
-        flush_s = FLUSH_TIMEOUT_S
+        flush_s = (FLUSH_TIMEOUT_S, FLUSH_LIMIT_S)
         try:
             yield record
         except BaseException as error:
             if not isinstance(error, Exception):  # interrupted: end within seconds
-                flush_s = INTERRUPTED_FLUSH_S
+                flush_s = (INTERRUPTED_FLUSH_S, INTERRUPTED_FLUSH_S)
             raise
         finally:
             try:
-                record.close(flush_s)
+                record.close(*flush_s)
             finally:
                 set_api_log_sink(None)
                 EventsWorker.set_client_override(None)
@@ -422,12 +469,12 @@ def recording(api_url: str | None = None) -> Iterator[Record]:
                 _active = None
 
 
-def active_record() -> Record | None:
+def active_record() -> PrefectRecord | None:
     """The active record, if any."""
     return _active
 
 
-def run_recorded(body: Callable[[Record], T], *, what: str, root: str) -> T:
+def run_recorded(body: Callable[[PrefectRecord], T], *, what: str, root: str) -> T:
     """Run a flow's ``body`` with the active record (or one of its own), noting its outcome,
     while registered as a run of the local server (:func:`flows.server.registered_run`) of
     ``what`` (``sweep``, ``optimize``) in ``root``."""
@@ -456,7 +503,7 @@ def busy_status(error: BaseException) -> int | None:
     return None
 
 
-def started(record: Record, call: Callable[[], T]) -> T:
+def started(record: PrefectRecord, call: Callable[[], T]) -> T:
     """``call()``, a flow's run with ``record`` active; called again after each of
     :data:`START_WAITS_S` while it fails with a busy answer (:func:`busy_status`) before the
     flow's body began (the record has no flow run id yet), as the module docstring says.

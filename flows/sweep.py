@@ -17,8 +17,8 @@ Prefect runs only in this process; the Dask workers run the plain functions of
 temporary Prefect server of their own when no real one is configured).
 
 No step of the sweep waits for the Prefect server or fails with it: artifacts and run-logger
-lines go through the run's :class:`flows.record.Record`, which keeps what the server could not
-take and sends it when the server answers again. A sweep whose server stopped, was killed or
+lines go through the run's :class:`flows.record.PrefectRecord`, which keeps what the server could
+not take and sends it when the server answers again. A sweep whose server stopped, was killed or
 restarted computes, stores and writes its cubes as any other. What stops a sweep is named in
 the state of every sweep task it stopped (:class:`flows.progress.StopCause`).
 """
@@ -51,7 +51,7 @@ from flows.progress import (
     stopped_message,
     write_error,
 )
-from flows.record import Record, active_record, run_recorded
+from flows.record import PrefectRecord, active_record, run_recorded
 from flows.report import needs_report_folder
 from flows.run import log_sweep_run, sweep_summary
 from flows.scheduling import submit_missing, sweep_client
@@ -159,7 +159,7 @@ def report_task(root: str) -> str:
     return str(path)
 
 
-def _record() -> Record:
+def _record() -> PrefectRecord:
     """The run's record (:func:`flows.record.run_recorded` makes it active for the flow)."""
     record = active_record()
     if record is None:
@@ -204,7 +204,7 @@ def sweep(
         raise EskinError(f"report: {problem}")
     store = open_root(grid, root, dataset)
 
-    def body(record: Record) -> dict[str, Any] | State:
+    def body(record: PrefectRecord) -> dict[str, Any] | State:
         summary: dict[str, Any] = {"flow_run_url": flow_run_url(), "dashboard": None}
         if show_progress and summary["flow_run_url"]:
             print(f"Prefect flow run: {summary['flow_run_url']}", file=sys.stderr)
@@ -271,7 +271,11 @@ def _write_failure(run: Any) -> StoreWriteError | None:
 
 
 def _follow(
-    plan: SweepPlan, client: Any, futures: dict[str, Any], show_progress: bool, record: Record
+    plan: SweepPlan,
+    client: Any,
+    futures: dict[str, Any],
+    show_progress: bool,
+    record: PrefectRecord,
 ) -> None:
     """Follow every submitted point: the bar per point, the record and log every few seconds."""
     logger = get_run_logger()

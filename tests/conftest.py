@@ -1,13 +1,25 @@
-"""Fixtures shared by the end-to-end suites (tests/flows, tests/reliability)."""
+"""Fixtures shared by the end-to-end suites (tests/flows, tests/reliability), and the rules the
+whole suite runs by.
+
+End-to-end tests (a sweep, a search, a Prefect server or a Dask cluster started) are marked
+``slow``: an unmarked test that starts one fails (:func:`pytest_configure`), so
+``make test-quick`` (``-m "not slow"``) runs everything else alone. Under pytest-xdist
+(``make test`` runs ``-n 2 --dist loadgroup``) the slow tests of a module run on one worker, in
+order (one ``xdist_group`` per module), so that a module-scoped sweep is made once, and the
+workers share one Prefect server, one migrated database and one smoke sweep (:func:`once`).
+Every test has a time limit (pytest-timeout, ``timeout`` in pyproject.toml); slow tests get
+:data:`SLOW_TIMEOUT_S`.
+"""
 
 import contextlib
+import fcntl
 import functools
 import json
 import os
 import shutil
 import sqlite3
 import subprocess
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -20,24 +32,150 @@ from tests.flows.helpers import (
     in_process_client,
     server_state_with_db,
 )
+from tests.shared_data import vibtac12_copy
 
 #: A backstop: the session's server stops by itself if the suite dies before its teardown.
 SUITE_SERVER_IDLE_S = "600"
+#: The time limit of a test marked slow (pytest-timeout), whose sweeps take minutes on a busy
+#: machine; other tests have pyproject.toml's ``timeout``.
+SLOW_TIMEOUT_S = 900
+#: Commands of ``eskin`` that start a sweep, a search or a server (end-to-end runs; ``eskin run``
+#: runs one scene in its own process).
+END_TO_END_COMMANDS = frozenset({"sweep", "optimize", "serve", "server"})
+#: Arguments with which those commands start nothing.
+STARTS_NOTHING = frozenset({"--help", "-h", "--dry-run", "status", "stop"})
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Slow tests: :data:`SLOW_TIMEOUT_S` and, for pytest-xdist's ``loadgroup``, one group per
+    module (its module-scoped sweeps are made once, and its sweeps run one at a time)."""
+    for item in items:
+        if item.get_closest_marker("slow") is None:
+            continue
+        if item.get_closest_marker("timeout") is None:
+            item.add_marker(pytest.mark.timeout(SLOW_TIMEOUT_S))
+        if item.get_closest_marker("xdist_group") is None:
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
+
+
+#: The test running now (its set-up, call and tear-down), for :func:`_refuse_unmarked`.
+_running: list[pytest.Item] = []
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    _running.append(item)
+    try:
+        return (yield)
+    finally:
+        _running.pop()
+
+
+def _refuse_unmarked(what: str) -> None:
+    """Fail the running test, if it is not marked slow, for starting ``what``."""
+    if _running and _running[-1].get_closest_marker("slow") is None:
+        pytest.fail(f"{_running[-1].nodeid} {what}: mark it @pytest.mark.slow", pytrace=False)
+
+
+def _eskin_command(args: object) -> str | None:
+    """The ``eskin`` command a subprocess runs (``eskin CMD`` or ``python -m flows.cli CMD``),
+    if it starts something (a run, a server), else None."""
+    words = [str(arg) for arg in args] if isinstance(args, list | tuple) else [str(args)]
+    if words[1:3] == ["-m", server.MARKER]:
+        return "a Prefect server"
+    if words[1:3] == ["-m", "flows.cli"]:
+        command = words[3:4]
+    else:
+        command = words[1:2] if words and Path(words[0]).name == "eskin" else []
+    if set(command) & END_TO_END_COMMANDS and not STARTS_NOTHING & set(words):
+        return f"`eskin {command[0]}`"
+    return None
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """End-to-end runs are marked ``slow``: a test not so marked fails (:func:`_refuse_unmarked`)
+    when it, or a fixture made for it, starts a subprocess of :func:`_eskin_command`, or in this
+    process uses the local Prefect server or starts a Dask cluster of worker processes."""
+    from distributed import LocalCluster
+
+    popen_init = subprocess.Popen.__init__
+
+    def checked_popen(self, args, *more, **kwargs):
+        what = _eskin_command(args)
+        if what is not None:
+            _refuse_unmarked(f"runs {what}")
+        popen_init(self, args, *more, **kwargs)
+
+    def checked(function: Callable[..., object], what: str) -> Callable[..., object]:
+        @functools.wraps(function)
+        def check(*args, **kwargs):
+            _refuse_unmarked(what)
+            return function(*args, **kwargs)
+
+        return check
+
+    def checked_cluster(self, *args, **kwargs):
+        if kwargs.get("processes", True):
+            _refuse_unmarked("starts a Dask cluster of worker processes")
+        cluster_init(self, *args, **kwargs)
+
+    subprocess.Popen.__init__ = checked_popen
+    server.prefect_server = checked(server.prefect_server, "uses the local Prefect server")
+    cluster_init = LocalCluster.__init__
+    LocalCluster.__init__ = checked_cluster
+
+
+def shared_folder(tmp_path_factory) -> Path:
+    """A folder every pytest-xdist worker of this run shares (their base folders' parent), or
+    this session's base folder when the tests run in one process."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    with open(path, "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
+
+
+def once(tmp_path_factory, name: str, make: Callable[[Path], None]) -> Path:
+    """``shared_folder()/name``, made by ``make(folder)`` by the first worker that asks (the
+    others wait for it, then use what it made)."""
+    folder = shared_folder(tmp_path_factory) / name
+    with _locked(folder.with_name(f"{name}.lock")):
+        if not (folder / ".made").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            make(folder)
+            (folder / ".made").touch()
+    return folder
 
 
 @pytest.fixture(scope="session", autouse=True)
 def suite_prefect_server(tmp_path_factory):
-    """One local Prefect server state for the whole suite, stopped at its end.
+    """One local Prefect server state for the whole suite, stopped at its end (the end of the
+    last pytest-xdist worker that uses it).
 
     Every sweep the tests start (in a subprocess or in this process) finds the folder through
     ``ESKIN_SERVER_DIR``: the first starts the server, the others reuse it, as a user's do.
     """
-    state = tmp_path_factory.mktemp("prefect-server")
+    state = shared_folder(tmp_path_factory) / "prefect-server"
+    users = state.with_name("prefect-server.users")
+    with _locked(users.with_suffix(".lock")):
+        state.mkdir(mode=0o700, exist_ok=True)
+        count = int(users.read_text()) if users.exists() else 0
+        users.write_text(f"{count + 1}\n")
     saved = {k: os.environ.get(k) for k in (server.SERVER_DIR_ENV, server.IDLE_ENV)}
     os.environ[server.SERVER_DIR_ENV] = str(state)
     os.environ[server.IDLE_ENV] = SUITE_SERVER_IDLE_S
     yield state
-    server.stop(state)
+    with _locked(users.with_suffix(".lock")):
+        count = int(users.read_text()) - 1
+        users.write_text(f"{count}\n")
+        if count == 0:
+            server.stop(state)
     for name, value in saved.items():
         if value is None:
             os.environ.pop(name, None)
@@ -49,11 +187,14 @@ def suite_prefect_server(tmp_path_factory):
 def migrated_prefect_db(tmp_path_factory) -> Path:
     """A Prefect database (SQLite, one file) with every migration applied and nothing stored.
 
-    Made once a session, by ``prefect server database upgrade`` (the migrations a server runs
-    on its first start), and copied whole through SQLite's backup, so no write-ahead log is
-    left beside it.
+    Made once a run (:func:`once`), by ``prefect server database upgrade`` (the migrations a
+    server runs on its first start), and copied whole through SQLite's backup, so no write-ahead
+    log is left beside it.
     """
-    base = tmp_path_factory.mktemp("prefect-db")
+    return once(tmp_path_factory, "prefect-db", _migrated_db) / "prefect.db"
+
+
+def _migrated_db(base: Path) -> None:
     env = hermetic_env(base)
     proc = subprocess.run(
         [BIN / "prefect", "server", "database", "upgrade", "-y"],
@@ -64,13 +205,11 @@ def migrated_prefect_db(tmp_path_factory) -> Path:
         stdin=subprocess.DEVNULL,
     )
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    template = base / "prefect.db"
     with (
         contextlib.closing(sqlite3.connect(Path(env["PREFECT_HOME"]) / "prefect.db")) as source,
-        contextlib.closing(sqlite3.connect(template)) as copy,
+        contextlib.closing(sqlite3.connect(base / "prefect.db")) as copy,
     ):
         source.backup(copy)
-    return template
 
 
 @pytest.fixture
@@ -88,19 +227,34 @@ def suite_server_db(suite_prefect_server, migrated_prefect_db) -> None:
     first starts there, so that start skips the set-up. A state that has a database already
     (its server started) is left alone; the first users of the server ask for this."""
     database = suite_prefect_server / "prefect.db"
-    if not database.exists():
-        shutil.copyfile(migrated_prefect_db, database)
+    with _locked(suite_prefect_server.with_name("prefect-server.lock")):
+        if not database.exists():
+            shutil.copyfile(migrated_prefect_db, database)
 
 
 @pytest.fixture(scope="session")
 def smoke_sweep(tmp_path_factory, suite_server_db):
-    """The smoke grid swept once on the default local cluster: (root, JSON summary, env)."""
-    base = tmp_path_factory.mktemp("smoke-sweep")
-    env = hermetic_env(base)
-    root = base / "run"
-    proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
+    """The smoke grid swept once a run on the default local cluster (:func:`once`): (root, JSON
+    summary, env: this worker's own Prefect home and scratch folders). The root is read, never
+    written: a test that sweeps it again copies it."""
+    base = once(tmp_path_factory, "smoke-sweep", _sweep_smoke)
+    env = hermetic_env(tmp_path_factory.mktemp("smoke-env"))
+    return base / "run", json.loads((base / "summary.json").read_text()), env
+
+
+def _sweep_smoke(base: Path) -> None:
+    proc = eskin(
+        "sweep", "--grid", "smoke", "--root", str(base / "run"), "--json", env=hermetic_env(base)
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
-    return root, json.loads(proc.stdout), env
+    (base / "summary.json").write_text(proc.stdout)
+
+
+@pytest.fixture
+def vibtac12() -> Path:
+    """The VibTac-12 copy of ``../shared`` (:func:`tests.shared_data.vibtac12_copy`): the test
+    skips without it, or fails under CI."""
+    return vibtac12_copy()
 
 
 @pytest.fixture(scope="module")

@@ -69,6 +69,7 @@ def test_every_toml_example_loads(page, index):
     load_toml_example(blocks(DOCS / page, "toml")[index])
 
 
+@pytest.mark.slow
 def test_the_python_api_session_runs_as_shown(tmp_path, monkeypatch):
     page = DOCS / "how-to" / "python.md"
     session = "".join(blocks(page, "pycon"))

@@ -41,6 +41,7 @@ def test_bad_workers_are_refused_before_the_root_is_made(tmp_path, grid, kwargs,
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.slow
 def test_a_sweep_on_a_given_client_writes_cubes_and_leaves_the_client_open(
     tmp_path, grid, client, monkeypatch
 ):
@@ -75,6 +76,7 @@ def failing_at_5_mv(root, level, points, *after):
     return ENSURE_ENTRIES(root, level, points, *after)
 
 
+@pytest.mark.slow
 def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     tmp_path, grid, client, monkeypatch
 ):
@@ -84,6 +86,7 @@ def test_a_failed_point_fails_the_sweep_but_keeps_the_other_cubes(
     assert sorted(open_results(tmp_path / "run")) == ["window"]
 
 
+@pytest.mark.slow
 def test_a_write_without_space_stops_the_sweep_and_a_rerun_resumes(
     tmp_path, grid, client, monkeypatch
 ):

@@ -80,6 +80,7 @@ def warm_root(smoke_sweep, tmp_path):
     return copy, env
 
 
+@pytest.mark.slow
 def test_a_run_whose_server_is_busy_as_it_starts_starts_again(warm_root):
     root, env = warm_root
     proc = run_busy(2, root, env)
@@ -96,6 +97,7 @@ def test_a_run_whose_server_is_busy_as_it_starts_starts_again(warm_root):
     assert "Traceback" not in proc.stderr
 
 
+@pytest.mark.slow
 def test_a_run_whose_server_stays_busy_fails_in_one_line_and_leaves_the_root(warm_root):
     root, env = warm_root
     before = written(root)

@@ -187,15 +187,9 @@ def test_console_script_exit_status_and_stderr(tmp_path):
     assert "readout.threshold_v" in proc.stderr
 
 
-VIBTAC12 = Path(__file__).resolve().parents[3] / "shared" / "datasets" / "vibtac12"
-
-
-@pytest.mark.skipif(
-    not (VIBTAC12 / "Z.csv").is_file(), reason=f"the VibTac-12 copy is absent at {VIBTAC12}"
-)
-def test_run_on_the_vibtac12_copy(capsys, tiny_scene):
+def test_run_on_the_vibtac12_copy(capsys, tiny_scene, vibtac12):
     code, out, err = run_cli(
-        capsys, "run", "--scene", tiny_scene(), "--dataset", str(VIBTAC12), "--json"
+        capsys, "run", "--scene", tiny_scene(), "--dataset", str(vibtac12), "--json"
     )
     assert code == 0, err
     result = json.loads(out)

@@ -83,6 +83,7 @@ def _worker_logs(messages):
     return [bool(logger.filter(r)) for r in records]
 
 
+@pytest.mark.slow
 def test_a_local_worker_does_not_report_a_heartbeat_to_its_closed_scheduler():
     messages = ["Failed to communicate with scheduler during heartbeat.", "Compute Failed"]
     with dask_client(workers=1) as client:

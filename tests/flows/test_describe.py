@@ -16,17 +16,6 @@ from pipeline.recordings.sources import Recordings, load_folder, load_recordings
 from pipeline.recordings.touch_statistics import REAL_TOUCHES
 from tests.flows.helpers import eskin, hermetic_env
 
-REAL_VIBTAC12 = next(
-    (
-        p / "shared/datasets/vibtac12"
-        for p in Path(__file__).resolve().parents
-        if (p / "shared/datasets/vibtac12").is_dir()
-    ),
-    Path("shared/datasets/vibtac12"),
-)
-needs_vibtac12 = pytest.mark.skipif(
-    not REAL_VIBTAC12.is_dir(), reason="the VibTac-12 copy is not here"
-)
 SEGMENTS = "are these segments of one recording?"
 
 
@@ -144,10 +133,9 @@ def test_a_failing_write_leaves_nothing_behind(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-@needs_vibtac12
-def test_the_vibtac12_copy_exports_with_classes_numbered_in_order(tmp_path):
-    vibtac = load_vibtac12(REAL_VIBTAC12)
-    export = export_folder(vibtac, tmp_path / "vt", source=str(REAL_VIBTAC12))
+def test_the_vibtac12_copy_exports_with_classes_numbered_in_order(tmp_path, vibtac12):
+    vibtac = load_vibtac12(vibtac12)
+    export = export_folder(vibtac, tmp_path / "vt", source=str(vibtac12))
     names = [f"{i:02d}_Texture{i}" for i in range(1, 13)]
     assert len(export.renamed) == 12
     _assert_same(load_folder(tmp_path / "vt"), vibtac, names)
@@ -192,12 +180,11 @@ def test_text_on_a_folder_dataset(tmp_path):
     assert not any(SEGMENTS in w or "no contact transient" in w for w in warnings)
 
 
-@needs_vibtac12
-def test_json_on_the_vibtac12_copy_warns_of_segments(tmp_path):
+def test_json_on_the_vibtac12_copy_warns_of_segments(tmp_path, vibtac12):
     proc = eskin(
         "describe",
         "--dataset",
-        str(REAL_VIBTAC12),
+        str(vibtac12),
         "--json",
         env=hermetic_env(tmp_path),
         timeout=120,

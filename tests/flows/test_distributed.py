@@ -20,6 +20,8 @@ from tests.flows.helpers import (
     wait_for,
 )
 
+pytestmark = pytest.mark.slow
+
 
 def test_existing_scheduler_and_workers_give_identical_cubes(smoke_sweep, tmp_path):
     env = hermetic_env(tmp_path)

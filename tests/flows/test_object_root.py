@@ -64,6 +64,7 @@ def test_tool_state_of_an_object_root_is_in_the_users_cache(tmp_path, monkeypatc
     assert state_folder(tmp_path / "run") == tmp_path / "run" / ".state"
 
 
+@pytest.mark.slow
 def test_a_sweep_on_an_object_root_cannot_write_its_report_there(tmp_path):
     env = hermetic_env(tmp_path)
     root = "s3://nowhere/run"

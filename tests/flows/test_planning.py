@@ -101,6 +101,7 @@ sys.exit(status)
 """
 
 
+@pytest.mark.slow
 def test_a_sweep_loads_and_checks_its_grid_once(tmp_path, client, monkeypatch):
     path = tmp_path / "once.toml"
     path.write_text(SMALL_GRID)

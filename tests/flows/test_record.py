@@ -19,10 +19,20 @@ class _Server:
         self.refuse: set[str] = set()
         #: Seconds each request takes (a busy server).
         self.slow_s = 0.0
+        #: Requests still to answer "busy, try again" (503), or with a time-out.
+        self.busy = 0
+        self.timeouts = 0
         self.lock = threading.Lock()
 
     def client(self, sync_client=True):
         return _Client(self)
+
+
+def status_error(status: int) -> httpx.HTTPStatusError:
+    """The error Prefect's client raises for an answer of ``status``."""
+    request = httpx.Request("POST", "http://127.0.0.1:9/api/")
+    response = httpx.Response(status, request=request)
+    return httpx.HTTPStatusError(str(status), request=request, response=response)
 
 
 class _Client:
@@ -40,8 +50,14 @@ class _Client:
         with self.server.lock:
             if not self.server.answers:
                 raise httpx.ConnectError("[Errno 111] Connection refused")
+            if self.server.busy:
+                self.server.busy -= 1
+                raise status_error(503)
+            if self.server.timeouts:
+                self.server.timeouts -= 1
+                raise httpx.ReadTimeout("timed out")
             if what in self.server.refuse:
-                raise httpx.HTTPStatusError("422", request=None, response=None)
+                raise status_error(422)
             self.server.taken.append((what, payload))
 
     def create_logs(self, logs):
@@ -51,7 +67,7 @@ class _Client:
             try:
                 LogCreate.model_validate(log)
             except ValueError as error:
-                raise httpx.HTTPStatusError("422", request=None, response=None) from error
+                raise status_error(422) from error
         self._take("logs", [log["message"] for log in logs])
 
     def create_artifact(self, artifact):
@@ -77,6 +93,7 @@ def fake(monkeypatch):
     monkeypatch.setattr(orchestration, "get_client", server.client)
     monkeypatch.setattr(records, "healthy", lambda url, timeout_s=2.0: server.answers)
     monkeypatch.setattr(records, "PROBE_S", 0.05)
+    monkeypatch.setattr(records, "BUSY_RETRY_S", 0.05)
     monkeypatch.setattr(records, "SEND_EVERY_S", 0.05)
     return server
 
@@ -102,7 +119,7 @@ def settle(condition, timeout_s=10.0):
 def test_what_a_gone_server_could_not_take_is_sent_when_it_answers_again(fake):
     from prefect.states import Completed
 
-    record = records.Record("http://127.0.0.1:9/api")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
     record.flow_run_id = "run"
     record.progress("p", 10.0, "points done")
     settle(lambda: ("create:p", 10.0) in fake.taken)
@@ -131,7 +148,7 @@ def test_what_a_gone_server_could_not_take_is_sent_when_it_answers_again(fake):
 
 
 def test_a_server_that_never_answers_again_is_not_waited_for(fake):
-    record = records.Record("http://127.0.0.1:9/api")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
     fake.answers = False
     record.log(line("held"))
     settle(lambda: record.down_since is not None)
@@ -145,7 +162,7 @@ def test_a_server_that_never_answers_again_is_not_waited_for(fake):
 
 def test_what_an_answering_server_refuses_is_counted_lost(fake):
     fake.refuse.add("create:bad")
-    record = records.Record("http://127.0.0.1:9/api")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
     record.table("bad", [{"x": 1}], "refused")
     record.table("good", [{"x": 2}], "taken")
     assert not record.close(timeout_s=10)
@@ -155,7 +172,7 @@ def test_what_an_answering_server_refuses_is_counted_lost(fake):
 
 def test_a_server_too_busy_to_take_it_all_before_the_end_is_named_so(fake):
     fake.slow_s = 0.5
-    record = records.Record("http://127.0.0.1:9/api")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
     for i in range(4):
         record.table(f"t{i}", [{"x": i}], "slow")
     assert not record.close(timeout_s=0.2)
@@ -165,10 +182,64 @@ def test_a_server_too_busy_to_take_it_all_before_the_end_is_named_so(fake):
     assert "refused" not in note
 
 
+def test_a_busy_server_taking_it_all_slowly_is_waited_for_while_it_takes(fake):
+    """The end of a run waits while the server takes something within each ``timeout_s``, not
+    a fixed time from the end: 12 requests of 0.1 s outlast a 0.5 s time-out."""
+    fake.slow_s = 0.1
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
+    for i in range(12):
+        record.table(f"t{i}", [{"x": i}], "slow")
+    start = time.monotonic()
+    assert record.close(timeout_s=0.5), record.incomplete_note()
+    assert time.monotonic() - start > 0.5
+    assert [what for what, _ in fake.taken] == [f"create:t{i}" for i in range(12)]
+
+
+def test_a_busy_server_does_not_stop_the_end_of_the_run_for_longer_than_the_limit(fake):
+    fake.slow_s = 0.1
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
+    for i in range(40):
+        record.table(f"t{i}", [{"x": i}], "slow")
+    start = time.monotonic()
+    assert not record.close(timeout_s=0.5, limit_s=0.6)
+    assert time.monotonic() - start < 1.5
+    assert "had not taken all of it" in record.incomplete_note()
+
+
+def test_busy_answers_and_time_outs_are_sent_again_not_lost(fake):
+    """503 ("busy, try again") and a request that timed out: a busy server, neither gone nor
+    refusing; what they did not take goes in order once it takes it."""
+    fake.busy, fake.timeouts = 2, 1
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
+    record.log(line("first"))
+    record.table("best", [{"x": 1}], "after the lines")
+    assert record.close(timeout_s=10), record.incomplete_note()
+    assert [what for what, _ in fake.taken] == ["logs", "create:best"]
+    assert record.lost == 0 and not record.was_down
+
+
+def test_a_slow_health_check_is_a_busy_server_not_a_gone_one(fake, monkeypatch):
+    """A server that answers its health check in 3 s (a cold server on a busy machine) is
+    answering: given :data:`flows.record.HEALTH_TIMEOUT_S`, not 2 s."""
+    asked = []
+
+    def healthy(url, timeout_s=2.0):
+        asked.append(timeout_s)
+        return timeout_s >= 3.0
+
+    monkeypatch.setattr(records, "healthy", healthy)
+    fake.refuse.add("create:bad")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
+    record.table("bad", [{"x": 1}], "refused")
+    assert not record.close(timeout_s=10)
+    assert asked and min(asked) >= 3.0
+    assert record.lost == 1 and record.down_since is None
+
+
 def test_run_logger_lines_as_prefect_prepares_them_are_taken(fake):
     entry = line("Dask dashboard: http://127.0.0.1:8787/status")
     assert "__payload_size__" in entry  # what made the API refuse every batch
-    record = records.Record("http://127.0.0.1:9/api")
+    record = records.PrefectRecord("http://127.0.0.1:9/api")
     record.log(entry)
     assert record.close(timeout_s=10)
     assert fake.taken == [("logs", ["Dask dashboard: http://127.0.0.1:8787/status"])]

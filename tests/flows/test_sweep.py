@@ -20,6 +20,7 @@ from tests.flows.helpers import api_headers, eskin, hermetic_env
 SMOKE_SWEEPS = {"threshold", "window", "noise"}
 
 
+@pytest.mark.slow
 def test_cold_run_summary(smoke_sweep):
     root, summary, _ = smoke_sweep
     assert set(summary) == {
@@ -62,6 +63,7 @@ def test_cold_run_summary(smoke_sweep):
     assert summary["root"] == str(root.resolve())
 
 
+@pytest.mark.slow
 def test_cubes_are_labelled(smoke_sweep):
     cubes = open_results(smoke_sweep[0])
     assert set(cubes) == SMOKE_SWEEPS
@@ -114,6 +116,7 @@ def test_cubes_are_labelled(smoke_sweep):
     )
 
 
+@pytest.mark.slow
 def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
     noise = open_results(smoke_sweep[0])["noise"]
     assert noise["accuracy"].dims == ("amplifier_noise_sigma_v", "model", "repeat", "fold")
@@ -129,6 +132,7 @@ def test_noise_sweep_correlates_spike_metrics_with_accuracy(smoke_sweep):
     assert np.all(np.diff(noise["ssnr_db"].values) < 0)
 
 
+@pytest.mark.slow
 def test_xarray_queries_from_the_readme(smoke_sweep):
     cubes = open_results(smoke_sweep[0])
     mean = cubes["threshold"]["accuracy_mean"]
@@ -139,6 +143,7 @@ def test_xarray_queries_from_the_readme(smoke_sweep):
     assert window.std(("repeat", "fold")).dims == ("model",)
 
 
+@pytest.mark.slow
 def test_window_sweep_reuses_spike_trains(smoke_sweep):
     folder = SweepStore.open(smoke_sweep[0]).path / SPIKES.name
     batches = [p for p in folder.iterdir() if p.name.startswith(BATCH_PREFIX)]
@@ -147,8 +152,10 @@ def test_window_sweep_reuses_spike_trains(smoke_sweep):
     assert len(written) == len(set(written)) == 6
 
 
-def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep):
-    root, _, env = smoke_sweep
+@pytest.mark.slow
+def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep, tmp_path):
+    root, env = tmp_path / "run", smoke_sweep[2]
+    shutil.copytree(smoke_sweep[0], root)  # the session's root is shared: read, never written
     before = open_results(root)
     proc = eskin("sweep", "--grid", "smoke", "--root", str(root), env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -159,6 +166,7 @@ def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep):
         xr.testing.assert_identical(before[name], after[name])
 
 
+@pytest.mark.slow
 def test_extending_a_grid_computes_only_new_points(smoke_sweep, tmp_path):
     # A copy: the extended grid rewrites the "threshold" cube, which other tests compare.
     root = tmp_path / "run"
@@ -258,6 +266,7 @@ def test_malformed_address(capsys, tmp_path):
     assert "expected tcp://HOST:PORT" in err
 
 
+@pytest.mark.slow
 def test_the_cube_guide_queries_run_on_a_sweep(smoke_sweep):
     import re
     from pathlib import Path
@@ -271,6 +280,7 @@ def test_the_cube_guide_queries_run_on_a_sweep(smoke_sweep):
     assert set(namespace["cubes"]) == SMOKE_SWEEPS
 
 
+@pytest.mark.slow
 def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
     """``--dataset`` puts any grid on other recordings; ``--report`` ends with the report, and
     the flow run links to it in the Prefect UI."""

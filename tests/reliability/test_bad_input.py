@@ -599,6 +599,7 @@ def test_object_roots_that_cannot_be_used_are_refused_in_one_line(
     assert bucket_objects(bucket, s3_server) == []
 
 
+@pytest.mark.slow
 def test_a_plain_http_endpoint_through_the_installed_command(tmp_path, bucket, s3_server):  # noqa: F811
     env = hermetic_env(tmp_path, **s3_env(s3_server))
     del env["AWS_ALLOW_HTTP"]
@@ -614,6 +615,7 @@ def test_a_plain_http_endpoint_through_the_installed_command(tmp_path, bucket, s
 # -- the real exit path ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("case_id"), ["dataset-nan", "args-text-workers", "grid-sweep-name-escapes"]
 )
@@ -692,6 +694,7 @@ def test_sweep_refuses_a_recording_shorter_than_the_taxel_delays(capsys, tmp_pat
     assert not (tmp_path / "root").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["run", "sweep"])
 def test_short_recordings_through_the_installed_command(tmp_path, command):
     root = tmp_path / "root"

@@ -108,6 +108,7 @@ def listening(process: psutil.Process) -> list[str]:
     return addresses
 
 
+@pytest.mark.slow
 def test_the_local_cluster_and_its_dashboard_listen_on_loopback_only(tmp_path, monkeypatch):
     monkeypatch.setenv("DASK_TEMPORARY_DIRECTORY", str(tmp_path))
     with dask_client(workers=1) as client:
@@ -139,6 +140,7 @@ def write_credentials(folder: Path, security) -> dict[str, str]:
     return files
 
 
+@pytest.mark.slow
 def test_a_running_sweeps_scheduler_refuses_clients_without_its_credentials(tmp_path, monkeypatch):
     """Another user who reaches the port cannot connect a client (and run code as the sweep's
     owner): not without TLS, not over plain TCP, not with credentials of their own."""
@@ -179,6 +181,7 @@ def tls_without_certificate(address: str, ca_pem: str) -> bytes:
         return tls.recv(1)
 
 
+@pytest.mark.slow
 def test_an_external_tls_scheduler_needs_matching_credentials(tmp_path):
     """The right files connect; another CA's are one line from ``eskin sweep --address``."""
     import dask
@@ -223,6 +226,7 @@ def test_an_external_tls_scheduler_needs_matching_credentials(tmp_path):
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.slow
 def test_prefect_servers_we_start_bind_to_loopback(tmp_path, monkeypatch):
     # hermetic_environment writes os.environ: give it a copy without the user's Prefect settings.
     environ = {k: v for k, v in os.environ.items() if not k.startswith("PREFECT_")}

@@ -1114,20 +1114,31 @@ def test_layout_1_store_is_refused_by_open_and_ignored_by_open_readonly(tmp_path
     assert listing(tmp_path) == before  # neither writes anything
 
 
-@pytest.mark.skipif(
-    hasattr(os, "geteuid") and os.geteuid() == 0,
-    reason="root may write to a read-only directory, so permissions cannot make one unwritable",
-)
-def test_read_only_root_is_refused(tmp_path):
+@pytest.fixture
+def read_only_root(tmp_path):
+    """An empty folder no one may write to: a read-only tmpfs mounted there when the tests run as
+    root (as CI does: root writes through a folder's permissions), else a folder of mode 0555."""
     root = tmp_path / "run"
     root.mkdir()
+    if os.geteuid() == 0:
+        mount = ["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(root)]
+        subprocess.run(mount, check=True)
+        try:
+            yield root
+        finally:
+            subprocess.run(["umount", "-l", str(root)], check=True)
+        return
     root.chmod(0o555)
     try:
-        with pytest.raises(StoreError, match="not writable"):
-            SweepStore.open_or_create(root)
-        assert os.listdir(root) == []
+        yield root
     finally:
         root.chmod(0o755)
+
+
+def test_read_only_root_is_refused(read_only_root):
+    with pytest.raises(StoreError, match="not writable"):
+        SweepStore.open_or_create(read_only_root)
+    assert os.listdir(read_only_root) == []
 
 
 def test_unwritable_root_by_access_check(tmp_path, monkeypatch):

@@ -4,7 +4,6 @@ import json
 import math
 import re
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,15 +21,6 @@ from pipeline.recordings.sources import Recordings, load_vibtac12
 from pipeline.recordings.touch_statistics import REAL_TOUCHES
 
 FS = 1000.0
-# The shared folder beside the repository (its depth differs between checkouts).
-REAL_VIBTAC12 = next(
-    (
-        p / "shared/datasets/vibtac12"
-        for p in Path(__file__).resolve().parents
-        if (p / "shared/datasets/vibtac12").is_dir()
-    ),
-    Path("shared/datasets/vibtac12"),
-)
 SEGMENTS = "are these segments of one recording?"
 NO_TRANSIENT = "no contact transient"
 
@@ -132,9 +122,8 @@ def test_the_segment_warning_uses_the_margin():
     assert flat_gap < SEGMENT_MARGIN and flat_warned
 
 
-@pytest.mark.skipif(not REAL_VIBTAC12.is_dir(), reason="the VibTac-12 copy is not here")
-def test_the_vibtac12_copy_looks_like_segments_of_one_recording():
-    description = describe_dataset(load_vibtac12(REAL_VIBTAC12))
+def test_the_vibtac12_copy_looks_like_segments_of_one_recording(vibtac12):
+    description = describe_dataset(load_vibtac12(vibtac12))
     assert description.facts.class_names[0] == "Texture1"
     assert description.facts.recordings_per_class == (10,) * 12
     assert description.facts.n_windows == 19

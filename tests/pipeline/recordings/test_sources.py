@@ -23,9 +23,6 @@ from pipeline.recordings.sources import (
     resolve_dataset_argument,
 )
 
-REAL_VIBTAC12 = Path(__file__).resolve().parents[4] / "shared/datasets/vibtac12"
-
-
 # ---------------------------------------------------------------------------------------------
 # Helpers
 
@@ -473,11 +470,8 @@ def test_vibtac12_errors(tmp_path):
             load_vibtac12(root, **bad)
 
 
-@pytest.mark.skipif(
-    not REAL_VIBTAC12.is_dir(), reason=f"the VibTac-12 copy is absent ({REAL_VIBTAC12})"
-)
-def test_vibtac12_real_copy():
-    rec = load_vibtac12(REAL_VIBTAC12)
+def test_vibtac12_real_copy(vibtac12):
+    rec = load_vibtac12(vibtac12)
     assert rec.n_recordings == 120
     assert rec.n_classes == 12
     assert set(rec.lengths) == {399}
