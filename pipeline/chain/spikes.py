@@ -53,7 +53,8 @@ class SpikeTrains:
     Attributes
     ----------
     times_s : float64 (n_events,)
-        Spike times in seconds from the first sample of each recording's taxel time axis.
+        Spike times in seconds from the first sample of each recording's taxel time axis,
+        whole ticks of :data:`TIME_RESOLUTION_S` where made by :meth:`concatenate`.
     polarity : int8 (n_events,)
         +1 (signal rose by one threshold) or -1 (fell).
     count : int64 (n_recordings, n_taxels)
