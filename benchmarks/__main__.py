@@ -25,6 +25,7 @@ from benchmarks import (
     scale,
     search,
     snn,
+    spike_store,
     sweep,
     sweep_scale,
     training,
@@ -32,7 +33,7 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, snn, planning, chips)
+QUICK = (encoder, coding, kernels, training, snn, planning, chips, spike_store)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 

@@ -223,7 +223,8 @@ class _Task:
     def flush(self) -> None:
         """Write the pending entries, one batch per level, inputs before the levels after."""
         for level in stages.stored_levels():
-            entries = self._pending.pop(level.name, None)
+            entries = self._pending.pop(level.name, {})
+            entries = {key: entry for key, entry in entries.items() if level.kept(entry)}
             if entries:
                 self.store.write_entries(level.record, entries)
         self._pending_bytes = 0

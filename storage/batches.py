@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from zarr.abc.store import Store
+from zarr.codecs import BloscCodec
 
 #: One entry's variables: name -> (entry-level dims, values, attrs).
 Variables = dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]
@@ -102,7 +103,7 @@ def write_batch(path: Path | Store, kind: str, records: Sequence[BatchEntry]) ->
         data[name] = xr.Variable(
             (f"{FLAT_PREFIX}{name}",), values, {**attrs, **strings, "dims": list(dims)}
         )
-        encoding[name] = {"chunks": (_chunk_length(values),)}
+        encoding[name] = {"chunks": (_chunk_length(values),), **_compressors(values)}
     digests["@entries"] = json_digest(entries)
     attrs = {"eskin_batch": kind, "entries": entries, "sha256": digests}
     xr.Dataset(data, attrs=attrs).to_zarr(_target(path), mode="w-", encoding=encoding, **_TO_ZARR)
@@ -197,6 +198,16 @@ def json_digest(value: Any) -> str:
     """sha256 hex of the canonical JSON of ``value`` (sorted keys, no NaN)."""
     text = json.dumps(value, sort_keys=True, allow_nan=False, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _compressors(values: np.ndarray) -> dict[str, Any]:
+    """Numbers: Blosc (a core Zarr v3 codec) with zstd over byte-shuffled values, which packs
+    small integers (the tick deltas of spike trains, :mod:`storage.codec`) to about their
+    entropy; strings: Zarr's default."""
+    if values.dtype.kind in "OTU":
+        return {}
+    shuffled = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle", typesize=values.itemsize)
+    return {"compressors": (shuffled,)}
 
 
 def _chunk_length(values: np.ndarray) -> int:

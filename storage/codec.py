@@ -13,6 +13,17 @@ its record declaration to the store); this module knows no kind by name. A decla
 ``encode(entry) -> (values, attrs)`` and ``decode(values, attrs) -> entry``
     between an entry and its named arrays plus JSON attributes.
 
+A variable may also declare ``ticks`` (``resolution_s``, ``runs``, ``sign``): event times, kept
+compactly as an address-event chip sends them. Their values must be whole ticks,
+``t = k * resolution_s`` (float64 product) with ``k`` non-decreasing within each train (the
+consecutive runs whose lengths are the variable ``runs``, C order); the store keeps one
+``uint32`` per event, ``2 * (k - k_before) + (sign > 0)`` (``k_before``: the previous event's
+tick in its train, 0 for its first), under the times variable's name, and not the ``+-1``
+variable ``sign`` apart. Its attributes say so (``ticks_s``, ``ticks_runs``, ``ticks_sign``),
+so any Zarr reader rebuilds the times with a cumulative sum per train. Reading gives back the
+very float64 times and int8 signs written (checked on write: a time that is not a whole tick,
+a sign that is not +-1 or a gap of more than ``2**31 - 1`` ticks is refused).
+
 Writing casts every array to its declared dtype (little-endian; never across kinds, never an
 integer that changes value), checks its number of dims, refuses undeclared and missing
 variables and attributes that JSON cannot hold (NaN, infinities), and writes the declared
@@ -46,6 +57,16 @@ class DeclaredVariable(Protocol):
     units: str
     long_name: str
     optional: bool
+    ticks: DeclaredTicks | None
+
+
+class DeclaredTicks(Protocol):
+    """How event times are kept (see the module docstring): the resolution (s), the name of the
+    variable holding each train's length and of the +-1 variable folded into the low bit."""
+
+    resolution_s: float
+    runs: str
+    sign: str
 
 
 class Declaration(Protocol):
@@ -92,6 +113,9 @@ def to_record(kind: Declaration, key: str, entry: Any) -> BatchEntry:
             array,
             {"units": variable.units, "long_name": variable.long_name},
         )
+    for variable in kind.variables:
+        if variable.ticks is not None and variable.name in variables:
+            _fold_ticks(variables, variable.name, variable.ticks)
     try:
         json.dumps(attrs, allow_nan=False)
     except (TypeError, ValueError) as error:
@@ -108,8 +132,12 @@ def from_record(kind: Declaration, record: BatchEntry) -> Any:
         The record does not match the declaration, or ``kind.decode`` refuses it.
     """
     declared = {variable.name: variable for variable in kind.variables}
+    stored = dict(record.variables)
+    for variable in kind.variables:
+        if variable.ticks is not None and variable.name in stored:
+            _unfold_ticks(stored, variable, declared[variable.ticks.sign])
     values = {}
-    for name, (dims, array, _) in record.variables.items():
+    for name, (dims, array, _) in stored.items():
         if name not in declared:
             raise ValueError(f"undeclared variable {name!r}")
         variable = declared[name]
@@ -152,3 +180,64 @@ def _cast(value: Any, dtype: str, what: str) -> np.ndarray:
     if target.kind in "iu" and not np.array_equal(cast, array):
         raise ValueError(f"{what}: values do not fit {target}")
     return cast
+
+
+#: The stored type of folded tick deltas: one bit of sign, 31 of delta.
+TICKS_DTYPE = np.dtype("<u4")
+
+
+def _fold_ticks(variables: Variables, name: str, ticks: DeclaredTicks) -> None:
+    """Replace the times ``name`` and their sign by one array of folded tick deltas."""
+    dims, times, attrs = variables[name]
+    if ticks.runs not in variables or ticks.sign not in variables:
+        raise ValueError(f"{name}: stored as ticks, it needs {ticks.runs} and {ticks.sign}")
+    _, sign, _ = variables.pop(ticks.sign)
+    runs = variables[ticks.runs][1].ravel()
+    if sign.shape != times.shape or (runs < 0).any() or int(runs.sum()) != times.size:
+        raise ValueError(f"{name}: {ticks.sign} and {ticks.runs} do not match its events")
+    if not np.isin(sign, (-1, 1)).all():
+        raise ValueError(f"{name}: {ticks.sign} holds values other than -1 and +1")
+    tick = np.rint(times / ticks.resolution_s)
+    if not np.array_equal(tick * ticks.resolution_s, times) or (tick < 0).any():
+        raise ValueError(f"{name}: times are not whole ticks of {ticks.resolution_s} s")
+    delta = np.diff(tick.astype(np.int64), prepend=0)
+    first = (np.cumsum(runs) - runs)[runs > 0]
+    delta[first] = tick[first]
+    if (delta < 0).any():
+        raise ValueError(f"{name}: times decrease within a train")
+    if delta.size and int(delta.max()) > (int(np.iinfo(TICKS_DTYPE).max) >> 1):
+        raise ValueError(f"{name}: a gap of more than 2**31 - 1 ticks does not fit {TICKS_DTYPE}")
+    folded = (delta.astype(TICKS_DTYPE) << 1) | (sign > 0)
+    about = {
+        "units": "1",
+        "long_name": f"{attrs['long_name']}: 2 * ticks since the train's last + ({ticks.sign} > 0)",
+        "ticks_s": ticks.resolution_s,
+        "ticks_runs": ticks.runs,
+        "ticks_sign": ticks.sign,
+    }
+    variables[name] = (dims, folded, about)
+
+
+def _unfold_ticks(variables: Variables, variable: DeclaredVariable, sign: DeclaredVariable) -> None:
+    """The inverse of :func:`_fold_ticks`: the float64 times and int8 signs, from the stored
+    folded deltas and the runs."""
+    ticks = variable.ticks
+    dims, folded, _ = variables[variable.name]
+    if folded.dtype != TICKS_DTYPE or ticks.runs not in variables:
+        raise TypeError(f"variable {variable.name!r} is not folded {TICKS_DTYPE} tick deltas")
+    runs = variables[ticks.runs][1].ravel()
+    if (runs < 0).any() or int(runs.sum()) != folded.size:
+        raise ValueError(f"{ticks.runs} does not match {variable.name}")
+    # One running sum over all trains, each train's first delta less the previous train's last
+    # tick, in place: a chip study reads tens of millions of events per entry.
+    tick = (folded >> 1).astype(np.int64)
+    first = (np.cumsum(runs) - runs)[runs > 0]
+    if first.size > 1:
+        tick[first[1:]] -= np.add.reduceat(tick, first)[:-1]
+    np.cumsum(tick, out=tick)
+    times = tick * ticks.resolution_s
+    signs = (folded & 1).astype(np.dtype(sign.dtype))
+    signs *= 2
+    signs -= 1
+    variables[variable.name] = (dims, times, {})
+    variables[sign.name] = (dims, signs, {})

@@ -20,9 +20,11 @@ from storage.errors import StoreError, StoreLayoutError, one_line
 
 STORE_NAME = "store.zarr"
 MARKER = "eskin_sweep_store"
-#: The store layout this code writes and reads. Layout 2 stores entries in batches
-#: (:mod:`storage.batches`); layout 1 stored one group per entry.
-VERSION = 2
+#: The store layout this code writes and reads. Layout 3 keeps spike times as whole ticks
+#: (:mod:`storage.codec`) and compresses numbers with Blosc; layout 2 kept them as float64
+#: seconds, unquantised; both store entries in batches (:mod:`storage.batches`); layout 1
+#: stored one group per entry.
+VERSION = 3
 # A store of an older layout is kept beside the new one under this name (plus a suffix).
 OLD_STORE_PREFIX = "store.zarr-layout-"
 CUBES = "cubes"

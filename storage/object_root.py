@@ -4,7 +4,7 @@ rename, with the same guarantees.
 Object layout (keys relative to the root URL)::
 
     store.lock                                the lease (:mod:`storage.lease`)
-    store.zarr/zarr.json                      group, attrs {"eskin_sweep_store": 2}
+    store.zarr/zarr.json                      group, attrs {"eskin_sweep_store": 3}
     store.zarr/<kind>/batch-<hex>/...         a batch; complete once its zarr.json exists
     store.zarr/cubes/<name>/current           the cube's version and its objects' ETags
     store.zarr/cubes/<name>/v-<hex>/...       one written version of the cube

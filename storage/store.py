@@ -4,13 +4,13 @@ On-disk layout (every node is a Zarr v3 group or array, written and read through
 
     <root>/                             the run root; may also hold our own .state/, ...
       store.lock                        the sweep lock (see :meth:`SweepStore.lock`)
-      store.zarr/                       group, attrs {"eskin_sweep_store": 2} (the layout)
+      store.zarr/                       group, attrs {"eskin_sweep_store": 3} (the layout)
         <kind>/batch-<hex>/             a batch of entries of one kind (a stored level's name,
                                         e.g. spikes, results; keys: pipeline.run.stages.cache_key)
         cubes/<name>/                   one result cube (name: [A-Za-z0-9_-]{1,64}: a sweep's;
                                         <search>.trials, <search>.front: a search's)
         <kind>/.partial-batch-<hex>/    a batch being written (or abandoned); never read
-      store.zarr-layout-1-<time>/       a store of an older layout, set aside (never read)
+      store.zarr-layout-2-<time>/       a store of an older layout, set aside (never read)
 
 A batch (:mod:`storage.batches`) holds the entries one task wrote at once, stacked variable by
 variable, with their keys, attributes and shapes in its group attributes: its files grow with

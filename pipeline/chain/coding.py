@@ -1,7 +1,10 @@
 """Rate coding: spike counts in fixed windows, and the frames the classifiers see.
 
 Windows are half-open, ``[k * w, (k + 1) * w)`` for ``k = 0 .. K - 1``, with explicit edges
-``e_k = k * w`` computed once from the window length and never from the data. A spike at time
+``e_k = k * w`` computed once from the window length and never from the data, each the nearest
+whole tick of :data:`~pipeline.chain.spikes.TIME_RESOLUTION_S` (spike times are whole ticks,
+floored: a floored time lies on the same side of such an edge as the time it came from, which
+``k * w`` in floating point, an ulp off the tick, would not guarantee). A spike at time
 ``t`` falls in window ``k`` when ``e_k <= t < e_{k+1}``; a spike exactly on an edge belongs to the
 window that starts there. Spikes before 0 or at or after ``e_K`` are outside and counted as
 dropped. Counts are int64: they cannot overflow for any train that fits in memory.
@@ -20,7 +23,7 @@ import math
 
 import numpy as np
 
-from pipeline.chain.spikes import SpikeTrains
+from pipeline.chain.spikes import TIME_RESOLUTION_S, SpikeTrains
 from pipeline.design.scene import CodingSpec, Polarity
 from pipeline.design.windows import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.errors import SimulationError
@@ -28,8 +31,10 @@ from pipeline.jit import kernel
 
 
 def window_edges_s(window_s: float, n_windows: int) -> np.ndarray:
-    """float64 (n_windows + 1,): the explicit edges ``k * window_s``."""
-    return np.arange(n_windows + 1, dtype=np.float64) * window_s
+    """float64 (n_windows + 1,): the explicit edges ``k * window_s``, each the nearest whole
+    tick of :data:`~pipeline.chain.spikes.TIME_RESOLUTION_S` (see the module docstring)."""
+    edges = np.arange(n_windows + 1, dtype=np.float64) * window_s
+    return np.rint(edges / TIME_RESOLUTION_S) * TIME_RESOLUTION_S
 
 
 def resolve_n_windows(coding: CodingSpec, durations_s: np.ndarray) -> int:

@@ -41,7 +41,7 @@ from pipeline.report.answer import (
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.chip_population import method_sentence as chips_method_sentence
-from pipeline.report.cost import observation_sentence
+from pipeline.report.cost import ROOT_SENTENCE, observation_sentence
 from pipeline.report.decision_time import latency_blocks
 from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, RESAMPLES
@@ -407,6 +407,7 @@ def _time_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         "or compiling the kernels) is paid by the first point of a worker that needs it and "
         "reused by the others; a spike train that several points share is paid by one of them."
         + older
+        + f" {ROOT_SENTENCE}"
     )
     yield Table(
         ("stage", "own (s)", "shared (s)", "share"),

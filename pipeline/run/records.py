@@ -39,13 +39,14 @@ from typing import Any
 import numpy as np
 
 from pipeline.chain.metrics import SpikeMetrics
-from pipeline.chain.spikes import SpikeTrains, train_starts
+from pipeline.chain.spikes import TIME_RESOLUTION_S, SpikeTrains, train_starts
 
 __all__ = [
     "METRICS_VARIABLE",
     "Charge",
     "Record",
     "StepSeconds",
+    "Ticks",
     "Variable",
     "metric_values",
     "paid_attr",
@@ -107,6 +108,18 @@ class StepSeconds:
 
 
 @dataclass(frozen=True)
+class Ticks:
+    """How the store keeps a variable of event times: as whole ticks of ``resolution_s``
+    (the values must be such multiples), delta-coded within each train (the trains' lengths are
+    the variable ``runs``, in order), with the +-1 variable ``sign`` folded into each delta's
+    low bit (``2 * delta + (sign > 0)``) instead of stored apart."""
+
+    resolution_s: float
+    runs: str
+    sign: str
+
+
+@dataclass(frozen=True)
 class Variable:
     """One stored variable of a record.
 
@@ -122,6 +135,8 @@ class Variable:
         CF ``units`` ("1" for dimensionless numbers and labels) and a prose description.
     optional : bool
         Whether an entry may lack it.
+    ticks : Ticks or None
+        For event times: how the store keeps them (:class:`Ticks`); None: as ``dtype``.
     """
 
     name: str
@@ -130,6 +145,7 @@ class Variable:
     units: str
     long_name: str
     optional: bool = False
+    ticks: Ticks | None = None
 
     def attrs(self) -> dict[str, str]:
         """``units`` and ``long_name``."""
@@ -190,11 +206,14 @@ def train_variables(
     prefix: str, optional: bool = False, grid: tuple[str, str] = ("recording", "taxel")
 ) -> tuple[Variable, ...]:
     """The four variables of one set of ragged trains (``true`` or ``real``), trains on
-    ``grid``."""
+    ``grid``; the times stored as ticks of :data:`~pipeline.chain.spikes.TIME_RESOLUTION_S`."""
     event = (f"{prefix}_event",)
     what = prefix.upper()
+    ticks = Ticks(TIME_RESOLUTION_S, f"{prefix}_count", f"{prefix}_polarity")
     return (
-        Variable(f"{prefix}_times_s", event, "float64", "s", f"{what} spike times", optional),
+        Variable(
+            f"{prefix}_times_s", event, "float64", "s", f"{what} spike times", optional, ticks
+        ),
         Variable(f"{prefix}_polarity", event, "int8", "1", f"{what} spike polarity", optional),
         Variable(f"{prefix}_start", grid, "int64", "1", f"first {what} event", optional),
         Variable(f"{prefix}_count", grid, "int64", "1", f"{what} spikes per train", optional),

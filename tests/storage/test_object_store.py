@@ -113,7 +113,7 @@ def test_an_empty_prefix_becomes_a_store_and_a_foreign_one_is_refused(bucket):  
     assert store.root == f"{bucket}/new"
     assert SweepStore.open(f"{bucket}/new/").root == store.root
     meta = json.loads(store._objects.objects.get("store.zarr/zarr.json")[0])
-    assert meta["attributes"] == {"eskin_sweep_store": 2}
+    assert meta["attributes"] == {"eskin_sweep_store": 3}
     S3Objects(f"{bucket}/other").put("notes.txt", b"mine")
     with pytest.raises(StoreError, match=r"^refusing run root s3://.*/other: not empty"):
         SweepStore.open_or_create(f"{bucket}/other")

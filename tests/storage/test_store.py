@@ -235,7 +235,7 @@ def test_layout_is_a_marked_zarr_v3_group_without_consolidated_metadata(tmp_path
     assert sorted(os.listdir(root)) == ["store.zarr"]  # no probe or partial left behind
     meta = json.loads((root / "store.zarr" / "zarr.json").read_text())
     assert meta["zarr_format"] == 3 and meta["node_type"] == "group"
-    assert meta["attributes"] == {"eskin_sweep_store": 2}
+    assert meta["attributes"] == {"eskin_sweep_store": 3}
     assert meta.get("consolidated_metadata") is None
     group = zarr.open_group(root / "store.zarr", mode="r", zarr_format=3, use_consolidated=False)
     # A kind's group is made with its first batch: the store knows no kind of entry before.
@@ -259,9 +259,23 @@ def test_entries_are_stored_in_batches(store, spike_entry):
         "seconds": {"taxels": 0.25, "readout": 1.5},
     }
     times = json.loads((batch / "true_times_s" / "zarr.json").read_text())
-    assert times["data_type"] == "float64" and times["dimension_names"] == ["flat_true_times_s"]
+    assert times["data_type"] == "uint32" and times["dimension_names"] == ["flat_true_times_s"]
     assert times["attributes"]["dims"] == ["true_event"]
-    assert times["attributes"]["units"] == "s"
+    assert times["attributes"]["units"] == "1"
+    assert times["attributes"]["ticks_s"] == 1e-6
+    assert times["attributes"]["ticks_runs"] == "true_count"
+    assert times["attributes"]["ticks_sign"] == "true_polarity"
+    # Core Zarr v3 codecs only: any Zarr v3 reader decodes the stored deltas.
+    assert times["codecs"] == [
+        {"name": "bytes", "configuration": {"endian": "little"}},
+        {
+            "name": "blosc",
+            "configuration": {
+                "typesize": 4, "cname": "zstd", "clevel": 5, "shuffle": "shuffle", "blocksize": 0
+            },
+        },
+    ]  # fmt: skip
+    assert not (batch / "true_polarity").exists()  # folded into the deltas' low bit
 
 
 def test_a_batch_has_as_many_files_for_many_entries_as_for_one(store, spike_entry):
@@ -309,7 +323,7 @@ def test_spikes_round_trip_ideal_keeps_real_is_true_and_stores_once(store, spike
     assert read.seconds == {}
     stored = sorted(os.listdir(batch_of(store, "spikes", KEY)))
     assert not any(name.startswith("real_") for name in stored)
-    assert {"true_times_s", "true_polarity", "true_start", "true_count"} <= set(stored)
+    assert {"true_times_s", "true_start", "true_count"} <= set(stored)
 
 
 def test_one_batch_mixes_ideal_and_non_ideal_spike_entries(store, spike_entry):
@@ -341,11 +355,12 @@ def ragged(draw) -> tuple[SpikeTrains, SpikeTrains | None]:
     n_recordings = draw(st.integers(0, 3))
     n_taxels = draw(st.integers(1, 4))
     finite = st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=True)
+    since_start = st.floats(0.0, 1e3, allow_nan=False, allow_subnormal=True)  # t >= 0
 
     def trains() -> list[tuple[np.ndarray, np.ndarray]]:
         out = []
         for _ in range(n_recordings * n_taxels):
-            times = sorted(draw(st.lists(finite, max_size=5)))
+            times = sorted(draw(st.lists(since_start, max_size=5)))
             polarity = draw(st.lists(st.sampled_from([-1, 1]), min_size=len(times)))
             out.append((np.array(times, np.float64), np.array(polarity[: len(times)], np.int8)))
         return out
@@ -901,8 +916,8 @@ def test_truncated_chunk_is_corruption(store, spike_entry, size):
 def test_missing_chunk_is_corruption(store, spike_entry):
     # Zarr reads a missing chunk as its fill value; only the checksum notices.
     write_spikes(store, KEY, spike_entry)
-    chunk(batch_of(store, "spikes", KEY), "true_polarity").unlink()
-    with pytest.raises(CorruptEntryError, match="'true_polarity' fails its sha256"):
+    chunk(batch_of(store, "spikes", KEY), "true_start").unlink()
+    with pytest.raises(CorruptEntryError, match="'true_start' fails its sha256"):
         read_spikes(store, KEY)
 
 
@@ -1019,7 +1034,7 @@ def make_zarr_array(root: Path) -> Path:
         (make_file, "is a file"),
         (make_foreign_dir, "not empty and holds no store.zarr"),
         (make_foreign_zarr, "lacks the 'eskin_sweep_store' marker"),
-        (marked_store(3), "unsupported sweep store version 3"),
+        (marked_store(4), "unsupported sweep store version 4"),
         (marked_store(0), "unsupported sweep store version 0"),
         (marked_store(True), "unsupported sweep store version True"),
         (marked_store("1"), "unsupported sweep store version '1'"),
@@ -1074,7 +1089,7 @@ def test_layout_1_store_is_set_aside_and_a_new_one_created(tmp_path, spike_entry
     assert (old / "spikes" / KEY / "true_times_s" / "c" / "0").read_bytes() == contents
     # The new store is of the current layout, empty and usable.
     assert json.loads((store.path / "zarr.json").read_text())["attributes"] == {
-        "eskin_sweep_store": 2
+        "eskin_sweep_store": 3
     }
     assert not store.has(SPIKES.record, KEY)
     write_spikes(store, KEY, spike_entry)

@@ -26,8 +26,12 @@ def test_spikes_exactly_on_edges_go_to_the_window_that_starts_there():
     counts, dropped = rate_code(edges, 0.1, 5)
     np.testing.assert_array_equal(counts, [1, 1, 1, 1, 1])
     assert dropped == 1  # the last edge, 5 * 0.1, is outside
-    # 0.3 is below the edge 3 * 0.1 = 0.30000000000000004, so it belongs to window 2.
+    # Edges are whole microseconds: edge 3 is 300000 us = 0.3 (not 3 * 0.1 =
+    # 0.30000000000000004), so 0.3 starts window 3 and the float just below it ends window 2.
+    assert edges[3] == 0.3
     counts, _ = rate_code(np.array([0.3]), 0.1, 5)
+    np.testing.assert_array_equal(counts, [0, 0, 0, 1, 0])
+    counts, _ = rate_code(np.array([np.nextafter(0.3, 0.0)]), 0.1, 5)
     np.testing.assert_array_equal(counts, [0, 0, 1, 0, 0])
 
 
