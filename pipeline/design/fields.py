@@ -446,6 +446,20 @@ def _leaves(cls: type, prefix: str) -> Iterator[tuple[str, Slot, Declared]]:
 # Plain and canonical forms
 
 
+def part_applies(owner: Any, name: str) -> bool:
+    """Whether part ``name`` of value object ``owner`` matters: always, unless it is declared
+    ``only_when`` its sibling field holds a value (or, for a list of options, lists it) that the
+    sibling does not hold now. Checks of a part's own values ask this, so that they follow the
+    declaration instead of naming the option."""
+    only_when = slot_named(type(owner))[name].only_when
+    if only_when is None:
+        return True
+    chosen = getattr(owner, only_when[0])
+    if isinstance(chosen, tuple):  # a list of options (the models): is the value among them
+        return only_when[1] in chosen
+    return chosen == only_when[1]
+
+
 def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool:
     """Whether field ``slot`` of value object ``owner`` holding ``value`` is left out of a plain
     form: when ``None``, and in the canonical form when at a neutral default or, for a part
@@ -456,10 +470,7 @@ def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool
         return False
     declared, only_when = slot.declared, slot.only_when
     if only_when is not None and owner is not None:
-        chosen = getattr(owner, only_when[0])
-        if isinstance(chosen, tuple):  # a list of options (the models): is the value among them
-            return only_when[1] not in chosen
-        return chosen != only_when[1]
+        return not part_applies(owner, slot.name)
     return declared is not None and declared.neutral and value == slot.default
 
 

@@ -399,7 +399,7 @@ class Scene:
         must fit whole in a rate-coding window, so that every window boundary is one of its
         decision times."""
         yield from chip_refusals(self)
-        if Model.SNN not in self.training.models:
+        if not fields.part_applies(self.training, "snn"):
             return
         step_s, window_s = self.training.snn.step_s, self.coding.window_s
         steps = round(window_s / step_s)
