@@ -75,6 +75,7 @@ from benchmarks.sweep import REPO
 from flows.refill import refill
 from flows.samplers import Proposer, resolve_sampler, seed_for
 from flows.search import StopRule, committed_seconds
+from pipeline.design.scene import scene_field
 from pipeline.design.space import Sampler, Space
 from pipeline.report.trials import hypervolume
 from pipeline.results.variables import (
@@ -245,7 +246,7 @@ def noise(arrays: dict[str, np.ndarray]) -> dict[str, float]:
     }
 
 
-MISMATCH = "readout.effects.threshold_mismatch.sigma_rel"
+MISMATCH = scene_field("readout.effects.threshold_mismatch.sigma_rel")
 
 
 def oracle_share(

@@ -28,7 +28,7 @@ from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.results.cube import CUBE_VARIABLES
-from pipeline.results.variables import CHARGE_DIM, REPEAT_DIM, SECONDS, WORK_SECONDS
+from pipeline.results.variables import CHARGE_DIM, REPEAT_DIM, SECONDS, STAGE_DIM, WORK_SECONDS
 from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.stages import SETUP_STEP
 
@@ -322,9 +322,9 @@ def old_seconds_layout(cube: xr.Dataset) -> xr.Dataset:
     if CHARGE_DIM not in cube.dims:
         return cube
     assert np.isnan(cube[SECONDS].values).all(), "golden entries state no paid seconds"
-    assert np.isnan(cube[WORK_SECONDS].sel(stage=SETUP_STEP).values).all()
+    assert np.isnan(cube[WORK_SECONDS].sel({STAGE_DIM: SETUP_STEP}).values).all()
     assert cube[WORK_SECONDS].attrs == CUBE_VARIABLES[WORK_SECONDS]
-    old = cube.drop_vars([SECONDS, CHARGE_DIM]).drop_sel(stage=[SETUP_STEP])
+    old = cube.drop_vars([SECONDS, CHARGE_DIM]).drop_sel({STAGE_DIM: [SETUP_STEP]})
     old = old.rename({WORK_SECONDS: SECONDS})
     old[SECONDS].attrs = {"units": "s", "long_name": _OLD_SECONDS_LONG_NAME}
     return old
@@ -339,5 +339,5 @@ def existing_part(cube: xr.Dataset, golden: xr.Dataset) -> xr.Dataset:
     extra = [name for name in cube.variables if name not in golden.variables]
     part = cube.drop_vars(extra).drop_attrs()
     if REPEAT_DIM in part.dims and REPEAT_DIM not in golden.dims and part.sizes[REPEAT_DIM] == 1:
-        part = part.isel(repeat=0, drop=True)
+        part = part.isel({REPEAT_DIM: 0}, drop=True)
     return part

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.design.scene import Deployment
+from pipeline.design.scene import Deployment, scene_field
 from pipeline.report.curves import Curve, sweep_curves
 from pipeline.report.panels import DEPLOYMENT
 from pipeline.results.chip_cube import CHIP_DIM
@@ -73,8 +73,8 @@ from pipeline.results.yields import (
 from pipeline.results.yields import QUANTILE as YIELD_QUANTILE
 
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
-CHIP_COUNT = "chips.count"
-YIELD_TARGET = "chips.yield_target"
+CHIP_COUNT = scene_field("chips.count")
+YIELD_TARGET = scene_field("chips.yield_target")
 #: The deployment of a point that names none (one chip, its own classifier, the scene's default).
 DEFAULT_DEPLOYMENT = Deployment.PER_CHIP.value
 #: The deployment the paper's Fig. 10 claim is judged on (one classifier loaded into every chip,
@@ -86,6 +86,8 @@ SPREAD_QUANTILES = (0.05, 0.5, 0.95)
 #: chip_repeat, recording), int8 as ``correct``; ``chip_repeat`` is the cube's own ``repeat``.
 PER_CHIP = "correct_per_chip"
 CHIP_REPEAT = "chip_repeat"
+#: The chips' accuracies a pooled cube keeps beside their mean (axes..., model, chip).
+ACCURACY_PER_CHIP = "accuracy_per_chip"
 #: The yield variables of a cube of several chips, (axes..., model).
 YIELD_VARIABLES = (
     ACCURACY_CHIP_MEAN,
@@ -218,7 +220,7 @@ def pooled(cube: xr.Dataset) -> xr.Dataset:
     out[ACCURACY_MEAN] = mean.assign_attrs(per_chip.attrs)
     out[ACCURACY_LOW] = low.assign_attrs(cube[ACCURACY_LOW].attrs | attrs)
     out[ACCURACY_HIGH] = high.assign_attrs(cube[ACCURACY_HIGH].attrs | attrs)
-    out["accuracy_per_chip"] = per_chip
+    out[ACCURACY_PER_CHIP] = per_chip
     if CORRECT in cube:
         per_chip_correct = cube[CORRECT].rename({REPEAT_DIM: CHIP_REPEAT})
         out[PER_CHIP] = per_chip_correct.drop_vars(
@@ -245,8 +247,8 @@ def chip_yields(cube: xr.Dataset) -> dict[tuple[int, str], ChipYield]:
     yield variables and its chips' accuracies."""
     if has_chips(cube):
         per_chip = cube[ACCURACY_MEAN]
-    elif "accuracy_per_chip" in cube:  # a pooled cube
-        per_chip = cube["accuracy_per_chip"]
+    elif ACCURACY_PER_CHIP in cube:  # a pooled cube
+        per_chip = cube[ACCURACY_PER_CHIP]
     else:
         return {}
     dims = tuple(d for d in per_chip.dims if d not in (MODEL_DIM, CHIP_DIM))
@@ -336,17 +338,17 @@ def with_chip_spread(curve: Curve, cube: xr.Dataset, x: np.ndarray, group: str) 
     with its ``group`` and, for a pooled cube of several chips, the chips' spread at each
     point: the cube's ``accuracy_p05`` (the yield), the median and the 95th percentile of the
     chips' accuracies."""
-    if "accuracy_per_chip" not in cube:
+    if ACCURACY_PER_CHIP not in cube:
         return dataclasses.replace(curve, group=group)
     (dim,) = tuple(d for d in cube[ACCURACY_MEAN].dims if d != MODEL_DIM)
     order = np.argsort(x, kind="stable")
-    per_chip = cube["accuracy_per_chip"].sel(model=curve.model).transpose(dim, CHIP_DIM)
+    per_chip = cube[ACCURACY_PER_CHIP].sel({MODEL_DIM: curve.model}).transpose(dim, CHIP_DIM)
     values = per_chip.values[order]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a point with no chip: all NaN
         low, median, high = np.nanquantile(values, SPREAD_QUANTILES, axis=-1)
     if ACCURACY_P05 in cube:  # the yield as the cube states it, where it is computed once
-        stated = cube[ACCURACY_P05].sel(model=curve.model).transpose(dim).values[order]
+        stated = cube[ACCURACY_P05].sel({MODEL_DIM: curve.model}).transpose(dim).values[order]
         low = np.where(np.isfinite(stated), stated, low)
     return dataclasses.replace(curve, group=group, chip_low=low, chip_median=median, chip_high=high)
 

@@ -48,7 +48,12 @@ from pipeline.report.cubes import point_keys, sweep_dims
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.seeds import rng_for
 from pipeline.report.text import comparison, pct, pct_interval, si
-from pipeline.results.decision_cube import DECISION_CONFIDENCE, DECISION_CORRECT, DECISION_DIM
+from pipeline.results.decision_cube import (
+    DECISION_CONFIDENCE,
+    DECISION_CORRECT,
+    DECISION_DIM,
+    DECODER_VARIABLES,
+)
 from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
 from pipeline.results.early_exit import EXIT_THRESHOLDS, early_exit, exit_energy_j
 from pipeline.results.stats import PairedComparison, accuracy_interval
@@ -58,7 +63,7 @@ from pipeline.results.variables import LABEL, MODEL_DIM, RECORDING_DIM, REPEAT_D
 DECISION_VARIABLES = (DECISION_CORRECT, DECISION_CONFIDENCE)
 #: The cube's operation counts, (axes..., model, decision_s), in
 #: :func:`~pipeline.results.decoder_energy.decoder_energy_j`'s order.
-OPERATION_VARIABLES = ("decoder_acs", "decoder_macs", "decoder_neuron_updates")
+OPERATION_VARIABLES = DECODER_VARIABLES
 #: The stem of the latency figure.
 LATENCY_STEM = "latency"
 

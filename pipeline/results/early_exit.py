@@ -32,7 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.results.decision_cube import DECISION_CONFIDENCE, DECISION_CORRECT, DECISION_DIM
+from pipeline.chain.operation_kinds import OPERATIONS
+from pipeline.results.decision_cube import (
+    DECISION_CONFIDENCE,
+    DECISION_CORRECT,
+    DECISION_DIM,
+    DECODER_VARIABLES,
+)
 from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
 from pipeline.results.variables import MODEL_DIM, RECORDING_DIM, REPEAT_DIM, RESULT_KEY
 
@@ -233,7 +239,7 @@ def exit_objectives(
     names = (DECISION_DIM, DECISION_CORRECT, DECISION_CONFIDENCE)
     if not all(name in cube for name in names) or model not in cube[MODEL_DIM].values:
         return nan, nan.copy()
-    at = cube.sel(model=model)
+    at = cube.sel({MODEL_DIM: model})
     order = (*dims, DECISION_DIM, REPEAT_DIM, RECORDING_DIM)
     found = early_exit(
         at[DECISION_CONFIDENCE].transpose(*order).values,
@@ -241,12 +247,13 @@ def exit_objectives(
         cube[DECISION_DIM].values,
         confidence,
     )
-    counts = ("decoder_acs", "decoder_macs", "decoder_neuron_updates")
-    if not all(name in cube for name in counts):
+    if not all(name in cube for name in DECODER_VARIABLES):
         return np.asarray(found.mean_decision_s, dtype=np.float64), nan
-    band = exit_energy_j(
-        found, *(at[name].transpose(*dims, DECISION_DIM).values for name in counts), energy
-    )
+    counts = {  # each kind of operation by its name, as exit_energy_j takes it
+        kind: at[name].transpose(*dims, DECISION_DIM).values
+        for kind, name in zip(OPERATIONS, DECODER_VARIABLES, strict=True)
+    }
+    band = exit_energy_j(found, **counts, model=energy)
     return (
         np.asarray(found.mean_decision_s, dtype=np.float64),
         np.asarray(band.high_j, dtype=np.float64),
