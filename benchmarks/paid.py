@@ -22,6 +22,8 @@ import argparse
 import tempfile
 from pathlib import Path
 
+from pipeline.results.variables import RESULT_KEY, STAGE_DIM, WORK_SECONDS
+
 WORKERS = 2
 DEFAULT_GRID = "smoke"
 TARGET = 0.9
@@ -53,10 +55,10 @@ def measure(grid: str = DEFAULT_GRID) -> dict:
         # shared work at every point that used it (one-off work, then inside the steps, apart).
         work: dict[str, dict[str, float]] = {}
         for cube in cubes.values():
-            seconds = cube["work_seconds"].transpose(*cube["result_key"].dims, "stage")
-            rows = seconds.values.reshape(-1, cube.sizes["stage"])
-            for key, row in zip(cube["result_key"].values.ravel(), rows, strict=True):
-                stages = [str(s) for s in cube["stage"].values]
+            seconds = cube[WORK_SECONDS].transpose(*cube[RESULT_KEY].dims, STAGE_DIM)
+            rows = seconds.values.reshape(-1, cube.sizes[STAGE_DIM])
+            for key, row in zip(cube[RESULT_KEY].values.ravel(), rows, strict=True):
+                stages = [str(s) for s in cube[STAGE_DIM].values]
                 work.setdefault(str(key), dict(zip(stages, row.tolist(), strict=True)))
     by_stage: dict[str, float] = {}
     for row in work.values():

@@ -75,8 +75,16 @@ from benchmarks.sweep import REPO
 from flows.refill import refill
 from flows.samplers import Proposer, resolve_sampler, seed_for
 from flows.search import StopRule, committed_seconds
+from pipeline.design.scene import scene_field
 from pipeline.design.space import Sampler, Space
 from pipeline.report.trials import hypervolume
+from pipeline.results.variables import (
+    ACCURACY_HIGH,
+    ACCURACY_LOW,
+    ACCURACY_MEAN,
+    MODEL_DIM,
+    STAGE_DIM,
+)
 
 WORKERS = 2
 SEEDS = 10
@@ -159,7 +167,8 @@ def exhaustive_arrays(space: Space, root: Path) -> dict[str, np.ndarray]:
     index), ``shared_s`` (the one-off load and set-up it paid: a worker's first point)."""
     from flows.run import run_sweep
     from flows.search import trials_cube
-    from pipeline.results.cube import CHARGE_DIM, paid_seconds
+    from pipeline.results.cube import paid_seconds
+    from pipeline.results.variables import CHARGE_DIM
     from pipeline.run.stages import SPIKES
 
     grid = space.exhaustive_grid(10)
@@ -169,21 +178,21 @@ def exhaustive_arrays(space: Space, root: Path) -> dict[str, np.ndarray]:
     paid = paid_seconds(cube)
     if paid is None:
         raise RuntimeError(f"{root}: the points hold no paid seconds")
-    spike = [s for s in (str(x) for x in cube["stage"].values) if s in SPIKES.steps_for(["ffnn"])]
+    spike = [s for s in (str(x) for x in cube[STAGE_DIM].values) if s in SPIKES.steps_for(["ffnn"])]
     own, shared = paid.sel({CHARGE_DIM: "own"}), paid.sel({CHARGE_DIM: "shared"})
     trains = [SPIKES.key(p.scene) for p in space.trial_grid(params).points()]
     index = {key: i for i, key in enumerate(dict.fromkeys(trains))}
-    model = {"model": "ffnn"}
+    model = {MODEL_DIM: "ffnn"}
     return {
         "values": np.column_stack(
-            [cube["accuracy_mean"].sel(model).values, cube["data_rate_bps"].values]
+            [cube[ACCURACY_MEAN].sel(model).values, cube["data_rate_bps"].values]
         ),
-        "accuracy_low": cube["accuracy_low"].sel(model).values,
-        "accuracy_high": cube["accuracy_high"].sel(model).values,
-        "own_s": own.drop_sel(stage=spike).sum("stage").values,
-        "train_s": own.sel(stage=spike).sum("stage").values,
+        ACCURACY_LOW: cube[ACCURACY_LOW].sel(model).values,
+        ACCURACY_HIGH: cube[ACCURACY_HIGH].sel(model).values,
+        "own_s": own.drop_sel({STAGE_DIM: spike}).sum(STAGE_DIM).values,
+        "train_s": own.sel({STAGE_DIM: spike}).sum(STAGE_DIM).values,
         "train": np.array([index[k] for k in trains], dtype=np.int32),
-        "shared_s": shared.sum("stage").values,
+        "shared_s": shared.sum(STAGE_DIM).values,
         "labels": np.array([point_label(p) for p in params]),
     }
 
@@ -227,7 +236,7 @@ def noise(arrays: dict[str, np.ndarray]) -> dict[str, float]:
 
     values = arrays["values"]
     front = pareto_mask(costs_of(values))
-    width = (arrays["accuracy_high"] - arrays["accuracy_low"])[front]
+    width = (arrays[ACCURACY_HIGH] - arrays[ACCURACY_LOW])[front]
     return {
         "front_points": int(front.sum()),
         "interval_median": float(np.median(width)),
@@ -237,7 +246,7 @@ def noise(arrays: dict[str, np.ndarray]) -> dict[str, float]:
     }
 
 
-MISMATCH = "readout.effects.threshold_mismatch.sigma_rel"
+MISMATCH = scene_field("readout.effects.threshold_mismatch.sigma_rel")
 
 
 def oracle_share(

@@ -68,6 +68,7 @@ from flows.planning import checked_grid, plan_sweep
 from flows.progress import completed_points, failure_message
 from flows.scheduling import submit_missing
 from pipeline.design.scene import Scene
+from pipeline.results.variables import ACCURACY, FOLD_DIM, MODEL_DIM, REPEAT_DIM
 from pipeline.run.decoding import Rates
 from pipeline.run.encoding import Spikes
 from pipeline.run.stages import LEVELS, RESULTS, SPIKES
@@ -95,7 +96,7 @@ AXES: dict[str, list[Any]] = {
 }
 #: Room left on the file system beyond what a size is expected to write.
 ROOM_MARGIN = 1.25
-MODEL_AXES = ("model", "repeat", "fold")
+MODEL_AXES = (MODEL_DIM, REPEAT_DIM, FOLD_DIM)
 
 # Which level compute functions are real, captured before any stand-in can be installed; the
 # stand-ins are put back to these, whatever ran in between.
@@ -396,7 +397,7 @@ def tree_size(root: Path) -> tuple[int, int, int]:
 def complete_cube_points(location: str) -> int:
     """Points of the cube at ``location`` whose accuracy is finite for every model and fold."""
     with xr.open_zarr(location, consolidated=False, chunks=None) as cube:
-        accuracy = cube["accuracy"]
+        accuracy = cube[ACCURACY]
         dims = [d for d in accuracy.dims if d not in MODEL_AXES]
         values = accuracy.transpose(*dims, ...).values
     n_points = math.prod(values.shape[: len(dims)])

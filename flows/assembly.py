@@ -18,6 +18,7 @@ import xarray as xr
 
 from flows.planning import SweepPlan, cube_source
 from pipeline.results.variables import ACCURACY_MEAN, MODEL_DIM
+from pipeline.results.yields import ACCURACY_CHIP_MEAN
 from pipeline.run.stages import RESULTS
 from storage import StoreError, SweepStore
 
@@ -121,7 +122,7 @@ def best_points(cube: xr.Dataset) -> list[dict[str, Any]]:
         value at the best point (the first of equals, in the cube's order); a model with no
         finite accuracy has no row.
     """
-    mean = cube["accuracy_chip_mean" if "accuracy_chip_mean" in cube else ACCURACY_MEAN]
+    mean = cube[ACCURACY_CHIP_MEAN if ACCURACY_CHIP_MEAN in cube else ACCURACY_MEAN]
     rows = []
     for model in cube[MODEL_DIM].values:
         per_model = mean.sel({MODEL_DIM: model})

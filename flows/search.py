@@ -67,6 +67,7 @@ from pipeline.design.space import TRIALS, Sampler, Space, load_space
 from pipeline.errors import EskinError
 from pipeline.report.trials import front_cube, search_seconds, trial_cube
 from pipeline.results.objectives import objective_values
+from pipeline.results.variables import MODEL_DIM, RESULT_KEY
 from pipeline.run.grid_keys import keyed_points, unique_points
 from pipeline.run.stages import RESULTS, SPIKES
 from storage import StoreError, SweepStore
@@ -310,7 +311,7 @@ def spent_seconds(
     """The stage seconds paid for trials at ``params`` whose cube is ``cube``, each point once
     (:func:`pipeline.report.trials.search_seconds`, with its ``shared``)."""
     spike_keys = [SPIKES.key(p.scene) for p in space.trial_grid(params).points()]
-    models = [str(m) for m in cube["model"].values]
+    models = [str(m) for m in cube[MODEL_DIM].values]
     return search_seconds(cube, spike_keys, SPIKES.steps_for(models), shared=shared)
 
 
@@ -581,7 +582,7 @@ def _run_trials(
     compute = compute or Search.compute
     pool = concurrent.futures.ThreadPoolExecutor(slots, thread_name_prefix="eskin-trial")
     seen: set[str] = set()
-    told = set() if search.cube is None else {str(k) for k in search.cube["result_key"].values}
+    told = set() if search.cube is None else {str(k) for k in search.cube[RESULT_KEY].values}
     cache_hits = computed = 0
     failed: dict[int, str] = {}
     rule = StopRule(slots)

@@ -34,7 +34,8 @@ import xarray as xr
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
-from pipeline.results.cube import CHARGE_DIM, CUBE_VARIABLES
+from pipeline.results.cube import CUBE_VARIABLES
+from pipeline.results.variables import CHARGE_DIM, REPEAT_DIM, SECONDS, STAGE_DIM, WORK_SECONDS
 from pipeline.run.entries import OutOfFold, RecordingsInfo, ResultEntry
 from pipeline.run.grid_keys import unique_points
 from pipeline.run.stages import SETUP_STEP
@@ -350,12 +351,12 @@ def old_seconds_layout(cube: xr.Dataset) -> xr.Dataset:
     """
     if CHARGE_DIM not in cube.dims:
         return cube
-    assert np.isnan(cube["seconds"].values).all(), "golden entries state no paid seconds"
-    assert np.isnan(cube["work_seconds"].sel(stage=SETUP_STEP).values).all()
-    assert cube["work_seconds"].attrs == CUBE_VARIABLES["work_seconds"]
-    old = cube.drop_vars(["seconds", CHARGE_DIM]).drop_sel(stage=[SETUP_STEP])
-    old = old.rename({"work_seconds": "seconds"})
-    old["seconds"].attrs = {"units": "s", "long_name": _OLD_SECONDS_LONG_NAME}
+    assert np.isnan(cube[SECONDS].values).all(), "golden entries state no paid seconds"
+    assert np.isnan(cube[WORK_SECONDS].sel({STAGE_DIM: SETUP_STEP}).values).all()
+    assert cube[WORK_SECONDS].attrs == CUBE_VARIABLES[WORK_SECONDS]
+    old = cube.drop_vars([SECONDS, CHARGE_DIM]).drop_sel({STAGE_DIM: [SETUP_STEP]})
+    old = old.rename({WORK_SECONDS: SECONDS})
+    old[SECONDS].attrs = {"units": "s", "long_name": _OLD_SECONDS_LONG_NAME}
     return old
 
 
@@ -367,6 +368,6 @@ def existing_part(cube: xr.Dataset, golden: xr.Dataset) -> xr.Dataset:
     cube = old_seconds_layout(cube)
     extra = [name for name in cube.variables if name not in golden.variables]
     part = cube.drop_vars(extra).drop_attrs()
-    if "repeat" in part.dims and "repeat" not in golden.dims and part.sizes["repeat"] == 1:
-        part = part.isel(repeat=0, drop=True)
+    if REPEAT_DIM in part.dims and REPEAT_DIM not in golden.dims and part.sizes[REPEAT_DIM] == 1:
+        part = part.isel({REPEAT_DIM: 0}, drop=True)
     return part

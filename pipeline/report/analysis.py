@@ -50,6 +50,7 @@ from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
 from pipeline.results.decoder_energy import DecoderEnergyModel
 from pipeline.results.readout_constants import EnergyModel
+from pipeline.results.variables import ACCURACY_LOW, ACCURACY_MEAN, RESULT_KEY
 
 
 @dataclass(frozen=True)
@@ -153,7 +154,7 @@ def build_report(
     older = [
         name
         for name, cube in cubes.items()
-        if "result_key" not in cube.coords or "accuracy_mean" not in cube
+        if RESULT_KEY not in cube.coords or ACCURACY_MEAN not in cube
     ]
     if older:
         raise EskinError(
@@ -277,6 +278,6 @@ def _interval_methods(cubes: Mapping[str, xr.Dataset]) -> tuple[str, ...]:
     methods = {
         part.strip()
         for cube in cubes.values()
-        for part in str(cube["accuracy_low"].attrs.get("interval", "none")).split(";")
+        for part in str(cube[ACCURACY_LOW].attrs.get("interval", "none")).split(";")
     }
     return tuple(sorted(methods - {"none", ""}))

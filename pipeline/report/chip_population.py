@@ -47,16 +47,34 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.design.scene import Deployment
+from pipeline.design.scene import Deployment, scene_field
 from pipeline.report.curves import Curve, sweep_curves
 from pipeline.report.panels import DEPLOYMENT
 from pipeline.results.chip_cube import CHIP_DIM
+from pipeline.results.variables import (
+    ACCURACY_HIGH,
+    ACCURACY_LOW,
+    ACCURACY_MEAN,
+    CORRECT,
+    LABEL,
+    MODEL_DIM,
+    RECORDING_DIM,
+    REPEAT_DIM,
+    RESULT_KEY,
+)
+from pipeline.results.yields import (
+    ACCURACY_CHIP_MEAN,
+    ACCURACY_P05,
+    ACCURACY_P05_HIGH,
+    ACCURACY_P05_LOW,
+    YIELD_SHARE,
+    quantile_estimate_rank,
+)
 from pipeline.results.yields import QUANTILE as YIELD_QUANTILE
-from pipeline.results.yields import quantile_estimate_rank
 
 #: The dotted scene fields of the chips (declared by the scene's ``chips`` part).
-CHIP_COUNT = "chips.count"
-YIELD_TARGET = "chips.yield_target"
+CHIP_COUNT = scene_field("chips.count")
+YIELD_TARGET = scene_field("chips.yield_target")
 #: The deployment of a point that names none (one chip, its own classifier, the scene's default).
 DEFAULT_DEPLOYMENT = Deployment.PER_CHIP.value
 #: The deployment the paper's Fig. 10 claim is judged on (one classifier loaded into every chip,
@@ -68,19 +86,21 @@ SPREAD_QUANTILES = (0.05, 0.5, 0.95)
 #: chip_repeat, recording), int8 as ``correct``; ``chip_repeat`` is the cube's own ``repeat``.
 PER_CHIP = "correct_per_chip"
 CHIP_REPEAT = "chip_repeat"
+#: The chips' accuracies a pooled cube keeps beside their mean (axes..., model, chip).
+ACCURACY_PER_CHIP = "accuracy_per_chip"
 #: The yield variables of a cube of several chips, (axes..., model).
 YIELD_VARIABLES = (
-    "accuracy_chip_mean",
-    "accuracy_p05",
-    "accuracy_p05_low",
-    "accuracy_p05_high",
-    "yield_share",
+    ACCURACY_CHIP_MEAN,
+    ACCURACY_P05,
+    ACCURACY_P05_LOW,
+    ACCURACY_P05_HIGH,
+    YIELD_SHARE,
 )
 
 
 def has_chips(cube: xr.Dataset) -> bool:
     """Whether the cube's points simulate several chips (its accuracy has a ``chip`` axis)."""
-    return "accuracy_mean" in cube and CHIP_DIM in cube["accuracy_mean"].dims
+    return ACCURACY_MEAN in cube and CHIP_DIM in cube[ACCURACY_MEAN].dims
 
 
 def chip_quantile(accuracy: np.ndarray) -> np.ndarray:
@@ -138,42 +158,44 @@ def pooled(cube: xr.Dataset) -> xr.Dataset:
     from pipeline.report.seeds import rng_for
     from pipeline.results.stats import accuracy_interval
 
-    per_chip = cube["accuracy_mean"]
+    per_chip = cube[ACCURACY_MEAN]
     n_chips = cube.sizes[CHIP_DIM]
-    folded = [n for n, v in cube.data_vars.items() if CHIP_DIM in v.dims or "repeat" in v.dims]
+    folded = [n for n, v in cube.data_vars.items() if CHIP_DIM in v.dims or REPEAT_DIM in v.dims]
     out = cube.drop_vars(folded)
     # The folded repeat axis is longer than the cube's: its coordinate no longer labels it.
-    out = out.drop_vars([c for c in ("repeat", CHIP_DIM) if c in out.coords])
+    out = out.drop_vars([c for c in (REPEAT_DIM, CHIP_DIM) if c in out.coords])
     for name in folded:
         variable = cube[name]
-        if name in ("accuracy_mean", "accuracy_low", "accuracy_high"):
+        if name in (ACCURACY_MEAN, ACCURACY_LOW, ACCURACY_HIGH):
             continue
-        if "repeat" in variable.dims and CHIP_DIM not in variable.dims:
+        if REPEAT_DIM in variable.dims and CHIP_DIM not in variable.dims:
             # The same splits for every chip (test_fold).
-            variable = variable.expand_dims({CHIP_DIM: n_chips}, axis=variable.dims.index("repeat"))
-        if "repeat" in variable.dims:
+            variable = variable.expand_dims(
+                {CHIP_DIM: n_chips}, axis=variable.dims.index(REPEAT_DIM)
+            )
+        if REPEAT_DIM in variable.dims:
             out[name] = _chips_as_repeats(variable)
         else:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # a padded chip of all NaN
                 out[name] = variable.mean(CHIP_DIM, skipna=True, keep_attrs=True)
     mean = (
-        cube["accuracy_chip_mean"]
-        if "accuracy_chip_mean" in cube
+        cube[ACCURACY_CHIP_MEAN]
+        if ACCURACY_CHIP_MEAN in cube
         else per_chip.mean(CHIP_DIM, skipna=True)
     )
     low, high = xr.full_like(mean, np.nan), xr.full_like(mean, np.nan)
     methods = set()
-    if "correct" in out and "label" in cube.coords:
-        dims = tuple(d for d in mean.dims if d != "model")
-        correct = out["correct"].transpose(*dims, "model", "repeat", "recording").values
-        keys = cube["result_key"].transpose(*dims).values.ravel()
-        labels = cube["label"].values
-        cells = correct.reshape(len(keys), mean.sizes["model"], *correct.shape[-2:])
-        values = mean.transpose(*dims, "model").values.reshape(cells.shape[:2])
+    if CORRECT in out and LABEL in cube.coords:
+        dims = tuple(d for d in mean.dims if d != MODEL_DIM)
+        correct = out[CORRECT].transpose(*dims, MODEL_DIM, REPEAT_DIM, RECORDING_DIM).values
+        keys = cube[RESULT_KEY].transpose(*dims).values.ravel()
+        labels = cube[LABEL].values
+        cells = correct.reshape(len(keys), mean.sizes[MODEL_DIM], *correct.shape[-2:])
+        values = mean.transpose(*dims, MODEL_DIM).values.reshape(cells.shape[:2])
         lows, highs = np.full(values.shape, np.nan), np.full(values.shape, np.nan)
         for p, key in enumerate(keys):
-            for m, model in enumerate(mean["model"].values):
+            for m, model in enumerate(mean[MODEL_DIM].values):
                 cell = cells[p, m]
                 ran = (cell >= 0).any(axis=1)
                 held = (cell[ran] >= 0).all(axis=0)
@@ -190,17 +212,17 @@ def pooled(cube: xr.Dataset) -> xr.Dataset:
                     interval.high,
                 )
                 methods.add(f"{interval.method}, chips and repeats of a recording drawn with it")
-        shape = mean.transpose(*dims, "model").shape
-        mean = mean.transpose(*dims, "model").copy(data=values.reshape(shape))
+        shape = mean.transpose(*dims, MODEL_DIM).shape
+        mean = mean.transpose(*dims, MODEL_DIM).copy(data=values.reshape(shape))
         low = mean.copy(data=lows.reshape(shape))
         high = mean.copy(data=highs.reshape(shape))
     attrs = {"interval": "; ".join(sorted(methods)) or "none", "confidence": 0.95}
-    out["accuracy_mean"] = mean.assign_attrs(per_chip.attrs)
-    out["accuracy_low"] = low.assign_attrs(cube["accuracy_low"].attrs | attrs)
-    out["accuracy_high"] = high.assign_attrs(cube["accuracy_high"].attrs | attrs)
-    out["accuracy_per_chip"] = per_chip
-    if "correct" in cube:
-        per_chip_correct = cube["correct"].rename({"repeat": CHIP_REPEAT})
+    out[ACCURACY_MEAN] = mean.assign_attrs(per_chip.attrs)
+    out[ACCURACY_LOW] = low.assign_attrs(cube[ACCURACY_LOW].attrs | attrs)
+    out[ACCURACY_HIGH] = high.assign_attrs(cube[ACCURACY_HIGH].attrs | attrs)
+    out[ACCURACY_PER_CHIP] = per_chip
+    if CORRECT in cube:
+        per_chip_correct = cube[CORRECT].rename({REPEAT_DIM: CHIP_REPEAT})
         out[PER_CHIP] = per_chip_correct.drop_vars(
             [c for c in (CHIP_REPEAT, CHIP_DIM) if c in per_chip_correct.coords]
         )
@@ -210,12 +232,12 @@ def pooled(cube: xr.Dataset) -> xr.Dataset:
 def _chips_as_repeats(variable: xr.DataArray) -> xr.DataArray:
     """``variable`` (..., chip, repeat, ...) with chip and repeat folded into ``repeat``,
     chip-major."""
-    order = [d for d in variable.dims if d not in (CHIP_DIM, "repeat")]
+    order = [d for d in variable.dims if d not in (CHIP_DIM, REPEAT_DIM)]
     at = variable.dims.index(CHIP_DIM)
-    moved = variable.transpose(*order[:at], CHIP_DIM, "repeat", *order[at:])
+    moved = variable.transpose(*order[:at], CHIP_DIM, REPEAT_DIM, *order[at:])
     values = moved.values
     shape = (*values.shape[:at], values.shape[at] * values.shape[at + 1], *values.shape[at + 2 :])
-    dims = (*order[:at], "repeat", *order[at:])
+    dims = (*order[:at], REPEAT_DIM, *order[at:])
     return xr.DataArray(values.reshape(shape), dims=dims, attrs=variable.attrs)
 
 
@@ -224,20 +246,20 @@ def chip_yields(cube: xr.Dataset) -> dict[tuple[int, str], ChipYield]:
     several chips, or of its :func:`pooled` view (empty for one without chips), read from its
     yield variables and its chips' accuracies."""
     if has_chips(cube):
-        per_chip = cube["accuracy_mean"]
-    elif "accuracy_per_chip" in cube:  # a pooled cube
-        per_chip = cube["accuracy_per_chip"]
+        per_chip = cube[ACCURACY_MEAN]
+    elif ACCURACY_PER_CHIP in cube:  # a pooled cube
+        per_chip = cube[ACCURACY_PER_CHIP]
     else:
         return {}
-    dims = tuple(d for d in per_chip.dims if d not in ("model", CHIP_DIM))
-    models = [str(m) for m in per_chip["model"].values]
-    chips = per_chip.transpose(*dims, "model", CHIP_DIM).values
+    dims = tuple(d for d in per_chip.dims if d not in (MODEL_DIM, CHIP_DIM))
+    models = [str(m) for m in per_chip[MODEL_DIM].values]
+    chips = per_chip.transpose(*dims, MODEL_DIM, CHIP_DIM).values
     chips = chips.reshape(-1, len(models), chips.shape[-1])
 
     def flat(name: str) -> np.ndarray:
         if name not in cube:
             return np.full(chips.shape[:2], np.nan)
-        return cube[name].transpose(*dims, "model").values.reshape(chips.shape[:2])
+        return cube[name].transpose(*dims, MODEL_DIM).values.reshape(chips.shape[:2])
 
     found = {name: flat(name) for name in YIELD_VARIABLES}
     deployment = _point_values(cube, DEPLOYMENT, dims, chips.shape[0], "")
@@ -249,14 +271,14 @@ def chip_yields(cube: xr.Dataset) -> dict[tuple[int, str], ChipYield]:
             if not values.size:
                 continue
             low, median, high = np.quantile(values, SPREAD_QUANTILES)
-            p05 = found["accuracy_p05"][p, m]
+            p05 = found[ACCURACY_P05][p, m]
             yields[(p, model)] = ChipYield(
                 n_chips=int(values.size),
-                mean=_or(found["accuracy_chip_mean"][p, m], float(np.mean(values))),
+                mean=_or(found[ACCURACY_CHIP_MEAN][p, m], float(np.mean(values))),
                 p05=_or(p05, float(chip_quantile(values))),
-                p05_low=float(found["accuracy_p05_low"][p, m]),
-                p05_high=float(found["accuracy_p05_high"][p, m]),
-                share=float(found["yield_share"][p, m]),
+                p05_low=float(found[ACCURACY_P05_LOW][p, m]),
+                p05_high=float(found[ACCURACY_P05_HIGH][p, m]),
+                share=float(found[YIELD_SHARE][p, m]),
                 target=float(target[p]),
                 low=float(low),
                 median=float(median),
@@ -293,7 +315,7 @@ def _point_values(
     name = field_coordinate(cube, field)
     if name is None:
         return np.full(size, missing, dtype=object)
-    like = cube["result_key"].transpose(*dims)
+    like = cube[RESULT_KEY].transpose(*dims)
     return np.asarray(cube[name].broadcast_like(like).transpose(*dims).values).ravel()
 
 
@@ -316,17 +338,17 @@ def with_chip_spread(curve: Curve, cube: xr.Dataset, x: np.ndarray, group: str) 
     with its ``group`` and, for a pooled cube of several chips, the chips' spread at each
     point: the cube's ``accuracy_p05`` (the yield), the median and the 95th percentile of the
     chips' accuracies."""
-    if "accuracy_per_chip" not in cube:
+    if ACCURACY_PER_CHIP not in cube:
         return dataclasses.replace(curve, group=group)
-    (dim,) = tuple(d for d in cube["accuracy_mean"].dims if d != "model")
+    (dim,) = tuple(d for d in cube[ACCURACY_MEAN].dims if d != MODEL_DIM)
     order = np.argsort(x, kind="stable")
-    per_chip = cube["accuracy_per_chip"].sel(model=curve.model).transpose(dim, CHIP_DIM)
+    per_chip = cube[ACCURACY_PER_CHIP].sel({MODEL_DIM: curve.model}).transpose(dim, CHIP_DIM)
     values = per_chip.values[order]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a point with no chip: all NaN
         low, median, high = np.nanquantile(values, SPREAD_QUANTILES, axis=-1)
-    if "accuracy_p05" in cube:  # the yield as the cube states it, where it is computed once
-        stated = cube["accuracy_p05"].sel(model=curve.model).transpose(dim).values[order]
+    if ACCURACY_P05 in cube:  # the yield as the cube states it, where it is computed once
+        stated = cube[ACCURACY_P05].sel({MODEL_DIM: curve.model}).transpose(dim).values[order]
         low = np.where(np.isfinite(stated), stated, low)
     return dataclasses.replace(curve, group=group, chip_low=low, chip_median=median, chip_high=high)
 

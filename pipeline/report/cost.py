@@ -29,7 +29,8 @@ import xarray as xr
 from pipeline.report.cubes import point_keys, sweep_dims
 from pipeline.report.curves import Curve
 from pipeline.report.text import pct
-from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
+from pipeline.results.cube import paid_seconds, work_seconds
+from pipeline.results.variables import CHARGE_DIM, STAGE_DIM
 from pipeline.run.records import Charge
 from pipeline.run.stages import step_charge
 
@@ -147,19 +148,21 @@ def sweep_cost(cubes: Mapping[str, xr.Dataset], runs: Iterable[SweepRun]) -> Swe
         paid, work = paid_seconds(cube), work_seconds(cube)
         if paid is None and work is None:
             continue
-        stages = [str(s) for s in cube["stage"].values]
+        stages = [str(s) for s in cube[STAGE_DIM].values]
         dims = sweep_dims(cube)
         charges = list(Charge) if paid is None else [Charge(c) for c in cube[CHARGE_DIM].values]
         # (points, stage, charge) paid seconds and (points, stage) work seconds, in point order.
         paid_rows = (
             None
             if paid is None
-            else paid.transpose(*dims, "stage", CHARGE_DIM).values.reshape(
+            else paid.transpose(*dims, STAGE_DIM, CHARGE_DIM).values.reshape(
                 -1, len(stages), len(charges)
             )
         )
         work_rows = (
-            None if work is None else work.transpose(*dims, "stage").values.reshape(-1, len(stages))
+            None
+            if work is None
+            else work.transpose(*dims, STAGE_DIM).values.reshape(-1, len(stages))
         )
         for i, key in enumerate(point_keys(cube)):
             if key in per_point:

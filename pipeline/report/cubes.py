@@ -27,6 +27,7 @@ from pipeline.report.panels import (
     Panel,
 )
 from pipeline.results.cube import field_coordinate
+from pipeline.results.variables import ACCURACY_MEAN, CORRELATION_R, MODEL_DIM, RESULT_KEY
 
 
 def swept_fields(cube: xr.Dataset) -> frozenset[str]:
@@ -36,12 +37,12 @@ def swept_fields(cube: xr.Dataset) -> frozenset[str]:
 
 def sweep_dims(cube: xr.Dataset) -> tuple[str, ...]:
     """The cube's sweep dimensions, in order (``accuracy_mean``'s dimensions but ``model``)."""
-    return tuple(str(d) for d in cube["accuracy_mean"].dims if d != "model")
+    return tuple(str(d) for d in cube[ACCURACY_MEAN].dims if d != MODEL_DIM)
 
 
 def is_one_dimensional(cube: xr.Dataset) -> bool:
     """Whether ``cube`` holds accuracy along exactly one sweep dimension (a curve's cube)."""
-    return "accuracy_mean" in cube and len(sweep_dims(cube)) == 1
+    return ACCURACY_MEAN in cube and len(sweep_dims(cube)) == 1
 
 
 def axis_coordinates(cube: xr.Dataset, dim: str) -> list[str]:
@@ -57,7 +58,7 @@ def axis_coordinates(cube: xr.Dataset, dim: str) -> list[str]:
 def sweeps_for(panel: Panel, cubes: Mapping[str, xr.Dataset]) -> list[str]:
     """Names of the cubes that feed ``panel``, in the mapping's order."""
     if panel is Panel.SPIKE_METRICS:
-        return [name for name, cube in cubes.items() if "correlation_r" in cube]
+        return [name for name, cube in cubes.items() if CORRELATION_R in cube]
     wanted = PANEL_FIELDS[panel]
     return [
         name
@@ -72,7 +73,7 @@ def _by_deployment(cube: xr.Dataset, wanted: tuple[set[str], ...]) -> bool:
     deployment, :mod:`pipeline.report.chip_population`)."""
     fields = set(swept_fields(cube))
     return (
-        "accuracy_mean" in cube
+        ACCURACY_MEAN in cube
         and len(sweep_dims(cube)) == 2
         and DEPLOYMENT in fields
         and fields - {DEPLOYMENT} in wanted
@@ -90,7 +91,7 @@ def field_values(cube: xr.Dataset, field: str) -> np.ndarray | None:
     name = field_coordinate(cube, field)
     if name is None:
         return None
-    keys = cube["result_key"]
+    keys = cube[RESULT_KEY]
     return cube[name].broadcast_like(keys).transpose(*keys.dims).values
 
 
@@ -135,7 +136,7 @@ def panel_x(panel: Panel, cube: xr.Dataset) -> np.ndarray:
 def point_keys(cube: xr.Dataset) -> list[str]:
     """Result cache keys (the cube's ``result_key``) of its points in C order over its swept
     dimensions; points shared by two sweeps have one key."""
-    return [str(k) for k in cube["result_key"].transpose(*sweep_dims(cube)).values.ravel()]
+    return [str(k) for k in cube[RESULT_KEY].transpose(*sweep_dims(cube)).values.ravel()]
 
 
 def dataset_kind(cubes: Mapping[str, xr.Dataset]) -> str:

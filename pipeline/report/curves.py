@@ -21,6 +21,17 @@ import numpy as np
 import xarray as xr
 
 from pipeline.report.cubes import point_keys, sweep_dims
+from pipeline.results.variables import (
+    ACCURACY,
+    ACCURACY_HIGH,
+    ACCURACY_LOW,
+    ACCURACY_MEAN,
+    COEFFICIENT_DIM,
+    CORRELATION_P,
+    CORRELATION_R,
+    METRIC_DIM,
+    MODEL_DIM,
+)
 
 
 @dataclass(frozen=True)
@@ -113,11 +124,11 @@ def sweep_curves(name: str, cube: xr.Dataset, x: np.ndarray) -> tuple[Curve, ...
     dim = sweep_dims(cube)[0]
     order = np.argsort(x, kind="stable")
     keys = np.asarray(point_keys(cube))[order]
-    folds = cube["accuracy"].transpose(dim, "model", ...).values
+    folds = cube[ACCURACY].transpose(dim, MODEL_DIM, ...).values
     folds = folds.reshape(folds.shape[0], folds.shape[1], -1)[order]
     curves = []
-    for m, model in enumerate(cube["model"].values):
-        mean = cube["accuracy_mean"].transpose(dim, "model").values[order, m]
+    for m, model in enumerate(cube[MODEL_DIM].values):
+        mean = cube[ACCURACY_MEAN].transpose(dim, MODEL_DIM).values[order, m]
         if np.isnan(mean).all():
             continue
         curves.append(
@@ -127,8 +138,8 @@ def sweep_curves(name: str, cube: xr.Dataset, x: np.ndarray) -> tuple[Curve, ...
                 x=np.asarray(x, dtype=np.float64)[order],
                 keys=tuple(str(k) for k in keys),
                 mean=mean.astype(np.float64),
-                low=cube["accuracy_low"].transpose(dim, "model").values[order, m],
-                high=cube["accuracy_high"].transpose(dim, "model").values[order, m],
+                low=cube[ACCURACY_LOW].transpose(dim, MODEL_DIM).values[order, m],
+                high=cube[ACCURACY_HIGH].transpose(dim, MODEL_DIM).values[order, m],
                 std=_fold_std(folds[:, m]),
             )
         )
@@ -141,14 +152,14 @@ def metric_fits(name: str, cube: xr.Dataset) -> tuple[MetricFit, ...]:
 
     dims = sweep_dims(cube)
     fits = []
-    for model in cube["model"].values:
-        where = {"model": model}
-        mean = cube["accuracy_mean"].sel(where).transpose(*dims).values.ravel()
+    for model in cube[MODEL_DIM].values:
+        where = {MODEL_DIM: model}
+        mean = cube[ACCURACY_MEAN].sel(where).transpose(*dims).values.ravel()
         if np.isnan(mean).all():
             continue
-        low = cube["accuracy_low"].sel(where).transpose(*dims).values.ravel()
-        high = cube["accuracy_high"].sel(where).transpose(*dims).values.ravel()
-        for metric in cube["metric"].values:
+        low = cube[ACCURACY_LOW].sel(where).transpose(*dims).values.ravel()
+        high = cube[ACCURACY_HIGH].sel(where).transpose(*dims).values.ravel()
+        for metric in cube[METRIC_DIM].values:
             x = cube[str(metric)].transpose(*dims).values.ravel().astype(np.float64)
             usable = np.isfinite(x) & np.isfinite(mean)
             xs, ys = x[usable], mean[usable]
@@ -156,7 +167,7 @@ def metric_fits(name: str, cube: xr.Dataset) -> tuple[MetricFit, ...]:
             if xs.size >= 2 and np.ptp(xs) > 0:
                 line = stats.linregress(xs, ys)
                 slope, intercept = float(line.slope), float(line.intercept)
-            at = {"model": model, "metric": metric, "coefficient": "pearson"}
+            at = {MODEL_DIM: model, METRIC_DIM: metric, COEFFICIENT_DIM: "pearson"}
             fits.append(
                 MetricFit(
                     sweep=name,
@@ -168,8 +179,8 @@ def metric_fits(name: str, cube: xr.Dataset) -> tuple[MetricFit, ...]:
                     high=high[usable],
                     slope=slope,
                     intercept=intercept,
-                    r=float(cube["correlation_r"].sel(at)),
-                    p=float(cube["correlation_p"].sel(at)),
+                    r=float(cube[CORRELATION_R].sel(at)),
+                    p=float(cube[CORRELATION_P].sel(at)),
                     left_out=int(np.sum(~usable)),
                 )
             )

@@ -48,15 +48,22 @@ from pipeline.report.cubes import point_keys, sweep_dims
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.seeds import rng_for
 from pipeline.report.text import comparison, pct, pct_interval, si
+from pipeline.results.decision_cube import (
+    DECISION_CONFIDENCE,
+    DECISION_CORRECT,
+    DECISION_DIM,
+    DECODER_VARIABLES,
+)
 from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
 from pipeline.results.early_exit import EXIT_THRESHOLDS, early_exit, exit_energy_j
 from pipeline.results.stats import PairedComparison, accuracy_interval
+from pipeline.results.variables import LABEL, MODEL_DIM, RECORDING_DIM, REPEAT_DIM
 
 #: The cube's decision variables, (axes..., model, decision_s, repeat, recording).
-DECISION_VARIABLES = ("decision_correct", "decision_confidence")
+DECISION_VARIABLES = (DECISION_CORRECT, DECISION_CONFIDENCE)
 #: The cube's operation counts, (axes..., model, decision_s), in
 #: :func:`~pipeline.results.decoder_energy.decoder_energy_j`'s order.
-OPERATION_VARIABLES = ("decoder_acs", "decoder_macs", "decoder_neuron_updates")
+OPERATION_VARIABLES = DECODER_VARIABLES
 #: The stem of the latency figure.
 LATENCY_STEM = "latency"
 
@@ -163,26 +170,26 @@ def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], D
     (the first cube met holding a point wins)."""
     found: dict[tuple[str, str], DesignDecisions] = {}
     for cube in cubes.values():
-        if not all(v in cube.variables for v in (*DECISION_VARIABLES, "decision_s", "label")):
+        if not all(v in cube.variables for v in (*DECISION_VARIABLES, DECISION_DIM, LABEL)):
             continue
         dims = sweep_dims(cube)
-        order = (*dims, "model", "decision_s", "repeat", "recording")
+        order = (*dims, MODEL_DIM, DECISION_DIM, REPEAT_DIM, RECORDING_DIM)
         correct, confidence = (
             _points(cube[name].transpose(*order), dims) for name in DECISION_VARIABLES
         )
         operations = np.stack(
             [
-                _points(cube[name].transpose(*dims, "model", "decision_s"), dims)
+                _points(cube[name].transpose(*dims, MODEL_DIM, DECISION_DIM), dims)
                 if name in cube
                 else np.full(correct.shape[:3], np.nan)
                 for name in OPERATION_VARIABLES
             ],
             axis=-2,
         )  # (points, model, 3, times)
-        times = cube["decision_s"].values.astype(np.float64)
-        labels = cube["label"].values.astype(np.int64)
+        times = cube[DECISION_DIM].values.astype(np.float64)
+        labels = cube[LABEL].values.astype(np.int64)
         for p, key in enumerate(point_keys(cube)):
-            for m, model in enumerate(str(v) for v in cube["model"].values):
+            for m, model in enumerate(str(v) for v in cube[MODEL_DIM].values):
                 decided = (correct[p, m] >= 0).any(axis=(-2, -1))
                 if (key, model) in found or not decided.any():
                     continue

@@ -69,6 +69,15 @@ from pipeline.results.readout_power import (
     frame_dynamic_power_w,
     frame_static_power_w,
 )
+from pipeline.results.variables import (
+    ACCURACY,
+    ACCURACY_HIGH,
+    ACCURACY_LOW,
+    ACCURACY_MEAN,
+    MODEL_DIM,
+    RESULT_KEY,
+    STAGE_DIM,
+)
 from pipeline.run.stages import shared_steps
 
 
@@ -263,11 +272,11 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
         dims = sweep_dims(cube)
         settings = _settings(cube)
         work = work_seconds(cube)
-        stages = [str(s) for s in cube["stage"].values] if work is not None else []
-        models = [str(m) for m in cube["model"].values]
-        mean = _flat(cube["accuracy_mean"], dims)
-        low, high = _flat(cube["accuracy_low"], dims), _flat(cube["accuracy_high"], dims)
-        folds = cube["accuracy"].transpose(*dims, "model", ...).values
+        stages = [str(s) for s in cube[STAGE_DIM].values] if work is not None else []
+        models = [str(m) for m in cube[MODEL_DIM].values]
+        mean = _flat(cube[ACCURACY_MEAN], dims)
+        low, high = _flat(cube[ACCURACY_LOW], dims), _flat(cube[ACCURACY_HIGH], dims)
+        folds = cube[ACCURACY].transpose(*dims, MODEL_DIM, ...).values
         folds = folds.reshape(mean.shape[0], len(models), -1)
         seconds = _flat(work, dims) if work is not None else None
         scalars = {
@@ -339,9 +348,9 @@ def _settings(cube: xr.Dataset) -> list[tuple[Setting, ...]]:
     for dim in dims:
         for name in axis_coordinates(cube, dim):
             _, units = describe_coordinate(cube, name)
-            values = cube[name].broadcast_like(cube["result_key"]).transpose(*dims).values.ravel()
+            values = cube[name].broadcast_like(cube[RESULT_KEY]).transpose(*dims).values.ravel()
             columns.append((str(cube[name].attrs["field"]), units, values))
-    size = cube["result_key"].size
+    size = cube[RESULT_KEY].size
     return [
         tuple(Setting(f, label(values[i]), units) for f, units, values in columns)
         for i in range(size)

@@ -44,6 +44,14 @@ from pipeline.results.stats import (
     compare_paired,
     trend,
 )
+from pipeline.results.variables import (
+    CORRECT,
+    LABEL,
+    MODEL_DIM,
+    RECORDING_DIM,
+    REPEAT_DIM,
+    RESULT_KEY,
+)
 
 RESAMPLES = 2000
 """Bootstrap resamples of every paired comparison and trend the report tests."""
@@ -185,21 +193,21 @@ def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
     found: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
     chips: dict[tuple[str, str], np.ndarray] = {}
     for cube in cubes.values():
-        if "correct" not in cube:
+        if CORRECT not in cube:
             continue
         cube = pooled(cube)
         if PER_CHIP in cube:
-            layout = (*sweep_dims(cube), "model", CHIP_DIM, CHIP_REPEAT, "recording")
+            layout = (*sweep_dims(cube), MODEL_DIM, CHIP_DIM, CHIP_REPEAT, RECORDING_DIM)
             by_chip = cube[PER_CHIP].transpose(*layout).values
             by_chip = by_chip.reshape(-1, *by_chip.shape[len(layout) - 4 :])
             for p, key in enumerate(point_keys(cube)):
-                for m, model in enumerate(str(v) for v in cube["model"].values):
+                for m, model in enumerate(str(v) for v in cube[MODEL_DIM].values):
                     chips.setdefault((key, model), by_chip[p, m])
         dims = sweep_dims(cube)
-        names = [str(n) for n in cube["recording"].values]
-        labels = [int(v) for v in cube["label"].values]
+        names = [str(n) for n in cube[RECORDING_DIM].values]
+        labels = [int(v) for v in cube[LABEL].values]
         datasets = _dataset_ids(cube)
-        correct = cube["correct"].transpose(*dims, "model", "repeat", "recording").values
+        correct = cube[CORRECT].transpose(*dims, MODEL_DIM, REPEAT_DIM, RECORDING_DIM).values
         correct = correct.reshape(-1, *correct.shape[len(dims) :])
         for p, key in enumerate(point_keys(cube)):
             columns = np.array(
@@ -209,7 +217,7 @@ def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:
                 ],
                 dtype=np.int64,
             )
-            for m, model in enumerate(str(v) for v in cube["model"].values):
+            for m, model in enumerate(str(v) for v in cube[MODEL_DIM].values):
                 values = correct[p, m]
                 if (key, model) in found or not (values >= 0).any():
                     continue
@@ -235,7 +243,7 @@ def _dataset_ids(cube: xr.Dataset) -> list[str]:
     """Which recordings each point saw (``dataset.kind`` and ``dataset.path``), in point order."""
     found = (field_values(cube, name) for name in (DATASET_KIND, DATASET_PATH))
     parts = [values.ravel() for values in found if values is not None]
-    size = cube["result_key"].size
+    size = cube[RESULT_KEY].size
     return ["|".join(str(p[i]) for p in parts) for i in range(size)]
 
 
@@ -300,6 +308,6 @@ def _result_key(cubes: Mapping[str, xr.Dataset], ref: PointRef) -> str:
     if set(at) != set(dims):
         raise KeyError(f"sweep {sweep!r} needs a value for each of {list(dims)}, got {sorted(at)}")
     try:
-        return str(cube["result_key"].sel(dict(at)).item())
+        return str(cube[RESULT_KEY].sel(dict(at)).item())
     except KeyError:
         raise KeyError(f"sweep {sweep!r} has no point at {dict(at)}") from None

@@ -24,7 +24,7 @@ DATASET_PATH = scene_field("dataset.path")
 REPEATS = scene_field("training.repeats")
 #: How one classifier meets many chips (the scene's ``chips`` part; see
 #: :mod:`pipeline.report.chip_population`).
-DEPLOYMENT = "chips.deployment"
+DEPLOYMENT = scene_field("chips.deployment")
 
 
 class Panel(enum.StrEnum):

@@ -19,6 +19,7 @@ import xarray as xr
 from pipeline.report.cubes import axis_coordinates, describe_coordinate, sweep_dims
 from pipeline.report.curves import Curve, sweep_curves
 from pipeline.report.text import label
+from pipeline.results.variables import ACCURACY_MEAN, MODEL_DIM
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ def sweep_plot(name: str, cube: xr.Dataset) -> SweepPlot | None:
 def heatmap(name: str, cube: xr.Dataset) -> Heatmap | None:
     """The heat map of a two-dimensional cube; None if no model has data."""
     first, second = sweep_dims(cube)
-    accuracy = cube["accuracy_mean"].transpose("model", first, second).values.astype(np.float64)
+    accuracy = cube[ACCURACY_MEAN].transpose(MODEL_DIM, first, second).values.astype(np.float64)
     keep = [m for m in range(accuracy.shape[0]) if np.isfinite(accuracy[m]).any()]
     if not keep:
         return None
@@ -122,6 +123,6 @@ def heatmap(name: str, cube: xr.Dataset) -> Heatmap | None:
         col_label=axis_label(cube, second),
         rows=tuple(label(v) for v in cube[first].values),
         cols=tuple(label(v) for v in cube[second].values),
-        models=tuple(str(cube["model"].values[m]) for m in keep),
+        models=tuple(str(cube[MODEL_DIM].values[m]) for m in keep),
         accuracy=accuracy[keep],
     )

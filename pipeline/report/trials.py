@@ -30,8 +30,9 @@ import xarray as xr
 
 from pipeline.design.space import TRIAL_DIM, Metric, Objective
 from pipeline.report.evidence import ALPHA, gather_evidence
-from pipeline.results.cube import CHARGE_DIM, paid_seconds, work_seconds
+from pipeline.results.cube import paid_seconds, work_seconds
 from pipeline.results.objectives import objective_values
+from pipeline.results.variables import CHARGE_DIM, RESULT_KEY, STAGE_DIM
 from pipeline.run.records import Charge
 
 OBJECTIVE_ATTRS = {"units": "1", "long_name": "objective"}
@@ -83,7 +84,7 @@ def front_cube(trials: xr.Dataset, objectives: Sequence[Objective]) -> xr.Datase
     indistinguishable trials beside it (see the module docstring)."""
     values = objective_values(trials, objectives)
     costs = values * np.array([o.sign for o in objectives])
-    keys = [str(k) for k in trials["result_key"].values]
+    keys = [str(k) for k in trials[RESULT_KEY].values]
     on = pareto_mask(costs)
     accuracy = next((o for o in objectives if o.metric is Metric.ACCURACY), None)
     evidence = gather_evidence({"trials": trials}) if accuracy is not None else None
@@ -116,7 +117,7 @@ def trial_cube(cube: xr.Dataset, numbers: Sequence[int], space_name: str) -> xr.
     """A trial grid's cube (:meth:`pipeline.design.space.Space.trial_grid`) along
     :data:`~pipeline.design.space.TRIAL_DIM`, the trials' ``numbers`` its coordinate; the searched
     fields stay coordinates along it (attribute ``field``), as every other scene field does."""
-    (dim,) = cube["result_key"].dims
+    (dim,) = cube[RESULT_KEY].dims
     renamed = cube.rename_dims({dim: TRIAL_DIM}).drop_indexes(dim)
     attrs = {"units": "1", "long_name": "trial of the search, in the order asked"}
     numbered = renamed.assign_coords({TRIAL_DIM: (TRIAL_DIM, np.asarray(numbers), attrs)})
@@ -140,16 +141,16 @@ def search_seconds(
     ``spike_stages`` of each spike train (``spike_keys``, per trial) once, so that a trial
     sharing the train of an earlier one costs only its coding and training.
     """
-    stages = [str(s) for s in cube["stage"].values]
+    stages = [str(s) for s in cube[STAGE_DIM].values]
     spike = np.array([s in spike_stages for s in stages])
     paid, work = paid_seconds(cube), work_seconds(cube)
-    paid_rows = None if paid is None else paid.transpose(TRIAL_DIM, "stage", CHARGE_DIM).values
-    work_rows = None if work is None else work.transpose(TRIAL_DIM, "stage").values
+    paid_rows = None if paid is None else paid.transpose(TRIAL_DIM, STAGE_DIM, CHARGE_DIM).values
+    work_rows = None if work is None else work.transpose(TRIAL_DIM, STAGE_DIM).values
     own = None if paid is None else [str(c) for c in paid[CHARGE_DIM].values].index(Charge.OWN)
     seen_points: set[str] = set()
     seen_trains: set[str] = set()
     total = 0.0
-    for i, key in enumerate(str(k) for k in cube["result_key"].values):
+    for i, key in enumerate(str(k) for k in cube[RESULT_KEY].values):
         if key in seen_points:
             continue
         seen_points.add(key)

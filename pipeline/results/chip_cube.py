@@ -44,7 +44,14 @@ from pipeline.results.variables import (
     RECORDING_DIM,
     REPEAT_DIM,
 )
-from pipeline.results.yields import yield_statistics
+from pipeline.results.yields import (
+    ACCURACY_CHIP_MEAN,
+    ACCURACY_P05,
+    ACCURACY_P05_HIGH,
+    ACCURACY_P05_LOW,
+    YIELD_SHARE,
+    yield_statistics,
+)
 from pipeline.run.grid_keys import KeyedPoint
 
 __all__ = ["CHIP_CUBE_VARIABLES", "CHIP_DIM", "CHIP_METRICS", "chip_variables"]
@@ -56,17 +63,17 @@ CHIP_METRICS = tuple(name for name in METRICS if name != "equivalent_bits")
 #: ``units`` and ``long_name`` of the chip dimension and the yield statistics.
 CHIP_CUBE_VARIABLES: dict[str, dict[str, str]] = {
     CHIP_DIM: {"units": "1", "long_name": "simulated chip of the design"},
-    "accuracy_chip_mean": {"units": "1", "long_name": "mean over the chips of their accuracy"},
-    "accuracy_p05": {"units": "1", "long_name": "5th percentile over the chips of their accuracy"},
-    "accuracy_p05_low": {
+    ACCURACY_CHIP_MEAN: {"units": "1", "long_name": "mean over the chips of their accuracy"},
+    ACCURACY_P05: {"units": "1", "long_name": "5th percentile over the chips of their accuracy"},
+    ACCURACY_P05_LOW: {
         "units": "1",
         "long_name": "lower end of the distribution-free 95 % interval of accuracy_p05",
     },
-    "accuracy_p05_high": {
+    ACCURACY_P05_HIGH: {
         "units": "1",
         "long_name": "upper end of the distribution-free 95 % interval of accuracy_p05",
     },
-    "yield_share": {
+    YIELD_SHARE: {
         "units": "1",
         "long_name": "share of the chips whose accuracy reaches chips.yield_target",
     },

@@ -32,7 +32,15 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from pipeline.chain.operation_kinds import OPERATIONS
+from pipeline.results.decision_cube import (
+    DECISION_CONFIDENCE,
+    DECISION_CORRECT,
+    DECISION_DIM,
+    DECODER_VARIABLES,
+)
 from pipeline.results.decoder_energy import DecoderEnergyModel, EnergyBand, decoder_energy_j
+from pipeline.results.variables import MODEL_DIM, RECORDING_DIM, REPEAT_DIM, RESULT_KEY
 
 #: Confidence thresholds of the report's early-exit table.
 EXIT_THRESHOLDS = (0.5, 0.7, 0.8, 0.9, 0.95, 0.99)
@@ -225,26 +233,27 @@ def exit_objectives(
         cube keeps no decisions (or no operation counts, for the energy) or does not hold the
         model.
     """
-    dims = cube["result_key"].dims
-    shape = cube["result_key"].shape
+    dims = cube[RESULT_KEY].dims
+    shape = cube[RESULT_KEY].shape
     nan = np.full(shape, np.nan)
-    names = ("decision_s", "decision_correct", "decision_confidence")
-    if not all(name in cube for name in names) or model not in cube["model"].values:
+    names = (DECISION_DIM, DECISION_CORRECT, DECISION_CONFIDENCE)
+    if not all(name in cube for name in names) or model not in cube[MODEL_DIM].values:
         return nan, nan.copy()
-    at = cube.sel(model=model)
-    order = (*dims, "decision_s", "repeat", "recording")
+    at = cube.sel({MODEL_DIM: model})
+    order = (*dims, DECISION_DIM, REPEAT_DIM, RECORDING_DIM)
     found = early_exit(
-        at["decision_confidence"].transpose(*order).values,
-        at["decision_correct"].transpose(*order).values,
-        cube["decision_s"].values,
+        at[DECISION_CONFIDENCE].transpose(*order).values,
+        at[DECISION_CORRECT].transpose(*order).values,
+        cube[DECISION_DIM].values,
         confidence,
     )
-    counts = ("decoder_acs", "decoder_macs", "decoder_neuron_updates")
-    if not all(name in cube for name in counts):
+    if not all(name in cube for name in DECODER_VARIABLES):
         return np.asarray(found.mean_decision_s, dtype=np.float64), nan
-    band = exit_energy_j(
-        found, *(at[name].transpose(*dims, "decision_s").values for name in counts), energy
-    )
+    counts = {  # each kind of operation by its name, as exit_energy_j takes it
+        kind: at[name].transpose(*dims, DECISION_DIM).values
+        for kind, name in zip(OPERATIONS, DECODER_VARIABLES, strict=True)
+    }
+    band = exit_energy_j(found, **counts, model=energy)
     return (
         np.asarray(found.mean_decision_s, dtype=np.float64),
         np.asarray(band.high_j, dtype=np.float64),

@@ -19,30 +19,31 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
+from pipeline.design.scene import scene_field
 from pipeline.design.space import MISMATCH_FIELD, Metric, Objective
+from pipeline.results.chip_cube import CHIP_DIM
 from pipeline.results.cube import field_coordinate
 from pipeline.results.early_exit import exit_objectives
 from pipeline.results.matched_area import array_area_m2
 from pipeline.results.readout_power import event_power_w
-
-#: The chip dimension of a cube whose points simulate several chips.
-CHIP_DIM = "chip"
+from pipeline.results.variables import ACCURACY_MEAN, MODEL_DIM, RESULT_KEY, SECONDS, STAGE_DIM
+from pipeline.results.yields import ACCURACY_CHIP_MEAN, ACCURACY_P05
 
 
 def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.ndarray:
     """float64 (points, objectives): each objective of every point of a cube with one sweep
     dimension (a trial cube), NaN where the point does not state it."""
-    (dim,) = [d for d in cube["result_key"].dims]
+    (dim,) = [d for d in cube[RESULT_KEY].dims]
     cube = _over_chips(cube)
     columns = []
     for objective in objectives:
         match objective.metric:
             case Metric.ACCURACY:
-                values = cube["accuracy_mean"].sel(model=objective.model)
+                values = cube[ACCURACY_MEAN].sel({MODEL_DIM: objective.model})
             case Metric.YIELD:
                 values = (
-                    cube["accuracy_p05"].sel(model=objective.model)
-                    if "accuracy_p05" in cube
+                    cube[ACCURACY_P05].sel({MODEL_DIM: objective.model})
+                    if ACCURACY_P05 in cube
                     else xr.DataArray(np.full(cube.sizes[dim], np.nan), dims=(dim,))
                 )
             case Metric.AREA:
@@ -55,11 +56,11 @@ def objective_values(cube: xr.Dataset, objectives: Sequence[Objective]) -> np.nd
                 power = event_power_w(*(np.where(ok, r, 0.0) for r in rates))
                 values = xr.DataArray(np.where(ok, power, np.nan), dims=(dim,))
             case Metric.COMPUTE:
-                values = cube["seconds"].sum("stage", min_count=1)
+                values = cube[SECONDS].sum(STAGE_DIM, min_count=1)
             case Metric.DECISION_TIME | Metric.DECODER_ENERGY:
                 time_s, energy_j = exit_objectives(cube, objective.model)
                 chosen = time_s if objective.metric is Metric.DECISION_TIME else energy_j
-                values = xr.DataArray(chosen, dims=cube["result_key"].dims)
+                values = xr.DataArray(chosen, dims=cube[RESULT_KEY].dims)
         columns.append(np.asarray(values.transpose(dim).values, dtype=np.float64))
     return np.stack(columns, axis=-1) if columns else np.empty((cube.sizes[dim], 0))
 
@@ -71,8 +72,8 @@ def _over_chips(cube: xr.Dataset) -> xr.Dataset:
         return cube
     chipped = [name for name, v in cube.data_vars.items() if CHIP_DIM in v.dims]
     means = {name: cube[name].mean(CHIP_DIM, skipna=True) for name in chipped}
-    if "accuracy_chip_mean" in cube:
-        means["accuracy_mean"] = cube["accuracy_chip_mean"]
+    if ACCURACY_CHIP_MEAN in cube:
+        means[ACCURACY_MEAN] = cube[ACCURACY_CHIP_MEAN]
     return cube.assign(means)
 
 
@@ -84,12 +85,12 @@ def _array_area(cube: xr.Dataset, dim: str) -> np.ndarray:
         name = field_coordinate(cube, field)
         if name is None:
             return np.full(cube.sizes[dim], np.nan)
-        found = cube[name].broadcast_like(cube["result_key"]).transpose(dim).values
+        found = cube[name].broadcast_like(cube[RESULT_KEY]).transpose(dim).values
         return np.asarray(found, dtype=np.float64)
 
-    rows, cols = values("array.rows"), values("array.cols")
+    rows, cols = values(scene_field("array.rows")), values(scene_field("array.cols"))
     sigma_rel = values(f"{MISMATCH_FIELD}.sigma_rel")
-    threshold_v = values("readout.threshold_v")
+    threshold_v = values(scene_field("readout.threshold_v"))
     known = np.isfinite(rows * cols * sigma_rel * threshold_v)
     area = np.full(known.shape, np.nan)
     if known.any():

@@ -3,8 +3,9 @@ its units and long name (:data:`~pipeline.results.variables.SHARED_VARIABLES`), 
 every module that builds or reads a cube.
 
 A feature's own names are declared beside its cube module: the ``chip`` dimension and the yield
-statistics in :mod:`pipeline.results.chip_cube`, the ``decision_s`` dimension and the decision
-variables in :mod:`pipeline.results.decision_cube`; :data:`pipeline.results.cube.CUBE_VARIABLES`
+statistics' units in :mod:`pipeline.results.chip_cube` (their names where they are computed,
+:mod:`pipeline.results.yields`), the ``decision_s`` dimension and the decision variables in
+:mod:`pipeline.results.decision_cube`; :data:`pipeline.results.cube.CUBE_VARIABLES`
 gathers them all. The spike metrics are the fields of
 :class:`~pipeline.chain.metrics.SpikeMetrics` (:data:`METRICS`), and the values a point's result
 states beside them are declared on the results record (:data:`RESULT_VALUES`).

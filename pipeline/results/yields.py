@@ -52,8 +52,13 @@ import math
 import numpy as np
 
 __all__ = [
+    "ACCURACY_CHIP_MEAN",
+    "ACCURACY_P05",
+    "ACCURACY_P05_HIGH",
+    "ACCURACY_P05_LOW",
     "CONFIDENCE",
     "QUANTILE",
+    "YIELD_SHARE",
     "binomial_cdf",
     "quantile_estimate_rank",
     "quantile_interval_ranks",
@@ -66,6 +71,13 @@ __all__ = [
 QUANTILE = 0.05
 #: Confidence of its interval.
 CONFIDENCE = 0.95
+#: The cube variables of the yield statistics (their units and long names are declared with the
+#: chip dimension, :data:`pipeline.results.chip_cube.CHIP_CUBE_VARIABLES`).
+ACCURACY_CHIP_MEAN = "accuracy_chip_mean"
+ACCURACY_P05 = "accuracy_p05"
+ACCURACY_P05_LOW = "accuracy_p05_low"
+ACCURACY_P05_HIGH = "accuracy_p05_high"
+YIELD_SHARE = "yield_share"
 #: ``N -> (l, u)`` of :func:`quantile_interval_ranks` as the module docstring states them.
 RANKS_EXAMPLES = {58: (None, 7), 59: (1, 10), 100: (1, 10), 200: (4, 17)}
 
@@ -158,19 +170,19 @@ def yield_statistics(
     accuracy = np.asarray(accuracy, dtype=np.float64)
     shape = accuracy.shape[:-1]
     targets = np.broadcast_to(np.asarray(target, dtype=np.float64), shape)
-    names = ("accuracy_chip_mean", "accuracy_p05", "accuracy_p05_low", "accuracy_p05_high")
-    out = {name: np.full(shape, np.nan) for name in (*names, "yield_share")}
+    names = (ACCURACY_CHIP_MEAN, ACCURACY_P05, ACCURACY_P05_LOW, ACCURACY_P05_HIGH, YIELD_SHARE)
+    out = {name: np.full(shape, np.nan) for name in names}
     for index in np.ndindex(shape):
         values = np.sort(accuracy[index][~np.isnan(accuracy[index])])
         n = len(values)
         if n == 0:
             continue
         low, high = quantile_interval_ranks(n, q)
-        out["accuracy_chip_mean"][index] = values.mean()
-        out["accuracy_p05"][index] = values[quantile_estimate_rank(n, q) - 1]
-        out["accuracy_p05_low"][index] = np.nan if low is None else values[low - 1]
-        out["accuracy_p05_high"][index] = np.nan if high is None else values[high - 1]
-        out["yield_share"][index] = np.mean(values >= targets[index])
+        out[ACCURACY_CHIP_MEAN][index] = values.mean()
+        out[ACCURACY_P05][index] = values[quantile_estimate_rank(n, q) - 1]
+        out[ACCURACY_P05_LOW][index] = np.nan if low is None else values[low - 1]
+        out[ACCURACY_P05_HIGH][index] = np.nan if high is None else values[high - 1]
+        out[YIELD_SHARE][index] = np.mean(values >= targets[index])
     return out
 
 
