@@ -97,7 +97,7 @@ def dry_run(grid: Grid, root: Path, workers: int) -> DryRun:
     The estimate: points of the same *kind* (:func:`pipeline.design.grid_cost.cost_kind`) cost
     about the same. A missing point is estimated at the median, over the cached points of this
     grid of its kind, of the total of their measured stage seconds
-    (:attr:`pipeline.run.records.ResultEntry.seconds`); a missing point whose kind has no cached
+    (:attr:`pipeline.run.entries.ResultEntry.seconds`); a missing point whose kind has no cached
     point is counted in ``unknown`` and left out. Stage seconds are as measured when each stage ran,
     so a spike train or a dataset that several points share counts in each of them: the estimate
     leans high for points that will share work with cached ones. The wall estimate,

@@ -182,7 +182,7 @@ def _cast(value: Any, dtype: str, what: str) -> np.ndarray:
     return cast
 
 
-#: The stored type of folded tick deltas: one bit of sign, 31 of delta.
+#: How folded tick deltas are stored, one bit of sign and 31 of delta.
 TICKS_DTYPE = np.dtype("<u4")
 
 

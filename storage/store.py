@@ -72,6 +72,8 @@ Why this design
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import os
 import re
 import shutil
@@ -84,6 +86,7 @@ from pathlib import Path
 from typing import Any
 
 import xarray as xr
+from zarr.core import sync as zarr_sync
 
 from storage import cube_files, index
 from storage.batches import BATCH_PREFIX, read_batch, write_batch
@@ -402,6 +405,12 @@ class SweepStore:
             try:
                 write_batch(partial, name, records)
                 os.rename(partial, folder / batch)
+            except BaseException:
+                # Zarr writes a batch's chunks concurrently on its own event loop and does not
+                # cancel the others when one fails (a full disk): wait for them to end, or one
+                # still writing would make the partial folder again after it is removed.
+                _settle_zarr_writes()
+                raise
             finally:
                 shutil.rmtree(partial, ignore_errors=True)
 
@@ -602,3 +611,17 @@ def _kind_name(kind: Kind) -> str:
     if not isinstance(name, str) or not _KIND.fullmatch(name) or name == CUBES:
         raise ValueError(f"unknown entry kind {name!r}: expected [a-z][a-z0-9_]{{0,63}}, not cubes")
     return name
+
+
+async def _pending_zarr_tasks() -> None:
+    current = asyncio.current_task()
+    await asyncio.gather(
+        *(task for task in asyncio.all_tasks() if task is not current), return_exceptions=True
+    )
+
+
+def _settle_zarr_writes() -> None:
+    """Wait until every task on Zarr's event loop has ended (their errors are dropped: the one
+    that failed the write is already being raised)."""
+    with contextlib.suppress(Exception):
+        zarr_sync.sync(_pending_zarr_tasks())

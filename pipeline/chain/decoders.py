@@ -139,7 +139,7 @@ class Preparation(Enum):
     STANDARDIZED = "standardized"
     """Per feature, with the fold's training statistics (:func:`standardize`)."""
     COUNTS = "counts"
-    """The counts themselves as float32: events stay events."""
+    """The counts themselves, as float32, so that events stay events."""
 
     def apply(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (shapes kept)."""

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: The time resolution of every spike train (s): times are whole multiples of it.
+#: Every spike train's time resolution in seconds; its times are whole multiples of it.
 TIME_RESOLUTION_S = 1e-6
 
 

@@ -205,6 +205,11 @@ class Read:
         return fields.get(scene, self.path) if self.applies(scene) else None
 
 
+def keep_every_entry(entry: Any) -> bool:
+    """The default cache policy of a stored level (:attr:`Level.kept`): keep every entry."""
+    return True
+
+
 @dataclass(frozen=True, eq=False)
 class Level:
     """One level of the data flow: what it reads, what it runs after, how it is computed.
@@ -242,7 +247,7 @@ class Level:
     steps: tuple[str, ...]
     record: Record | None = None
     shared: tuple[str, ...] = ()
-    kept: Callable[[Any], bool] = lambda entry: True
+    kept: Callable[[Any], bool] = keep_every_entry
 
     def __repr__(self) -> str:
         return f"Level({self.name!r})"

@@ -348,6 +348,7 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
     assert any(Path(summary["report"]).as_uri() in a["data"] for a in links)
 
 
+@pytest.mark.slow
 def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
     """A sweep of ``ffnn`` and ``snn`` deployed ``shared`` on several chips runs end to end: every
     chip's accuracy for both models, and the yield over the chips (few chips, few epochs)."""

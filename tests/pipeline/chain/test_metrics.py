@@ -18,7 +18,7 @@ from pipeline.chain.metrics import (
     ste_per_train,
     ste_s2,
 )
-from pipeline.chain.spikes import SpikeTrains
+from pipeline.chain.spikes import TIME_RESOLUTION_S, SpikeTrains, floor_ticks
 
 
 def test_ssnr_formula_and_edge_cases():
@@ -73,10 +73,12 @@ def test_ste_nearest_real_spike_is_found_on_either_side():
 
 def test_ste_per_train_agrees_with_single_trains():
     rng = np.random.default_rng(0)
-    pairs = [
-        (np.sort(rng.uniform(0, 1, n)), np.sort(rng.uniform(0, 1, m)))
-        for n, m in [(5, 7), (0, 3), (4, 0), (6, 6)]
-    ]
+
+    # Whole ticks, as every train holds them (SpikeTrains floors its times to the tick).
+    def ticked(n):
+        return floor_ticks(np.sort(rng.uniform(0, 1, n))) * TIME_RESOLUTION_S
+
+    pairs = [(ticked(n), ticked(m)) for n, m in [(5, 7), (0, 3), (4, 0), (6, 6)]]
     true = SpikeTrains.concatenate([(t, np.ones(len(t))) for t, _ in pairs], 2, np.ones(2))
     real = SpikeTrains.concatenate([(r, np.ones(len(r))) for _, r in pairs], 2, np.ones(2))
     per_train = ste_per_train(true, real).ravel()
