@@ -102,6 +102,21 @@ class Model(enum.StrEnum):
     SNN = "snn"  # leaky integrate-and-fire layer on the spike trains, deciding at every step
 
 
+class DecisionTraining(enum.StrEnum):
+    """What decisions the decoders are trained for (:mod:`pipeline.chain.decoders`)."""
+
+    FULL_TOUCH = "full_touch"  # the decision at the end of the touch; earlier ones read it early
+    ALONG_TOUCH = "along_touch"  # a decision at every time along the touch (prefixes, steps)
+
+
+class SNNInputs(enum.StrEnum):
+    """How the spiking decoder's step counts become its input currents."""
+
+    COUNTS = "counts"  # the event counts themselves
+    LOG_COUNTS = "log_counts"  # log(1 + count): a burst counts less than its events
+    STANDARDIZED = "standardized"  # per input and step, with the fold's training statistics
+
+
 class Encoder(enum.StrEnum):
     """Encoder architecture of the readout."""
 
@@ -416,6 +431,9 @@ class SNNSpec:
     epochs: int = param(
         100, "1", "training epochs of the spiking decoder", within=Range(1, 100_000)
     )
+    inputs: SNNInputs = param(
+        SNNInputs.COUNTS, "1", "how step counts become the spiking decoder's inputs", neutral=True
+    )
 
 
 @dataclass(frozen=True)
@@ -439,6 +457,12 @@ class TrainingSpec:
         within=Range(1, 100),
     )
     seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
+    decisions: DecisionTraining = param(
+        DecisionTraining.ALONG_TOUCH,
+        "1",
+        "decisions the decoders are trained for: along the touch, or at its end only",
+        formerly=DecisionTraining.FULL_TOUCH,
+    )
     snn: SNNSpec = part(SNNSpec, only_when=("models", Model.SNN))
 
 
