@@ -171,6 +171,9 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.threshold",
         "training.snn.surrogate_slope",
         "training.snn.epochs",
+        "training.snn.inputs",
+        # What decisions the decoders are trained for, a new scene field.
+        "training.decisions",
     }
 )
 # Attributes that name the software that built a cube: they change with every release.
