@@ -219,6 +219,10 @@ class Decoder(ABC):
         """Training epochs: ``training.epochs``."""
         return training.epochs
 
+    def learning_rate(self, training: TrainingSpec) -> float:
+        """Adam's learning rate: ``training.learning_rate``."""
+        return training.learning_rate
+
     def loss(
         self,
         net: nn.Module,
@@ -341,6 +345,11 @@ class SNNDecoder(Decoder):
     def epochs(self, training: TrainingSpec) -> int:
         """``training.snn.epochs``."""
         return training.snn.epochs
+
+    def learning_rate(self, training: TrainingSpec) -> float:
+        """``training.snn.learning_rate``, or ``training.learning_rate`` when not set."""
+        rate = training.snn.learning_rate
+        return training.learning_rate if rate is None else rate
 
     def prepare(self, train, test, training):
         """Its step counts as ``training.snn.inputs`` says (:class:`Preparation`)."""

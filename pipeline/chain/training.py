@@ -15,7 +15,8 @@ The procedure:
   (:func:`pipeline.chain.decoders.standardize`; a zero or non-finite standard deviation is
   replaced by 1, so all-zero frames give zeros, never NaN), the SNN's counts as they are.
   Inputs are float32.
-* Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``,
+* Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``;
+  the SNN's ``training.snn.learning_rate`` when set,
   betas 0.9/0.999, eps 1e-8), mean cross-entropy on logits per mini-batch
   (:func:`pipeline.chain.folded.fold_loss`), the decoder's epochs (``training.epochs``; the SNN's
   ``training.snn.epochs``) of mini-batches of ``training.batch_size`` drawn in a fresh random
@@ -566,7 +567,7 @@ def fit_folds(
     )
     epochs = decoder.epochs(training)
     params = [p for p in net.parameters()]
-    optimizer = FoldAdam(params, training.learning_rate)
+    optimizer = FoldAdam(params, decoder.learning_rate(training))
 
     # Epoch orders: per fold, a fresh permutation of its own training set per epoch from its own
     # generator, padded with row 0 of the fold (weight 0) up to n_max; as flat row indices.

@@ -434,6 +434,12 @@ class SNNSpec:
     inputs: SNNInputs = param(
         SNNInputs.COUNTS, "1", "how step counts become the spiking decoder's inputs", neutral=True
     )
+    learning_rate: float | None = param(
+        None,
+        "1",
+        "Adam learning rate of the spiking decoder (default: training.learning_rate)",
+        within=Range(0, 10, low_open=True),
+    )
 
 
 @dataclass(frozen=True)

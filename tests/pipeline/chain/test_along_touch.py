@@ -221,3 +221,16 @@ def test_the_snn_prepares_its_counts_as_its_inputs_field_says():
     np.testing.assert_allclose(
         Preparation.LOG_COUNTS.apply(train, test)[1], np.log1p([[7.0, 0.0, 0.0]]), rtol=1e-7
     )
+
+
+def test_the_snn_has_a_learning_rate_of_its_own_when_set():
+    training = TrainingSpec(learning_rate=0.002)
+    assert decoder_of(Model.SNN).learning_rate(training) == 0.002
+    assert decoder_of(Model.FFNN).learning_rate(training) == 0.002
+    own = TrainingSpec(learning_rate=0.002, snn=SNNSpec(learning_rate=0.01))
+    assert decoder_of(Model.SNN).learning_rate(own) == 0.01
+    assert decoder_of(Model.CNN).learning_rate(own) == 0.002
+    snn = Scene.paper().replace(**{"training.models": ["snn"]})
+    assert "learning_rate" not in snn.canonical(("training.snn",))
+    faster = snn.replace(**{"training.snn.learning_rate": 0.01})
+    assert cache_key(faster, "results") != cache_key(snn, "results")
