@@ -22,14 +22,6 @@ from pipeline.design.scene import DecisionTraining, Model, Scene, SNNInputs, SNN
 from pipeline.run.stages import cache_key
 
 
-@pytest.fixture
-def one_thread():
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
-
-
 def separable(shape, n_classes=4, per_class=10, seed=0, contrast=6.0):
     """Poisson counts, rate 1 plus ``contrast`` on the cells ``== k mod n_classes`` of class k."""
     rng = np.random.default_rng(seed)
@@ -169,7 +161,10 @@ FIELDS = (
 
 
 @pytest.mark.parametrize("model", [Model.FFNN, Model.CNN, Model.SNN])
-def test_full_touch_reproduces_the_code_before_the_choice(model, one_thread):
+def test_full_touch_reproduces_the_code_before_the_choice(model, request):
+    threads = torch.get_num_threads()
+    request.addfinalizer(lambda: torch.set_num_threads(threads))
+    torch.set_num_threads(1)  # as the digests were taken (and as the workers train)
     frames, labels = separable((2 if model is Model.SNN else 1, 3, 8))
     spec = SNNSpec(step_s=0.01, hidden_neurons=6, tau_mem_s=0.05, epochs=5)
     common = dict(epochs=6, learning_rate=0.01, batch_size=8, folds=4, hidden_units=16, seed=3)
