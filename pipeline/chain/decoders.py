@@ -247,8 +247,9 @@ class Decoder(ABC):
         ``(F, B, W, 3)`` (:mod:`pipeline.chain.operations`).
 
         By default those of the trained model on the frame whose columns after ``k`` are 0, the
-        training mean of a standardized input: a prefix of the full-touch model, which costs no
-        training (:func:`pipeline.chain.folded.on_prefixes`)."""
+        training mean of a standardized input (:func:`pipeline.chain.folded.on_prefixes`), as
+        its training along the touch saw them (:meth:`loss`); a full-touch model is read on
+        its prefixes so."""
         from pipeline.chain.folded import on_prefixes
 
         return on_prefixes(self.logits_and_operations, net, x)

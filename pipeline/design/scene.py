@@ -400,7 +400,8 @@ class SNNSpec:
     """The spiking decoder (:class:`~pipeline.chain.spiking.FoldSNN`): ON and OFF spikes of each
     taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
     neurons, a readout read at every step; trained ``epochs`` epochs through time with a
-    fast-sigmoid surrogate gradient of slope ``surrogate_slope``."""
+    fast-sigmoid surrogate gradient of slope ``surrogate_slope``, on its counts as ``inputs``
+    says, at its own ``learning_rate`` when set."""
 
     step_s: float = param(
         0.02,
