@@ -172,6 +172,7 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.surrogate_slope",
         "training.snn.epochs",
         "training.snn.inputs",
+        "training.snn.learning_rate",
         # What decisions the decoders are trained for, a new scene field.
         "training.decisions",
     }

@@ -3,8 +3,10 @@ r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched 
 Input
     A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
     per polarity and taxel: ``x`` of shape ``(C=2, H=taxels, T=steps)``, ON (+1) counts then OFF
-    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). The counts are fed
-    as they are (no standardization), so every input is a number of events.
+    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). They are fed as
+    ``training.snn.inputs`` says (:meth:`pipeline.chain.decoders.SNNDecoder.prepare`):
+    standardized per input and step with the fold's training statistics (the default), as
+    the event counts they are, or as ``log(1 + count)``.
 
 Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset by subtraction)
     With :math:`\beta = \exp(-\Delta t / \tau_\mathrm{mem})` (``tau_mem_s``), threshold

@@ -13,7 +13,8 @@ The procedure:
   and CNN's standardized per feature (one feature = one (channel, taxel, window) cell) with
   their mean and population standard deviation
   (:func:`pipeline.chain.decoders.standardize`; a zero or non-finite standard deviation is
-  replaced by 1, so all-zero frames give zeros, never NaN), the SNN's counts as they are.
+  replaced by 1, so all-zero frames give zeros, never NaN), the SNN's as ``training.snn.inputs``
+  says (standardized so by default).
   Inputs are float32.
 * Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``;
   the SNN's ``training.snn.learning_rate`` when set,
@@ -329,7 +330,8 @@ def cross_validate(
         channels (polarities), H taxels in raster order, W columns, the frames its decoder reads
         (:attr:`pipeline.chain.decoders.Decoder.reads`: windows, or for the SNN 2 polarities
         and steps), prepared fold by fold as it prepares them (standardized for the FFNN and
-        CNN, counts for the SNN: :attr:`~pipeline.chain.decoders.Decoder.preparation`).
+        CNN, as ``training.snn.inputs`` says for the SNN:
+        :meth:`~pipeline.chain.decoders.Decoder.prepare`).
     labels
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).

@@ -166,7 +166,15 @@ def test_full_touch_reproduces_the_code_before_the_choice(model, request):
     request.addfinalizer(lambda: torch.set_num_threads(threads))
     torch.set_num_threads(1)  # as the digests were taken (and as the workers train)
     frames, labels = separable((2 if model is Model.SNN else 1, 3, 8))
-    spec = SNNSpec(step_s=0.01, hidden_neurons=6, tau_mem_s=0.05, epochs=5)
+    # the spiking decoder as it was first built: counts, at training.learning_rate
+    spec = SNNSpec(
+        step_s=0.01,
+        hidden_neurons=6,
+        tau_mem_s=0.05,
+        epochs=5,
+        inputs=SNNInputs.COUNTS,
+        learning_rate=None,
+    )
     common = dict(epochs=6, learning_rate=0.01, batch_size=8, folds=4, hidden_units=16, seed=3)
     training = TrainingSpec(models=(model,), repeats=2, snn=spec, **common)
     full = training.__class__(
@@ -191,11 +199,12 @@ def test_the_choice_keys_the_results_and_full_touch_keeps_the_old_keys():
     assert '"decisions":"along_touch"' in paper.canonical(("training",)).replace(" ", "")
     assert cache_key(full, "rates") == cache_key(paper, "rates")
     assert cache_key(full, "results") != cache_key(paper, "results")
-    # the snn's inputs at today's counts keep their keys too
+    # the snn's inputs as first built, counts, keep their keys too
     snn = paper.replace(**{"training.models": ["snn"]})
-    logs = snn.replace(**{"training.snn.inputs": "log_counts"})
-    assert "inputs" not in snn.canonical(("training",))
-    assert cache_key(logs, "results") != cache_key(snn, "results")
+    counts = snn.replace(**{"training.snn.inputs": "counts"})
+    assert "inputs" not in counts.canonical(("training",))
+    assert '"inputs":"standardized"' in snn.canonical(("training",)).replace(" ", "")
+    assert cache_key(counts, "results") != cache_key(snn, "results")
 
 
 def test_the_snn_prepares_its_counts_as_its_inputs_field_says():
@@ -218,14 +227,15 @@ def test_the_snn_prepares_its_counts_as_its_inputs_field_says():
     )
 
 
-def test_the_snn_has_a_learning_rate_of_its_own_when_set():
-    training = TrainingSpec(learning_rate=0.002)
+def test_the_snn_has_a_learning_rate_of_its_own_unless_unset():
+    assert decoder_of(Model.SNN).learning_rate(TrainingSpec(learning_rate=0.002)) == 0.01
+    training = TrainingSpec(learning_rate=0.002, snn=SNNSpec(learning_rate=None))
     assert decoder_of(Model.SNN).learning_rate(training) == 0.002
     assert decoder_of(Model.FFNN).learning_rate(training) == 0.002
-    own = TrainingSpec(learning_rate=0.002, snn=SNNSpec(learning_rate=0.01))
-    assert decoder_of(Model.SNN).learning_rate(own) == 0.01
+    own = TrainingSpec(learning_rate=0.002, snn=SNNSpec(learning_rate=0.05))
+    assert decoder_of(Model.SNN).learning_rate(own) == 0.05
     assert decoder_of(Model.CNN).learning_rate(own) == 0.002
     snn = Scene.paper().replace(**{"training.models": ["snn"]})
-    assert "learning_rate" not in snn.canonical(("training.snn",))
-    faster = snn.replace(**{"training.snn.learning_rate": 0.01})
-    assert cache_key(faster, "results") != cache_key(snn, "results")
+    assert '"learning_rate":0.01' in snn.canonical(("training.snn",)).replace(" ", "")
+    slower = snn.replace(**{"training.snn.learning_rate": 0.001})
+    assert cache_key(slower, "results") != cache_key(snn, "results")
