@@ -148,9 +148,9 @@ class Preparation(Enum):
     STANDARDIZED = "standardized"
     """Per feature, with the fold's training statistics (:func:`standardize`)."""
     COUNTS = "counts"
-    """The counts themselves as float32: events stay events."""
+    """The counts themselves as float32, so events stay events."""
     LOG_COUNTS = "log_counts"
-    """``log(1 + count)`` as float32: 0 stays 0, a burst weighs less than its events."""
+    """``log(1 + count)`` as float32, so 0 stays 0 and a burst weighs less than its events."""
 
     def apply(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (shapes kept)."""
@@ -196,7 +196,7 @@ class Decoder(ABC):
     reads: ClassVar[Reads]
     """What it reads of the spike trains."""
     preparation: ClassVar[Preparation]
-    """How its frames become its inputs (by default: :meth:`prepare`)."""
+    """How its frames become its inputs, unless its :meth:`prepare` reads the scene's choice."""
 
     def prepare(
         self, train: np.ndarray, test: np.ndarray, training: TrainingSpec

@@ -1,7 +1,7 @@
 """The parts every fold-batched classifier shares (:mod:`pipeline.chain.models`,
 :mod:`pipeline.chain.spiking`): the module that checks the fold-batched input shape, two
 linear layers drawn per fold, and the read of a full-touch classifier on the prefixes of its
-frames (:func:`on_prefixes`, :func:`prefix`).
+frames (:func:`~pipeline.chain.folded.on_prefixes`, :func:`~pipeline.chain.folded.prefix`).
 
 Parameters carry a leading fold dimension ``F``; each fold's are drawn from that fold's own
 :class:`torch.Generator` with PyTorch's default bounds for ``Linear``,
