@@ -196,7 +196,8 @@ class Decoder(ABC):
     reads: ClassVar[Reads]
     """What it reads of the spike trains."""
     preparation: ClassVar[Preparation]
-    """How its frames become its inputs, unless its :meth:`prepare` reads the scene's choice."""
+    """How its frames become its inputs, unless its
+    :meth:`~pipeline.chain.decoders.Decoder.prepare` reads the scene's choice."""
 
     def prepare(
         self, train: np.ndarray, test: np.ndarray, training: TrainingSpec
