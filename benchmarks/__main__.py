@@ -17,6 +17,7 @@ from tqdm import tqdm
 from benchmarks import (
     chips,
     coding,
+    decisions,
     encoder,
     kernels,
     object_root,
@@ -33,7 +34,7 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, snn, planning, chips, spike_store)
+QUICK = (encoder, coding, kernels, training, decisions, snn, planning, chips, spike_store)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 

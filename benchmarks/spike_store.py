@@ -29,10 +29,12 @@ import numpy as np
 
 from benchmarks.timing import median_seconds
 from pipeline.design.scene import Scene
-from pipeline.run.records import SpikeEntry, StepSeconds
-from pipeline.run.stages import FRONT_END, RECORDINGS, SPIKES, Stopwatch
+from pipeline.run.entries import SpikeEntry
+from pipeline.run.records import StepSeconds
+from pipeline.run.stages import FRONT_END, RECORDINGS, SPIKES, step_charge
+from pipeline.run.stopwatch import Stopwatch
 from storage import batches
-from storage.batches import Record, read_batch, write_batch
+from storage.batches import BatchEntry, read_batch, write_batch
 from storage.codec import from_record, to_record
 
 KEY = "0" * 32
@@ -57,15 +59,15 @@ def spike_entry(point: Scene) -> SpikeEntry:
     outputs: dict = {}
     for level in (RECORDINGS, FRONT_END, SPIKES):
         outputs[level.name] = level.run(point, outputs, watch)
-    seconds = StepSeconds(dict(watch.seconds), watch.paid, KEY)
+    seconds = StepSeconds(dict(watch.seconds), watch.paid(step_charge), KEY)
     return SPIKES.record.make(outputs[SPIKES.name], seconds, outputs.get)
 
 
-def old_record(entry: SpikeEntry) -> Record:
+def old_record(entry: SpikeEntry) -> BatchEntry:
     """The entry as layout 2 kept it: every declared variable as its dtype, times in seconds."""
     values, attrs = SPIKES.record.encode(entry)
     declared = {v.name: v for v in SPIKES.record.variables}
-    return Record(
+    return BatchEntry(
         KEY,
         {
             name: (declared[name].dims, np.asarray(value, declared[name].dtype), {})
@@ -90,7 +92,7 @@ def all_bytes(batch: Path) -> int:
     return sum(f.stat().st_size for f in batch.rglob("*") if f.is_file())
 
 
-def entropy_bytes(record: Record) -> float:
+def entropy_bytes(record: BatchEntry) -> float:
     """Zero-order entropy of the stored folded deltas, bytes per event."""
     folded = np.concatenate(
         [values for name, (_, values, _) in record.variables.items() if name.endswith("_times_s")]

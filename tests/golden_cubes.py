@@ -180,6 +180,10 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.threshold",
         "training.snn.surrogate_slope",
         "training.snn.epochs",
+        "training.snn.inputs",
+        "training.snn.learning_rate",
+        # What decisions the decoders are trained for, a new scene field.
+        "training.decisions",
     }
 )
 #: Variables the cube builder computes from the entries with floating-point reductions whose order
@@ -255,8 +259,16 @@ def rich_entries(g: Grid) -> dict[str, ResultEntry]:
 
 
 def grids() -> dict[str, Grid]:
-    """The built-in grids as they were, by name."""
-    return {name: Grid.from_dict(data) for name, data in GRIDS.items()}
+    """The built-in grids as they were, by name: their points trained for the full touch, as
+    every point then was (``training.decisions``; their keys are the keys they had)."""
+    return {
+        name: Grid.from_dict({**data, "base": _trained_for_the_full_touch(data["base"])})
+        for name, data in GRIDS.items()
+    }
+
+
+def _trained_for_the_full_touch(base: str) -> dict:
+    return Scene.builtin(base).replace(**{"training.decisions": "full_touch"}).to_dict()
 
 
 def write_golden(cubes: dict[str, xr.Dataset], path: Path = GOLDEN, *, attrs: bool = False) -> None:

@@ -22,6 +22,8 @@ def keyed_dict(scene: Scene) -> dict:
         del data["readout"]["encoder"], data["readout"]["decay"]
     if not fields.plain(scene.chips, canonical=True):
         del data["chips"]
+    if data["training"]["decisions"] == "full_touch":  # what every key before the choice meant
+        del data["training"]["decisions"]
     if "snn" not in data["training"]["models"]:
         del data["training"]["snn"]
     return data

@@ -116,7 +116,8 @@ def make_cubes(
     results (fold accuracies only, no intervals); ``paid=False`` of one that predates paid
     seconds (else the first point paid the one load of the recordings, shared by the others)."""
     base = Scene.load("smoke").to_dict()
-    base["training"] |= {"models": list(models), "repeats": repeats}
+    # trained for the full touch, as the points of the golden report were (their result keys)
+    base["training"] |= {"models": list(models), "repeats": repeats, "decisions": "full_touch"}
     grid = Grid.from_dict({"name": "t", "base": base, "sweeps": sweeps or PAPER_LIKE_SWEEPS})
     n_classes = len(recordings.class_names) if recordings and recordings.class_names else 12
     records = {}

@@ -1,4 +1,4 @@
-"""The decoder registry: one frozen class per model (:class:`~pipeline.design.scene.Model`) that
+r"""The decoder registry: one frozen class per model (:class:`~pipeline.design.scene.Model`) that
 declares everything the rest of the chain asks of a decoder.
 
 A :class:`Decoder` says
@@ -9,12 +9,20 @@ A :class:`Decoder` says
   models read (:mod:`pipeline.run.decoding`);
 * how its inputs are prepared (:class:`Preparation`): standardized per feature with the
   statistics of a fold's training recordings (:func:`standardize`), or fed as the counts they
-  are;
+  are, or as ``log(1 + count)`` (the ``snn``'s, as ``training.snn.inputs`` says);
 * how it is built (:meth:`Decoder.build`, the fold-batched modules of
   :mod:`pipeline.chain.models` and :mod:`pipeline.chain.spiking`) and how long it trains
   (:meth:`Decoder.epochs`);
-* what its training minimizes (:meth:`Decoder.loss`): every decoder today minimizes the
-  cross-entropy of the decision at the end of the touch;
+* what its training minimizes (:meth:`Decoder.loss`), as ``training.decisions`` says
+  (:class:`~pipeline.design.scene.DecisionTraining`): with ``full_touch``, the cross-entropy
+  :math:`\mathrm{CE}(z_W, y)` of the decision at the end of the touch; with ``along_touch``,
+  that of decisions along it: the FFNN and CNN see each training sample, in each epoch, as at
+  one decision time ``k`` (its columns after ``k`` set as :meth:`Decoder.decide` sets them),
+  the ``k`` of an epoch's samples spread evenly over the ``W`` columns (drawn by
+  :func:`pipeline.chain.training.fit_folds`), so the loss is
+  :math:`\mathrm{CE}(z_k, y)` with :math:`k` uniform on the columns; the ``snn``, whose one
+  pass gives its decision at every step, minimizes :math:`\frac{1}{T} \sum_t
+  \mathrm{CE}(z_t, y)`, the mean over its steps;
 * how it decides along the touch (:meth:`Decoder.decide`): the logits and the operations of a
   decision read at the end of every frame column, the ``snn``'s at every step, the FFNN's and
   CNN's on the frame's prefixes (its later windows set to their training mean, 0 once
@@ -134,17 +142,22 @@ def standardize(train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 class Preparation(Enum):
-    """How a decoder's frames become its float32 inputs, fold by fold."""
+    """How a decoder's frames become its float32 inputs, fold by fold (the values of
+    :class:`~pipeline.design.scene.SNNInputs` name members)."""
 
     STANDARDIZED = "standardized"
     """Per feature, with the fold's training statistics (:func:`standardize`)."""
     COUNTS = "counts"
-    """The counts themselves, as float32, so that events stay events."""
+    """The counts themselves as float32, so events stay events."""
+    LOG_COUNTS = "log_counts"
+    """``log(1 + count)`` as float32, so 0 stays 0 and a burst weighs less than its events."""
 
     def apply(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (shapes kept)."""
         if self is Preparation.STANDARDIZED:
             return standardize(train, test)
+        if self is Preparation.LOG_COUNTS:
+            return np.log1p(train).astype(np.float32), np.log1p(test).astype(np.float32)
         return np.asarray(train, dtype=np.float32), np.asarray(test, dtype=np.float32)
 
 
@@ -183,9 +196,12 @@ class Decoder(ABC):
     reads: ClassVar[Reads]
     """What it reads of the spike trains."""
     preparation: ClassVar[Preparation]
-    """How its frames become its inputs."""
+    """How its frames become its inputs, unless its
+    :meth:`~pipeline.chain.decoders.Decoder.prepare` reads the scene's choice."""
 
-    def prepare(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def prepare(
+        self, train: np.ndarray, test: np.ndarray, training: TrainingSpec
+    ) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (:attr:`preparation`)."""
         return self.preparation.apply(train, test)
 
@@ -204,16 +220,27 @@ class Decoder(ABC):
         """Training epochs: ``training.epochs``."""
         return training.epochs
 
+    def learning_rate(self, training: TrainingSpec) -> float:
+        """Adam's learning rate: ``training.learning_rate``."""
+        return training.learning_rate
+
     def loss(
-        self, net: nn.Module, x: torch.Tensor, targets: torch.Tensor, weights: torch.Tensor
+        self,
+        net: nn.Module,
+        x: torch.Tensor,
+        targets: torch.Tensor,
+        weights: torch.Tensor,
+        ends: torch.Tensor | None = None,
     ) -> torch.Tensor:
         """float32 ``(F,)``: each fold's training loss on a mini-batch ``x`` (float32
-        ``(F, B, C, H, W)``), the weighted cross-entropy of the decision at the end of the
-        touch (:func:`pipeline.chain.folded.fold_loss`). A decoder trained along the touch
-        would weigh its decisions at every column here."""
-        from pipeline.chain.folded import fold_loss
+        ``(F, B, C, H, W)``), the weighted cross-entropy (:func:`pipeline.chain.folded.fold_loss`)
+        of the decision at the end of the touch (``ends`` None: ``full_touch``), or, trained
+        along the touch, of each sample's decision at its column ``ends[f, b]`` (int64
+        ``(F, B)``): its frame with the later columns set to 0, the training mean of a
+        standardized input, as :meth:`decide` reads it (:func:`pipeline.chain.folded.prefix`)."""
+        from pipeline.chain.folded import fold_loss, prefix
 
-        return fold_loss(net(x), targets, weights)
+        return fold_loss(net(x if ends is None else prefix(x, ends)), targets, weights)
 
     def decide(self, net: nn.Module, x: torch.Tensor) -> tuple[torch.Tensor, np.ndarray]:
         """Decisions read at the end of every frame column of ``x`` (float32
@@ -221,8 +248,9 @@ class Decoder(ABC):
         ``(F, B, W, 3)`` (:mod:`pipeline.chain.operations`).
 
         By default those of the trained model on the frame whose columns after ``k`` are 0, the
-        training mean of a standardized input: a prefix of the full-touch model, which costs no
-        training (:func:`pipeline.chain.folded.on_prefixes`)."""
+        training mean of a standardized input (:func:`pipeline.chain.folded.on_prefixes`), as
+        its training along the touch saw them (:meth:`loss`); a full-touch model is read on
+        its prefixes so."""
         from pipeline.chain.folded import on_prefixes
 
         return on_prefixes(self.logits_and_operations, net, x)
@@ -292,8 +320,9 @@ class CNNDecoder(WindowsDecoder):
 
 @dataclass(frozen=True)
 class SNNDecoder(Decoder):
-    """The spiking decoder (:class:`pipeline.chain.spiking.FoldSNN`) on step counts, trained
-    ``training.snn.epochs`` epochs; its decision at every step is its own output there."""
+    """The spiking decoder (:class:`pipeline.chain.spiking.FoldSNN`) on step counts (prepared
+    as ``training.snn.inputs`` says), trained ``training.snn.epochs`` epochs; its decision at
+    every step is its own output there."""
 
     model: ClassVar[Model] = Model.SNN
     reads: ClassVar[Reads] = Reads.STEPS
@@ -318,6 +347,30 @@ class SNNDecoder(Decoder):
     def epochs(self, training: TrainingSpec) -> int:
         """``training.snn.epochs``."""
         return training.snn.epochs
+
+    def learning_rate(self, training: TrainingSpec) -> float:
+        """``training.snn.learning_rate``, or ``training.learning_rate`` when not set."""
+        rate = training.snn.learning_rate
+        return training.learning_rate if rate is None else rate
+
+    def prepare(self, train, test, training):
+        """Its step counts as ``training.snn.inputs`` says (:class:`Preparation`)."""
+        return Preparation(training.snn.inputs.value).apply(train, test)
+
+    def loss(self, net, x, targets, weights, ends=None):
+        """The cross-entropy of its decision at the last step (``ends`` None), or, trained
+        along the touch, the mean over the steps of each step's decision's (one pass gives
+        them all, so every step is weighed, not the drawn ``ends``)."""
+        from pipeline.chain.folded import fold_loss
+
+        if ends is None:
+            return fold_loss(net(x), targets, weights)
+        logits = net.decision_logits(x)  # (F, B, T, n_classes)
+        n_steps = logits.shape[2]
+        every = targets.unsqueeze(2).expand(-1, -1, n_steps)
+        return fold_loss(
+            logits.flatten(1, 2), every.flatten(1), weights.repeat_interleave(n_steps, 1) / n_steps
+        )
 
     def decide(self, net, x):
         """Its outputs at every step (:meth:`~pipeline.chain.spiking.FoldSNN.decision_logits`),

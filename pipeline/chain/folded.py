@@ -1,7 +1,7 @@
 """The parts every fold-batched classifier shares (:mod:`pipeline.chain.models`,
 :mod:`pipeline.chain.spiking`): the module that checks the fold-batched input shape, two
 linear layers drawn per fold, and the read of a full-touch classifier on the prefixes of its
-frames (:func:`~pipeline.chain.folded.on_prefixes`).
+frames (:func:`~pipeline.chain.folded.on_prefixes`, :func:`~pipeline.chain.folded.prefix`).
 
 Parameters carry a leading fold dimension ``F``; each fold's are drawn from that fold's own
 :class:`torch.Generator` with PyTorch's default bounds for ``Linear``,
@@ -90,6 +90,15 @@ def fold_loss(logits: torch.Tensor, targets: torch.Tensor, weights: torch.Tensor
     n_folds, batch, n_classes = logits.shape
     losses = F.cross_entropy(logits.reshape(-1, n_classes), targets.reshape(-1), reduction="none")
     return (losses * weights.reshape(-1)).reshape(n_folds, batch).sum(dim=1)
+
+
+def prefix(x: torch.Tensor, ends: torch.Tensor) -> torch.Tensor:
+    """Frames ``x`` (float32 ``(F, B, C, H, W)``) as at decision time: sample ``[f, b]``'s
+    columns after ``ends[f, b]`` (int64 ``(F, B)``, in ``[0, W)``) set to 0, the training mean
+    of a standardized input, as :func:`on_prefixes` reads them."""
+    column = torch.arange(x.shape[-1]).reshape(1, 1, -1)
+    keep = (column <= ends.unsqueeze(-1)).to(x.dtype)  # (F, B, W)
+    return x * keep.reshape(*ends.shape, 1, 1, x.shape[-1])
 
 
 #: Most input cells (folds x samples x prefixes x frame cells) read at once by

@@ -58,7 +58,7 @@ from pipeline.chain.folded import FoldModel, two_layers, uniform
 CNN_CHANNELS = (16, 32)
 """Output channels of the CNN's two convolutions (the paper's)."""
 
-_STREAMS = {"init": 0, "shuffle": 1}
+_STREAMS = {"init": 0, "shuffle": 1, "decisions": 2}
 
 
 def fold_generator(seed: int, fold: int, purpose: str) -> torch.Generator:
@@ -71,7 +71,8 @@ def fold_generator(seed: int, fold: int, purpose: str) -> torch.Generator:
     fold
         Fold index, ``>= 0``.
     purpose
-        ``"init"`` (initial weights) or ``"shuffle"`` (mini-batch order).
+        ``"init"`` (initial weights), ``"shuffle"`` (mini-batch order) or ``"decisions"`` (the
+        decision times of training along the touch).
 
     Returns
     -------

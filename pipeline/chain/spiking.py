@@ -3,8 +3,10 @@ r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched 
 Input
     A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
     per polarity and taxel: ``x`` of shape ``(C=2, H=taxels, T=steps)``, ON (+1) counts then OFF
-    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). The counts are fed
-    as they are (no standardization), so every input is a number of events.
+    (-1) counts (:func:`pipeline.chain.coding.frames` with ``Polarity.SPLIT``). They are fed as
+    ``training.snn.inputs`` says (:meth:`pipeline.chain.decoders.SNNDecoder.prepare`):
+    standardized per input and step with the fold's training statistics (the default), as
+    the event counts they are, or as ``log(1 + count)``.
 
 Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset by subtraction)
     With :math:`\beta = \exp(-\Delta t / \tau_\mathrm{mem})` (``tau_mem_s``), threshold
@@ -35,10 +37,11 @@ Readout and decisions
     A non-spiking integrator sums the output currents :math:`W_2^\top s_t + b_2` of every step;
     the decision read at step :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of
     their running mean :math:`z_t = \frac{1}{t} \sum_{t' \le t} (W_2^\top s_{t'} + b_2)`, its
-    confidence the softmax probability of that class. Training minimizes the cross-entropy of
-    :math:`z_T`, the decision at the end of the touch, as the FFNN and CNN are trained on the
-    whole touch; an earlier decision reads the same network on the evidence so far, as theirs
-    read the same network on the windows so far (:mod:`pipeline.chain.training`).
+    confidence the softmax probability of that class. Training (``training.decisions``,
+    :meth:`pipeline.chain.decoders.SNNDecoder.loss`) minimizes the cross-entropy of
+    :math:`z_T`, the decision at the end of the touch (``full_touch``), or its mean over the
+    steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)` (``along_touch``: every step's
+    decision is trained, as the FFNN's and CNN's are on the windows so far).
 
 Speed
     The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the

@@ -13,13 +13,19 @@ The procedure:
   and CNN's standardized per feature (one feature = one (channel, taxel, window) cell) with
   their mean and population standard deviation
   (:func:`pipeline.chain.decoders.standardize`; a zero or non-finite standard deviation is
-  replaced by 1, so all-zero frames give zeros, never NaN), the SNN's counts as they are.
+  replaced by 1, so all-zero frames give zeros, never NaN), the SNN's as ``training.snn.inputs``
+  says (standardized so by default).
   Inputs are float32.
-* Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``,
+* Training: PyTorch's default initialization per fold, Adam (``lr = training.learning_rate``;
+  the SNN's ``training.snn.learning_rate`` when set,
   betas 0.9/0.999, eps 1e-8), mean cross-entropy on logits per mini-batch
   (:func:`pipeline.chain.folded.fold_loss`), the decoder's epochs (``training.epochs``; the SNN's
   ``training.snn.epochs``) of mini-batches of ``training.batch_size`` drawn in a fresh random
-  order every epoch.
+  order every epoch. The loss is the decoder's (:meth:`pipeline.chain.decoders.Decoder.loss`),
+  of the decision at the end of the touch (``training.decisions = "full_touch"``) or of
+  decisions along it (``"along_touch"``): then every training sample is, in each epoch, read
+  at one decision column, the columns of an epoch's samples spread evenly over the frame's
+  (a fresh random order per epoch, from the fold's own generator ``"decisions"``).
 * Evaluation: accuracy of ``argmax(logits)`` on each fold's test recordings (as each chip gives
   them, for a classifier deployed on chips: :mod:`pipeline.chain.deployment`), and the
   out-of-fold prediction of every recording (each recording is tested in exactly one fold), so
@@ -57,7 +63,7 @@ from torch.optim.adam import adam as functional_adam
 
 from pipeline.chain.decoders import Decoder, build_model, decoder_of
 from pipeline.chain.models import fold_generator
-from pipeline.design.scene import Model, TrainingSpec
+from pipeline.design.scene import DecisionTraining, Model, TrainingSpec
 from pipeline.errors import SimulationError
 
 __all__ = [
@@ -324,7 +330,8 @@ def cross_validate(
         channels (polarities), H taxels in raster order, W columns, the frames its decoder reads
         (:attr:`pipeline.chain.decoders.Decoder.reads`: windows, or for the SNN 2 polarities
         and steps), prepared fold by fold as it prepares them (standardized for the FFNN and
-        CNN, counts for the SNN: :attr:`~pipeline.chain.decoders.Decoder.preparation`).
+        CNN, as ``training.snn.inputs`` says for the SNN:
+        :meth:`~pipeline.chain.decoders.Decoder.prepare`).
     labels
         int64 ``(n_recordings,)`` class of each recording (indices into ``class_names`` when
         given; any integers otherwise).
@@ -399,7 +406,10 @@ def cross_validate(
         # Every chip's held-out frames of a fold (chip-major rows), prepared as its training
         # frames were; the decisions are read on chip 0's, the first rows.
         train_x, test_x = zip(
-            *(decoder.prepare(frames[tr], chips[:, te].reshape(-1, *sample)) for tr, te in splits),
+            *(
+                decoder.prepare(frames[tr], chips[:, te].reshape(-1, *sample), training)
+                for tr, te in splits
+            ),
             strict=True,
         )
         groups = [list(range(len(splits)))] if batched else [[f] for f in range(len(splits))]
@@ -559,7 +569,7 @@ def fit_folds(
     )
     epochs = decoder.epochs(training)
     params = [p for p in net.parameters()]
-    optimizer = FoldAdam(params, training.learning_rate)
+    optimizer = FoldAdam(params, decoder.learning_rate(training))
 
     # Epoch orders: per fold, a fresh permutation of its own training set per epoch from its own
     # generator, padded with row 0 of the fold (weight 0) up to n_max; as flat row indices.
@@ -570,6 +580,7 @@ def fit_folds(
         for epoch in range(epochs):
             order[epoch, i, :n] = torch.randperm(n, generator=shuffle)
     order += (torch.arange(n_folds) * n_max).reshape(1, n_folds, 1)
+    ends = _decision_columns(seed, folds, n_train, epochs, sample_shape[-1], training.decisions)
 
     # Mini-batches cover positions [s, s + batch_size) of every fold's order. Loss weights make
     # each fold's contribution its mean over its real samples; folds without any real sample in
@@ -593,7 +604,8 @@ def fit_folds(
             rows = epoch_order[:, s:stop].reshape(-1)
             xb = x_rows.index_select(0, rows).reshape(n_folds, stop - s, *sample_shape)
             yb = target_rows.index_select(0, rows).reshape(n_folds, stop - s)
-            loss = decoder.loss(net, xb, yb, weights)
+            eb = None if ends is None else ends[epoch][:, s:stop]
+            loss = decoder.loss(net, xb, yb, weights, eb)
             grads = torch.autograd.grad(loss.sum(), params)
             optimizer.step(grads, active)
             if epoch == epochs - 1:
@@ -601,6 +613,31 @@ def fit_folds(
 
     net.eval()
     return net, (last_loss / active_batches).numpy().astype(np.float64)
+
+
+def _decision_columns(
+    seed: int,
+    folds: Sequence[int],
+    n_train: np.ndarray,
+    epochs: int,
+    n_columns: int,
+    decisions: DecisionTraining,
+) -> torch.Tensor | None:
+    """The decision column each position of each fold's epoch order is trained at: int64
+    ``(epochs, F, n_max)`` in ``[0, n_columns)``, or None for ``full_touch`` (no draw at all).
+
+    Along the touch, fold ``f``'s ``n_f`` positions of an epoch take the columns
+    ``permutation(n_f) mod n_columns`` from the fold's own generator (``"decisions"``): every
+    column equally often in every epoch (up to one), in a fresh random order (padding: 0)."""
+    if decisions is DecisionTraining.FULL_TOUCH:
+        return None
+    ends = torch.zeros(epochs, len(folds), int(n_train.max()), dtype=torch.int64)
+    for i, fold in enumerate(folds):
+        draw = fold_generator(seed, fold, "decisions")
+        n = int(n_train[i])
+        for epoch in range(epochs):
+            ends[epoch, i, :n] = torch.randperm(n, generator=draw) % n_columns
+    return ends
 
 
 def predict_folds(net: torch.nn.Module, test_x: Sequence[np.ndarray]) -> list[np.ndarray]:

@@ -123,6 +123,7 @@ class Declared:
     label: bool = False
     cost: Cost = Cost.KIND
     entries: Mapping[Any, type] | None = None
+    formerly: tuple[Any, ...] = ()
 
 
 _DECLARED = "declared"
@@ -139,6 +140,7 @@ def param(
     label: bool = False,
     cost: Cost = Cost.KIND,
     entries: Mapping[Any, type] | None = None,
+    formerly: Any = dataclasses.MISSING,
 ) -> Any:
     """A dataclass field with its declaration.
 
@@ -163,6 +165,10 @@ def param(
     entries
         For a table of named entries (a mapping field): the type of each entry by its key, an
         enum member (e.g. ``Effect``); each entry is read as a table of that type.
+    formerly
+        For a field whose default is not what was done before it existed: the value that
+        reproduces that, left out of the canonical form as a neutral default is, so a scene
+        that sets it keeps its key (a scene at the new default gets a new one).
     """
     declared = Declared(
         units=units,
@@ -172,6 +178,7 @@ def param(
         label=label,
         cost=cost,
         entries=entries,
+        formerly=() if formerly is dataclasses.MISSING else (formerly,),
     )
     metadata = {_DECLARED: declared}
     if default_factory is not dataclasses.MISSING:
@@ -462,8 +469,9 @@ def part_applies(owner: Any, name: str) -> bool:
 
 def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool:
     """Whether field ``slot`` of value object ``owner`` holding ``value`` is left out of a plain
-    form: when ``None``, and in the canonical form when at a neutral default or, for a part
-    declared ``only_when``, when its sibling field does not hold that value."""
+    form: when ``None``, and in the canonical form when at a neutral default or its
+    ``formerly`` value or, for a part declared ``only_when``, when its sibling field does not
+    hold that value."""
     if value is None:
         return True
     if not canonical:
@@ -471,7 +479,9 @@ def left_out(slot: Slot, value: Any, canonical: bool, owner: Any = None) -> bool
     declared, only_when = slot.declared, slot.only_when
     if only_when is not None and owner is not None:
         return not part_applies(owner, slot.name)
-    return declared is not None and declared.neutral and value == slot.default
+    if declared is None:
+        return False
+    return (declared.neutral and value == slot.default) or value in declared.formerly
 
 
 def plain(value: Any, canonical: bool = False) -> Any:

@@ -16,7 +16,7 @@ import zarr
 
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import TIME_RESOLUTION_S, Encoded, SpikeTrains
-from pipeline.run.records import SpikeEntry
+from pipeline.run.entries import SpikeEntry
 from pipeline.run.stages import SPIKES
 from storage import StoreLayoutError, SweepStore
 from storage.codec import from_record, to_record

@@ -37,10 +37,12 @@ SATURATING = PAPER.replace(
 )
 
 # The keys of stores made at this MODEL_REVISION (5): a change of code that alters them without a
-# revision bump would recompute every store made so far instead of reusing it.
+# revision bump would recompute every store made so far instead of reusing it. Those stores were
+# trained for the decision at the end of the touch, now chosen by ``training.decisions``.
+FULL_TOUCH = {"training.decisions": "full_touch"}
 EARLIER_KEYS = {
     "smoke": (
-        SMOKE,
+        SMOKE.replace(**FULL_TOUCH),
         {
             "recordings": "2968b82159a109ae9ac360c701032406",
             "spikes": "686612a1c4a6e98cba240dc442796ae5",
@@ -49,7 +51,7 @@ EARLIER_KEYS = {
         },
     ),
     "paper": (
-        PAPER,
+        PAPER.replace(**FULL_TOUCH),
         {
             "recordings": "66e9b24961439c432efb2acb38375f2a",
             "spikes": "3f34ef2df7005cfe1d2962c677d3af65",
@@ -58,7 +60,7 @@ EARLIER_KEYS = {
         },
     ),
     "noisy": (
-        NOISY,
+        NOISY.replace(**FULL_TOUCH),
         {
             "recordings": "2968b82159a109ae9ac360c701032406",
             "spikes": "990825bd220da61c59f30ea8949bbb37",
@@ -67,7 +69,7 @@ EARLIER_KEYS = {
         },
     ),
     "saturating": (
-        SATURATING,
+        SATURATING.replace(**FULL_TOUCH),
         {
             "recordings": "66e9b24961439c432efb2acb38375f2a",
             "spikes": "931dce318166d45fff94c4eff79ca735",
@@ -83,6 +85,18 @@ def test_keys_of_earlier_stores_stay_valid(name):
     scene, keys = EARLIER_KEYS[name]
     assert {stage: level_named(stage).key(scene) for stage in keys} == keys
     assert {stage: cache_key(scene, stage) for stage in keys} == keys
+
+
+@pytest.mark.parametrize("name", EARLIER_KEYS)
+def test_training_along_the_touch_changes_the_results_key_alone(name):
+    scene, keys = EARLIER_KEYS[name]
+    along = scene.replace(**{"training.decisions": "along_touch"})
+    assert along.training.decisions != scene.training.decisions
+    new = {stage: cache_key(along, stage) for stage in keys}
+    assert {s: k for s, k in new.items() if s != "results"} == {
+        s: k for s, k in keys.items() if s != "results"
+    }
+    assert new["results"] != keys["results"]
 
 
 class Encoder(enum.StrEnum):
