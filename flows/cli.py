@@ -76,14 +76,16 @@ def _handled(args: argparse.Namespace) -> int:
     except BaseException:  # KeyboardInterrupt; Prefect's TerminationSignal for a SIGTERM
         pass
     # Interrupted: a SIGTERM that Prefect's handler saw may come out as another exception.
+    if not interrupts.is_program():
+        print("eskin: interrupted", file=sys.stderr)
+        return interrupts.EXIT_INTERRUPTED
+    # What it started is stopped, the store holds what was written, the record is closed:
+    # nothing is left to wait for at exit (Prefect's flushes to a server that may be gone took
+    # seconds there, past the deadline's reach once the interpreter finalizes). The line comes
+    # after the stop, so that it is the last thing the command says.
+    interrupts.stop_started_processes(grace_s=1.0)
     print("eskin: interrupted", file=sys.stderr)
-    if interrupts.is_program():
-        # What it started is stopped, the store holds what was written, the record is closed:
-        # nothing is left to wait for at exit (Prefect's flushes to a server that may be gone
-        # took seconds there, past the deadline's reach once the interpreter finalizes).
-        interrupts.stop_started_processes(grace_s=1.0)
-        interrupts.exit_now(interrupts.EXIT_INTERRUPTED, quiet=True)
-    return interrupts.EXIT_INTERRUPTED
+    interrupts.exit_now(interrupts.EXIT_INTERRUPTED, quiet=True)
 
 
 if __name__ == "__main__":

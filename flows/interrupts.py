@@ -133,6 +133,17 @@ def stop_started_processes(grace_s: float = 2.0) -> None:
         with contextlib.suppress(psutil.Error):
             process.kill()
     psutil.wait_procs(alive, timeout=1)
+    _stop_resource_tracker()
+
+
+def _stop_resource_tracker() -> None:
+    """Stop Python's resource tracker now, while this command can still speak after it: it
+    frees what the killed processes left (their semaphores) and warns of it on the shared
+    stderr, which it would otherwise do after the command's last line."""
+    from multiprocessing import resource_tracker
+
+    with contextlib.suppress(Exception):
+        resource_tracker._resource_tracker._stop()
 
 
 def _descendants(process: Any) -> list[Any]:
