@@ -1,8 +1,10 @@
-"""Recordings: the one-channel force (or acceleration) signals a scene starts from.
+"""Recordings: the force (or acceleration) signals a scene starts from, one channel or one
+column per taxel of a real array.
 
 A dataset is a set of recordings ``x_n[k]``, ``n = 0..N-1``, each a finite float64 sequence
-sampled at one rate ``fs_hz`` for the whole dataset, with a class label ``c_n`` in
-``0..C-1``. Recording ``n`` lasts ``len(x_n) / fs_hz`` seconds; lengths may differ.
+sampled at one rate ``fs_hz`` for the whole dataset (of one value per sample, or of one value per
+taxel, the same taxels in every recording), with a class label ``c_n`` in ``0..C-1``. Recording
+``n`` lasts ``len(x_n) / fs_hz`` seconds; lengths may differ.
 
 Three sources (``pipeline.design.scene.DatasetKind``):
 
@@ -18,9 +20,13 @@ Three sources (``pipeline.design.scene.DatasetKind``):
     recording per texture into segments only approximates the paper's 10 recordings per class.
 ``folder``
     ``DIR/dataset.toml`` (``sampling_rate_hz`` required, optional ``name``, ``units`` and
-    ``description``, no other keys) plus one sub-folder per class, sorted by name, each holding
-    one recording per file: ``.csv`` with one numeric column and no header, or ``.npy`` holding
-    a 1-D numeric array. Hidden entries (names starting with ``.``) are ignored everywhere;
+    ``description``, and for an array ``taxels``, ``time_column`` with ``time_unit`` (which
+    replace ``sampling_rate_hz``) and ``taxel_positions_mm``, no other keys) plus one sub-folder
+    per class, sorted by name, each holding one recording per file: ``.csv`` with one numeric
+    column and no header, or ``.npy`` holding a 1-D numeric array; for an array, a ``.csv``
+    whose first line names its columns, or a 2-D ``.npy`` ``(samples, columns)``
+    (:mod:`pipeline.recordings.taxel_columns` says which columns are taxels and how a time
+    column sets the rate). Hidden entries (names starting with ``.``) are ignored everywhere;
     other files at the top level (a README, say) are ignored; any other file or folder inside a
     class folder is an error.
 
@@ -47,6 +53,18 @@ from pipeline.design.scene import Axis, DatasetKind, DatasetSpec
 from pipeline.errors import DatasetError
 from pipeline.numbers import positive_number, whole_number
 from pipeline.recordings.recording_set import MAX_LISTED, Recordings, message, signal_problem
+from pipeline.recordings.taxel_columns import (
+    ARRAY_KEYS,
+    ColumnLayout,
+    ColumnProblem,
+    TaxelRecording,
+    column_layout,
+    header_of,
+    npy_columns,
+    parse_with_header,
+    taxel_recording,
+    taxel_set,
+)
 
 __all__ = [
     "MAX_ABS_SAMPLE",
@@ -72,7 +90,7 @@ VIBTAC12_ROWS = 12
 VIBTAC12_DEFAULT_RATE_HZ = 200.0
 
 _FOLDER_TOML = "dataset.toml"
-_FOLDER_KEYS = ("sampling_rate_hz", "name", "units", "description")
+_FOLDER_KEYS = ("sampling_rate_hz", "name", "units", "description", *ARRAY_KEYS)
 _VIBTAC_FILES = ("X.csv", "Y.csv", "Z.csv")
 _RECORDING_SUFFIXES = (".csv", ".npy")
 _NUMBER = re.compile(
@@ -89,18 +107,16 @@ def _check_magnitudes(recordings: Recordings) -> Recordings:
     for name, signal in zip(recordings.names, recordings.signals, strict=True):
         huge = np.abs(signal) > MAX_ABS_SAMPLE
         if huge.any():
-            first = int(np.argmax(huge))
+            first, column = divmod(int(np.argmax(huge)), recordings.n_taxels)
+            taxel = f", taxel {recordings.taxel_names[column]}" if recordings.is_array else ""
             problems.append(
-                f"{name}: absurd magnitude {signal[first]!r} at sample {first} (more than "
-                f"{MAX_ABS_SAMPLE:g} in any unit: a corrupt or misread file)"
+                f"{name}: absurd magnitude {signal.flat[int(np.argmax(huge))]!r} at sample "
+                f"{first}{taxel} (more than {MAX_ABS_SAMPLE:g} in any unit: a corrupt or "
+                "misread file)"
             )
     if problems:
         raise DatasetError(message(f"dataset {recordings.name}", problems))
     return recordings
-
-
-class _Problem(Exception):
-    """One problem with one file; collected, then reported together as a DatasetError."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -284,7 +300,7 @@ def load_vibtac12(
         raise DatasetError(f"{head}: file {file.name} for axis {axis.value} does not exist")
     try:
         table = _parse_table(_read_text(file, file.name), file.name, columns=None)
-    except _Problem as exc:
+    except ColumnProblem as exc:
         raise DatasetError(message(head, [str(exc)])) from None
     n_rows, n_cols = table.shape
     if n_rows != VIBTAC12_ROWS:
@@ -343,12 +359,16 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
         Each non-hidden sub-folder is a class (sorted by name; the folder name is the class
         name) holding one recording per file, sorted by file name: ``.csv`` with one numeric
         column, no header (blank lines only at the end), UTF-8; or ``.npy`` with a 1-D integer
-        or floating-point array (read without unpickling).
+        or floating-point array (read without unpickling). An array dataset's files are CSVs
+        with a header line or 2-D ``.npy`` arrays, and ``dataset.toml`` may hold ``taxels``,
+        ``time_column`` and ``time_unit``, ``taxel_positions_mm``
+        (:mod:`pipeline.recordings.taxel_columns`).
 
     Returns
     -------
     Recordings
-        Labels in class-folder order; recording names ``"<class>/<file name>"``.
+        Labels in class-folder order; recording names ``"<class>/<file name>"``; for an array,
+        ``taxel_names`` in the declared (or the first recording's) order and the positions.
 
     Raises
     ------
@@ -359,13 +379,17 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
         a file of another type or a folder inside a class folder; a binary or non-numeric CSV
         (file and line), a CSV with more than one column, an empty recording, a recording
         shorter than 2 samples, a non-finite value (recording and first bad sample); a ``.npy``
-        that is not a valid ``.npy`` file, not 1-D or not numeric.
+        that is not a valid ``.npy`` file, not 1-D or 2-D or not numeric. For an array:
+        recordings with different taxel sets (or a one-column recording among them), a missing
+        taxel or time column, a non-numeric or non-finite value in one (file, line and column
+        named), a time column that does not increase, positions whose count differs from the
+        taxels', a time column with ``sampling_rate_hz`` or without ``time_unit``.
     """
     root = Path(path)
     head = f"folder dataset {root}"
     _require_folder(root, head)
     problems: list[str] = []
-    meta = _read_dataset_toml(root / _FOLDER_TOML, problems)
+    meta, data = _read_dataset_toml(root / _FOLDER_TOML, problems)
     try:
         class_dirs = sorted(
             (p for p in root.iterdir() if not p.name.startswith(".") and p.is_dir()),
@@ -375,6 +399,7 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
         raise DatasetError(f"{head}: cannot list the folder: {exc.strerror}") from None
     if not class_dirs:
         problems.append("no class folders (expected one sub-folder of recordings per class)")
+    layout = column_layout(data, _FOLDER_TOML, problems)
     signals, labels, names = [], [], []
     for label, class_dir in enumerate(class_dirs):
         try:
@@ -397,15 +422,16 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
                 continue
             n_found += 1
             try:
-                if suffix == ".csv":
-                    signal = _parse_table(_read_text(entry, rel), rel, columns=1)[:, 0]
-                    problem = signal_problem(rel, signal, lambda i: f"line {i + 1}")
-                else:
-                    signal = _read_npy(entry, rel)
-                    problem = signal_problem(rel, signal)
-            except _Problem as exc:
+                signal = _read_recording(entry, rel, suffix, layout)
+            except ColumnProblem as exc:
                 problems.append(str(exc))
                 continue
+            if isinstance(signal, TaxelRecording):
+                problem = signal_problem(rel, signal.signal)
+            elif suffix == ".csv":
+                problem = signal_problem(rel, signal, lambda i: f"line {i + 1}")
+            else:
+                problem = signal_problem(rel, signal)
             if problem:
                 problems.append(problem)
                 continue
@@ -414,43 +440,78 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
             names.append(rel)
         if n_found == 0:
             problems.append(f"{class_dir.name}/: class folder holds no recordings (.csv, .npy)")
+    arrays = [s for s in signals if isinstance(s, TaxelRecording)]
+    if arrays or layout.declared:
+        problems += [
+            f"{name}: one unnamed column, where the dataset's recordings hold named taxels (a "
+            "header line naming the columns, or a 2-D .npy)"
+            for name, s in zip(names, signals, strict=True)
+            if not isinstance(s, TaxelRecording)
+        ]
+    taxels = taxel_set(arrays, layout, meta.get("sampling_rate_hz"), problems, _FOLDER_TOML)
+    if not problems:
+        problems = [p for p in map(signal_problem, names, taxels.signals) if p]
     if problems:
         raise DatasetError(message(head, problems))
     return Recordings(
-        signals=tuple(signals),
+        signals=taxels.signals or tuple(signals),
         labels=np.array(labels, dtype=np.int64),
         class_names=tuple(p.name for p in class_dirs),
-        fs_hz=meta["sampling_rate_hz"],
+        fs_hz=taxels.fs_hz or meta["sampling_rate_hz"],
         names=tuple(names),
         units=meta.get("units", "a.u."),
         name=meta.get("name", root.resolve().name),
+        taxel_names=taxels.taxels,
+        taxel_positions_mm=taxels.positions_mm,
     )
 
 
-def _read_dataset_toml(file: Path, problems: list[str]) -> dict[str, Any]:
-    """Validated ``dataset.toml`` contents; problems are appended, not raised."""
+def _read_recording(
+    file: Path, where: str, suffix: str, layout: ColumnLayout
+) -> np.ndarray | TaxelRecording:
+    """One recording: a 1-D signal (a headerless one-column CSV, a 1-D ``.npy``) or its taxels
+    (a CSV with a header line, a 2-D ``.npy``). Raises :class:`ColumnProblem`."""
+    if suffix == ".npy":
+        array = _read_npy(file, where)
+        return array if array.ndim == 1 else taxel_recording(npy_columns(array), layout, where)
+    text = _read_text(file, where)
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if lines and header_of(lines) is not None:
+        wanted = {*layout.taxels, *([layout.time_column] if layout.time_column else [])}
+        table = parse_with_header(lines, where, wanted if layout.taxels else None)
+        return taxel_recording(table, layout, where)
+    return _parse_table(text, where, columns=1)[:, 0]
+
+
+def _read_dataset_toml(file: Path, problems: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Validated ``dataset.toml`` scalars and the parsed table (for the array keys); problems are
+    appended, not raised."""
     where = file.name
     if not file.is_file():
         problems.append(f"{where}: missing (it must give sampling_rate_hz)")
-        return {}
+        return {}, {}
     try:
         data = tomllib.loads(file.read_text(encoding="utf-8"))
     except OSError as exc:
         problems.append(f"{where}: cannot read: {exc.strerror}")
-        return {}
+        return {}, {}
     except UnicodeDecodeError:
         problems.append(f"{where}: not UTF-8 text")
-        return {}
+        return {}, {}
     except tomllib.TOMLDecodeError as exc:
         problems.append(f"{where}: not valid TOML: {exc}")
-        return {}
+        return {}, {}
     meta: dict[str, Any] = {}
     for key in data:
         if key not in _FOLDER_KEYS:
             problems.append(f"{where}: unknown key {key!r} (known: {', '.join(_FOLDER_KEYS)})")
-    if "sampling_rate_hz" not in data:
-        problems.append(f"{where}: sampling_rate_hz is missing (required, in Hz)")
-    else:
+    if "sampling_rate_hz" not in data and "time_column" not in data:
+        problems.append(
+            f"{where}: sampling_rate_hz is missing (required, in Hz, unless a time_column gives it)"
+        )
+    elif "sampling_rate_hz" in data:
         rate = positive_number(data["sampling_rate_hz"])
         if rate is None:
             problems.append(
@@ -466,7 +527,7 @@ def _read_dataset_toml(file: Path, problems: list[str]) -> dict[str, Any]:
                 problems.append(f"{where}: {key} = {data[key]!r} is not a non-empty string")
     if "description" in data and not isinstance(data["description"], str):
         problems.append(f"{where}: description = {data['description']!r} is not a string")
-    return meta
+    return meta, data
 
 
 def _read_text(file: Path, where: str) -> str:
@@ -474,28 +535,28 @@ def _read_text(file: Path, where: str) -> str:
     try:
         data = file.read_bytes()
     except OSError as exc:
-        raise _Problem(f"{where}: cannot read: {exc.strerror}") from None
+        raise ColumnProblem(f"{where}: cannot read: {exc.strerror}") from None
     nul = data.find(b"\x00")
     if nul >= 0:
-        raise _Problem(f"{where}: binary data, not text (NUL byte at offset {nul})")
+        raise ColumnProblem(f"{where}: binary data, not text (NUL byte at offset {nul})")
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise _Problem(f"{where}: binary data, not UTF-8 text (byte {exc.start})") from None
+        raise ColumnProblem(f"{where}: binary data, not UTF-8 text (byte {exc.start})") from None
 
 
 def _parse_table(text: str, where: str, *, columns: int | None) -> np.ndarray:
     """Parse comma-separated numbers, one row per line; trailing blank lines are allowed.
 
     Returns float64, shape ``(n_lines, n_columns)``. ``columns`` is the required column count
-    (``None``: any, but the same on every line). Raises :class:`_Problem` naming ``where`` and
+    (``None``: any, but the same on every line). Raises :class:`ColumnProblem` naming ``where`` and
     the first bad line (1-based), with a count of further bad lines.
     """
     lines = text.splitlines()
     while lines and not lines[-1].strip():
         lines.pop()
     if not lines:
-        raise _Problem(f"{where}: empty recording (no samples)")
+        raise ColumnProblem(f"{where}: empty recording (no samples)")
     table = None
     if all(line.strip() for line in lines):
         try:
@@ -504,7 +565,7 @@ def _parse_table(text: str, where: str, *, columns: int | None) -> np.ndarray:
             table = None
     if table is not None and (columns is None or table.shape[1] == columns):
         return table
-    raise _Problem(_diagnose_table(lines, where, columns))
+    raise ColumnProblem(_diagnose_table(lines, where, columns))
 
 
 def _diagnose_table(lines: Iterable[str], where: str, columns: int | None) -> str:
@@ -520,7 +581,8 @@ def _diagnose_table(lines: Iterable[str], where: str, columns: int | None) -> st
             expected = len(fields)
         if len(fields) != expected:
             want = "one column" if expected == 1 else f"{expected} columns"
-            bad.append(f"line {number} has {len(fields)} columns, expected {want}")
+            hint = " (several taxels need a header line naming the columns)" * (expected == 1)
+            bad.append(f"line {number} has {len(fields)} columns, expected {want}{hint}")
             continue
         for column, field in enumerate(fields, start=1):
             if not _NUMBER.fullmatch(field):
@@ -537,22 +599,26 @@ def _diagnose_table(lines: Iterable[str], where: str, columns: int | None) -> st
 
 
 def _read_npy(file: Path, where: str) -> np.ndarray:
-    """A 1-D numeric ``.npy`` array as float64, read without unpickling."""
+    """A 1-D or 2-D numeric ``.npy`` array as float64, read without unpickling."""
     try:
         with file.open("rb") as handle:
             if handle.read(6) != b"\x93NUMPY":
-                raise _Problem(f"{where}: not a .npy file (bad magic bytes)")
+                raise ColumnProblem(f"{where}: not a .npy file (bad magic bytes)")
             handle.seek(0)
             array = np.lib.format.read_array(handle, allow_pickle=False)
-    except _Problem:
+    except ColumnProblem:
         raise
     except OSError as exc:
-        raise _Problem(f"{where}: cannot read: {exc.strerror or exc}") from None
+        raise ColumnProblem(f"{where}: cannot read: {exc.strerror or exc}") from None
     except (ValueError, EOFError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise _Problem(f"{where}: unreadable .npy ({reason})") from None
+        raise ColumnProblem(f"{where}: unreadable .npy ({reason})") from None
     if array.dtype.kind not in "iuf":
-        raise _Problem(f"{where}: .npy holds {array.dtype} values, expected integers or floats")
-    if array.ndim != 1:
-        raise _Problem(f"{where}: .npy array has shape {array.shape}, expected 1-D")
+        raise ColumnProblem(
+            f"{where}: .npy holds {array.dtype} values, expected integers or floats"
+        )
+    if array.ndim not in (1, 2):
+        raise ColumnProblem(
+            f"{where}: .npy array has shape {array.shape}, expected 1-D or (samples, taxels)"
+        )
     return array.astype(np.float64)

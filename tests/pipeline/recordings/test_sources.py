@@ -224,7 +224,8 @@ def test_dataset_toml_description_is_free_text_and_not_loaded(tmp_path):
 def test_dataset_toml_unknown_keys_are_still_refused(tmp_path):
     toml = 'sampling_rate_hz = 1\ndescriptoin = "typo"\n'
     message = dataset_error(make_folder(tmp_path / "ds", {"c": {"a.csv": [1.0, 2.0]}}, toml))
-    known = "sampling_rate_hz, name, units, description"
+    known = "sampling_rate_hz, name, units, description, taxels, time_column, time_unit, "
+    known += "taxel_positions_mm"
     assert f"dataset.toml: unknown key 'descriptoin' (known: {known})" in message
 
 
@@ -267,17 +268,30 @@ def test_malformed_dataset_toml(tmp_path, toml, expected):
 
 def test_non_numeric_csv_names_file_and_line(tmp_path):
     root = make_folder(
-        tmp_path / "ds", {"c": {"head.csv": "force\n1.0\n2.0\n", "mid.csv": "1\n2\nx\n3\nnan?\n"}}
+        tmp_path / "ds", {"c": {"late.csv": "1.0\n2.0\nforce\n", "mid.csv": "1\n2\nx\n3\nnan?\n"}}
     )
     message = dataset_error(root)
-    assert "c/head.csv: line 1: 'force' is not a number (a header line is not allowed)" in message
+    assert "c/late.csv: line 3: 'force' is not a number" in message
     assert "c/mid.csv: line 3: 'x' is not a number (and 1 more bad lines)" in message
     assert "(2 problems)" in message
 
 
+def test_a_header_line_makes_a_recording_of_named_taxels_among_plain_ones_refused(tmp_path):
+    root = make_folder(
+        tmp_path / "ds", {"c": {"head.csv": "force\n1.0\n2.0\n", "plain.csv": [1, 2]}}
+    )
+    message = dataset_error(root)
+    assert "c/plain.csv: one unnamed column, where the dataset's recordings hold named taxels" in (
+        message
+    )
+
+
 def test_csv_with_more_than_one_column(tmp_path):
     root = make_folder(tmp_path / "ds", {"c": {"two.csv": "1,2\n3,4\n"}})
-    assert "c/two.csv: line 1 has 2 columns, expected one column" in dataset_error(root)
+    message = dataset_error(root)
+    assert "c/two.csv: line 1 has 2 columns, expected one column (several taxels need a header" in (
+        message
+    )
 
 
 def test_csv_with_an_interior_blank_line(tmp_path):
@@ -343,7 +357,7 @@ def test_npy_not_one_dimensional_or_not_numeric(tmp_path):
         tmp_path / "ds",
         {
             "c": {
-                "matrix.npy": np.zeros((3, 2)),
+                "cube.npy": np.zeros((3, 2, 2)),
                 "text.npy": np.array(["a", "b"]),
                 "cplx.npy": np.zeros(3, dtype=complex),
                 "flags.npy": np.ones(3, dtype=bool),
@@ -351,7 +365,9 @@ def test_npy_not_one_dimensional_or_not_numeric(tmp_path):
         },
     )
     message = dataset_error(root)
-    assert "c/matrix.npy: .npy array has shape (3, 2), expected 1-D" in message
+    assert (
+        "c/cube.npy: .npy array has shape (3, 2, 2), expected 1-D or (samples, taxels)" in message
+    )
     assert "c/text.npy: .npy holds <U1 values, expected integers or floats" in message
     assert "c/cplx.npy: .npy holds complex128 values" in message
     assert "c/flags.npy: .npy holds bool values" in message
@@ -391,7 +407,7 @@ def test_every_problem_in_one_line_at_most_ten_listed(tmp_path):
     assert message.count("; ") == MAX_LISTED
     assert message.endswith("; and 4 more")
     assert "dataset.toml: sampling_rate_hz = -1" in message
-    assert "c/bad00.csv: line 1" in message
+    assert "c/bad00.csv: empty recording (a header and no samples)" in message
     assert "c/bad09.csv" not in message  # the 11th problem is summarised
 
 
