@@ -33,6 +33,7 @@ from pipeline.recordings.describe import (
     folder_layout,
     typical_text,
 )
+from pipeline.recordings.describe_array import ArrayDescription
 from pipeline.recordings.sources import Recordings
 
 __all__ = ["Export", "ExportError", "check_export_folder", "export_folder", "format_description"]
@@ -115,7 +116,7 @@ def export_folder(
     """Write ``recordings`` as a folder dataset at ``target`` (see the module docstring).
 
     Layout and names: :func:`pipeline.recordings.describe.folder_layout`; each recording a float64
-    1-D ``.npy`` written without pickling.
+    1-D ``.npy`` written without pickling, or for an array a CSV whose header names the taxels.
 
     Raises
     ------
@@ -135,6 +136,9 @@ def export_folder(
             (partial / folder).mkdir()
         for file, signal in zip(layout.files, recordings.signals, strict=True):
             with (partial / file).open("xb") as handle:
+                if recordings.is_array:
+                    handle.write(_header_csv(recordings.taxel_names, signal).encode())
+                    continue
                 np.lib.format.write_array(
                     handle, np.ascontiguousarray(signal, dtype=np.float64), allow_pickle=False
                 )
@@ -153,6 +157,12 @@ def export_folder(
     finally:
         shutil.rmtree(partial, ignore_errors=True)
     return Export(path=path, n_recordings=recordings.n_recordings, renamed=layout.renamed)
+
+
+def _header_csv(names: tuple[str, ...], signal: np.ndarray) -> str:
+    """A CSV with a header line; ``repr`` gives the shortest decimals that read back exactly."""
+    rows = (",".join(map(repr, row)) for row in signal.tolist())
+    return ",".join(names) + "\n" + "\n".join(rows) + "\n"
 
 
 def _cannot_write(target: object, path: Path, error: OSError) -> str:
@@ -236,6 +246,9 @@ def format_description(description: DatasetDescription, export: Export | None = 
         )
     lines += _table(stat_rows)
     lines.append("")
+    if description.array is not None:
+        lines += _array_lines(description.array, f.units)
+        lines.append("")
     if description.warnings:
         lines.append("warnings")
         for warning in description.warnings:
@@ -247,6 +260,59 @@ def format_description(description: DatasetDescription, export: Export | None = 
         lines.append(f"exported {export.n_recordings} recordings to {export.path}")
         lines += [f"  class renamed: {r}" for r in export.renamed]
     return "\n".join(lines)
+
+
+def _array_lines(array: ArrayDescription, units: str) -> list[str]:
+    """The taxels of a real array, and what they say beyond each other."""
+    names = [t.name for t in array.taxels]
+    where = "positions given" if array.taxels[0].position_mm else "no positions given"
+    lines = [f"taxels      {len(names)}: {names[0]} .. {names[-1]} ({where})"]
+    rows = [("taxel", "x, y mm", f"level ({units})", "activity (std)", "range", "at rails")]
+    for t in array.taxels:
+        position = "-" if t.position_mm is None else f"{t.position_mm[0]:g}, {t.position_mm[1]:g}"
+        rows.append(
+            (
+                t.name + (" (dead)" if t.dead else ""),
+                position,
+                _number(t.level, 4),
+                _number(t.activity, 3),
+                f"{_number(t.low, 4)} to {_number(t.high, 4)}",
+                f"{t.rail_share:.1%}",
+            )
+        )
+    lines += _table(rows)
+    lines.append("")
+    lines += textwrap.wrap(
+        f"taxels say  envelopes correlate {_number(array.envelope_corr_taxels)} between taxels "
+        "(median); a plain classifier (logistic regression on 4 statistics per taxel over the "
+        f"first {array.span_s:.3g} s, {array.folds}-fold) reads:",
+        WIDTH,
+        subsequent_indent=" " * 12,
+    )
+    rows = [("taxels read", "accuracy")]
+    rows += [
+        (
+            f"{len(s.taxels)} ({', '.join(s.taxels) if len(s.taxels) <= 4 else 'evenly spread'})",
+            _percent(s.accuracy),
+        )
+        for s in array.subsets
+    ]
+    single = sorted(array.single, key=lambda s: (s.accuracy, s.taxels))
+    if single:
+        rows.append(
+            (
+                "each alone",
+                f"{_percent(single[0].accuracy)} ({single[0].taxels[0]}) to "
+                f"{_percent(single[-1].accuracy)} ({single[-1].taxels[0]}), median "
+                f"{_percent(float(np.median([s.accuracy for s in single])))}",
+            )
+        )
+    rows.append(("chance", _percent(array.chance)))
+    return lines + ["  " + line for line in _table(rows)]
+
+
+def _percent(value: float) -> str:
+    return "n/a" if math.isnan(value) else f"{100 * value:.1f} %"
 
 
 def _table(rows: list[tuple[str, ...]]) -> list[str]:

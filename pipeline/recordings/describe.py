@@ -47,7 +47,9 @@ import numpy as np
 
 from pipeline.design.scene import Scene
 from pipeline.design.windows import MAX_AUTO_WINDOWS, whole_windows
-from pipeline.recordings.sources import MAX_LISTED, Recordings
+from pipeline.recordings.describe_array import ArrayDescription, describe_array, taxel_mean
+from pipeline.recordings.recording_set import listed
+from pipeline.recordings.sources import Recordings
 from pipeline.recordings.touch_statistics import (
     CONTACT_S,
     REAL_TOUCHES,
@@ -137,13 +139,16 @@ class DatasetDescription:
     """A dataset's facts, its statistics beside real touches, and warnings (plain sentences).
 
     ``statistics`` is ``None`` when the shortest recording holds no whole window; every
-    comparison is then undefined.
+    comparison is then undefined. For a real taxel array the statistics are those of the mean
+    over its taxels, and ``array`` describes its taxels
+    (:mod:`pipeline.recordings.describe_array`; its warnings are among ``warnings``).
     """
 
     facts: DatasetContents
     statistics: TouchStatistics | None
     comparisons: tuple[Comparison, ...]
     warnings: tuple[str, ...]
+    array: ArrayDescription | None = None
 
     def to_json(self) -> dict[str, Any]:
         """Plain JSON values: NaN and infinities become ``None`` (JSON ``null``).
@@ -154,7 +159,8 @@ class DatasetDescription:
         (name -> ``value``, ``inside`` (bool or ``None``), ``real``, ``low``, ``high``,
         ``description``; ``contact_transient`` also ``p10`` and ``p90``; the statistics of
         :data:`CLASS_MEDIANS` also ``classes``, the lowest and highest class median),
-        ``warnings`` (list of strings).
+        ``warnings`` (list of strings); for a taxel array also ``array``
+        (:meth:`pipeline.recordings.describe_array.ArrayDescription.to_json`).
         """
         f = self.facts
         stats = self.statistics
@@ -208,6 +214,8 @@ class DatasetDescription:
             "statistics": statistics,
             "warnings": list(self.warnings),
         }
+        if self.array is not None:
+            out["array"] = self.array.to_json()
         return _json_values(out)
 
 
@@ -250,16 +258,29 @@ def describe_dataset(recordings: Recordings, *, folds: int | None = None) -> Dat
         folds=folds,
     )
     stats = (
-        touch_statistics(recordings, window_s=window_s, span_s=MAX_AUTO_WINDOWS * window_s)
+        touch_statistics(
+            taxel_mean(recordings), window_s=window_s, span_s=MAX_AUTO_WINDOWS * window_s
+        )
         if n_windows >= 1
         else None
     )
     comparisons = tuple(_compare(name, ref, stats) for name, ref in REAL_TOUCHES.items())
+    array = (
+        describe_array(
+            recordings,
+            span_s=max(n_windows, 1) * window_s,
+            window_s=window_s,
+            folds=folds,
+        )
+        if recordings.is_array
+        else None
+    )
     return DatasetDescription(
         facts=facts,
         statistics=stats,
         comparisons=comparisons,
-        warnings=_warnings(recordings, facts, stats),
+        warnings=_warnings(recordings, facts, stats) + (array.warnings if array else ()),
+        array=array,
     )
 
 
@@ -305,7 +326,7 @@ def _warnings(
         if s and recordings.class_names[label] not in silent_classes
     ]
     if lone:
-        out.append(f"{_count(len(lone), 'recording')} silent (constant): {_listed(lone)}")
+        out.append(f"{_count(len(lone), 'recording')} silent (constant): {listed(lone)}")
     few = [
         f"{name} has {n}"
         for name, n in zip(facts.class_names, facts.recordings_per_class, strict=True)
@@ -314,7 +335,7 @@ def _warnings(
     if few:
         out.append(
             f"fewer touches per class than folds ({facts.folds}, the paper scene's "
-            f"cross-validation): {_listed(few)}; set training.folds to at most "
+            f"cross-validation): {listed(few)}; set training.folds to at most "
             f"{min(facts.recordings_per_class)} or record more touches"
         )
     window = f"{facts.window_s:g} s"
@@ -389,20 +410,13 @@ def _typical(name: str) -> str:
 def _classes(names: Sequence[str]) -> str:
     return (
         ("class " if len(names) == 1 else "classes ")
-        + _listed(names)
+        + listed(names)
         + (" is" if len(names) == 1 else " are")
     )
 
 
 def _count(n: int, noun: str) -> str:
     return f"{n} {noun} is" if n == 1 else f"{n} {noun}s are"
-
-
-def _listed(items: Sequence[str]) -> str:
-    shown = list(items[:MAX_LISTED])
-    if len(items) > MAX_LISTED:
-        shown.append(f"and {len(items) - MAX_LISTED} more")
-    return ", ".join(shown)
 
 
 def _json_values(value: Any) -> Any:
@@ -427,7 +441,8 @@ class FolderLayout:
     """Where a dataset's recordings go in a folder dataset, and its ``dataset.toml``.
 
     ``class_folders[c]`` is the folder of class ``c``; ``files[n]`` is recording ``n``'s path
-    ``"<class folder>/<name>.npy"``; ``renamed`` lists ``"'old' -> 'new'"`` for every class name
+    ``"<class folder>/<name>.npy"`` (``.csv`` with a header line naming the taxels for an
+    array); ``renamed`` lists ``"'old' -> 'new'"`` for every class name
     that had to change; ``toml`` is the text of ``dataset.toml``.
     """
 
@@ -450,10 +465,11 @@ def folder_layout(recordings: Recordings, *, source: str = "") -> FolderLayout:
     the same recordings always give the same layout.
 
     :func:`pipeline.recordings.sources.load_folder` on the written folder gives the same signals
-    (bit for bit, as float64 ``.npy``), rate, units and name; recordings come back class by class,
-    in their order within each class, so labels agree recording for recording when the dataset
-    is stored class by class; class names are ``class_folders`` (equal to the original names
-    unless ``renamed`` lists them). ``source`` (e.g. the path the dataset came from) goes into
+    (bit for bit, as float64 ``.npy``, or an array's as the shortest decimals that read back as the
+    same float64), rate, units and name (and an array's taxels and positions); recordings come back
+    class by class, in their order within each class, so labels agree recording for recording when
+    the dataset is stored class by class; class names are ``class_folders`` (equal to the original
+    names unless ``renamed`` lists them). ``source`` (e.g. the path the dataset came from) goes into
     the description.
     """
     class_folders = _safe_names(recordings.class_names)
@@ -474,12 +490,19 @@ def folder_layout(recordings: Recordings, *, source: str = "") -> FolderLayout:
                 if stem.lower().endswith(suffix):
                     stem = stem[: -len(suffix)]
             stems.append(stem)
+        # An array's taxels are named by a CSV's header; a .npy has no column names.
+        suffix = ".csv" if recordings.is_array else ".npy"
         for n, stem in zip(members, _safe_names(stems), strict=True):
-            files[n] = f"{folder}/{stem}.npy"
+            files[n] = f"{folder}/{stem}{suffix}"
     origin = f" from {source}" if source else ""
     description = (
         f"{recordings.name}{origin}, exported by eskin describe: {recordings.n_recordings} "
-        f"recordings of {recordings.n_classes} classes, float64 .npy"
+        f"recordings of {recordings.n_classes} classes, "
+        + (
+            f"{recordings.n_taxels} taxels, CSV with a header"
+            if recordings.is_array
+            else "float64 .npy"
+        )
     )
     if renamed:
         description += "; class folders renamed to be safe file names in order: " + "; ".join(
@@ -489,6 +512,11 @@ def folder_layout(recordings: Recordings, *, source: str = "") -> FolderLayout:
     if recordings.units.strip():
         lines.append(f"units = {_toml_string(recordings.units)}")
     lines.append(f"description = {_toml_string(description)}")
+    if recordings.is_array:
+        lines.append(f"taxels = [{', '.join(map(_toml_string, recordings.taxel_names))}]")
+    if recordings.taxel_positions_mm is not None:
+        pairs = ", ".join(f"[{x!r}, {y!r}]" for x, y in recordings.taxel_positions_mm.tolist())
+        lines.append(f"taxel_positions_mm = [{pairs}]")
     return FolderLayout(
         class_folders=class_folders,
         files=tuple(files),

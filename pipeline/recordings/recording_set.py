@@ -13,7 +13,7 @@ import numpy as np
 
 from pipeline.errors import DatasetError
 
-__all__ = ["MAX_LISTED", "Recordings", "message", "signal_problem"]
+__all__ = ["MAX_LISTED", "Recordings", "listed", "message", "signal_problem"]
 
 #: At most this many problems are spelled out in one error message.
 MAX_LISTED = 10
@@ -189,6 +189,14 @@ def signal_problem(
         more = f" ({n_bad} non-finite samples in all)" if n_bad > 1 else ""
         return f"{name}: non-finite value {signal.flat[int(np.argmax(bad))]} at {where}{more}"
     return None
+
+
+def listed(items: Sequence[str]) -> str:
+    """``"a, b, c"``, at most ``MAX_LISTED`` items, then ``"and N more"``."""
+    shown = list(items[:MAX_LISTED])
+    if len(items) > MAX_LISTED:
+        shown.append(f"and {len(items) - MAX_LISTED} more")
+    return ", ".join(shown)
 
 
 def message(head: str, problems: Sequence[str]) -> str:

@@ -12,7 +12,9 @@ named ``column1 .. columnN``). ``dataset.toml`` may then say (:class:`ColumnLayo
     ``taxels`` given a recording may hold other columns too (proximity sensors, say), ignored.
 ``time_column`` and ``time_unit``
     The column of sample times and its unit (``"s"``, ``"ms"`` or ``"us"``; required with a
-    time column). The times of each recording must increase strictly. The rate is the dataset's
+    time column). The times of each recording must increase strictly, except that a row
+    repeated whole (the same time and the same taxel values as the row before, as a logger
+    that writes its last row twice leaves) is one sample, read once. The rate is the dataset's
     mean sample interval ``T``, pooled over recordings,
     ``fs = sum_n (len_n - 1) / sum_n (t_n[-1] - t_n[0])``, and each recording is resampled onto
     its own uniform grid ``t_n[0] + k / fs``, ``k = 0 .. floor((t_n[-1] - t_n[0]) fs)``, by linear
@@ -281,14 +283,19 @@ def taxel_recording(table: TaxelTable, layout: ColumnLayout, where: str) -> Taxe
     times = None
     if layout.time_column is not None and layout.time_unit is not None:
         stamps = table.values[:, index[layout.time_column]]
-        steps = np.diff(stamps)
+        # A row written twice (same time, same taxel values) is one sample: keep the first.
+        repeated = np.concatenate(
+            [[False], (np.diff(stamps) == 0) & (np.diff(signal, axis=0) == 0).all(axis=1)]
+        )
+        steps = np.diff(stamps[~repeated])
         if (steps <= 0).any():
-            row = int(np.argmax(steps <= 0)) + 1
+            row = np.flatnonzero(~repeated)[int(np.argmax(steps <= 0)) + 1]
             raise ColumnProblem(
                 f"{where}: time column {layout.time_column} does not increase at sample {row}"
-                f"{_line(table, row)}: {stamps[row]:g} after {stamps[row - 1]:g}"
+                f"{_line(table, row)}: {stamps[row]:.15g} after {stamps[row - 1]:.15g}"
             )
-        times = (stamps - stamps[0]) * layout.time_unit.seconds
+        signal = signal[~repeated]
+        times = (stamps[~repeated] - stamps[0]) * layout.time_unit.seconds
     return TaxelRecording(where, taxels, signal, times)
 
 

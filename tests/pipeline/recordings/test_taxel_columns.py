@@ -231,10 +231,26 @@ def test_a_time_column_that_does_not_increase_names_file_column_and_line(tmp_pat
     root.mkdir()
     (root / "dataset.toml").write_text('time_column = "ms"\ntime_unit = "ms"\n')
     write_table(root / "a/r.csv", ["ms", "p"], [np.array([0, 28, 56, 84]), np.ones(4)])
-    write_table(root / "b/r.csv", ["ms", "p"], [np.array([0, 28, 28, 84]), np.ones(4)])
-    assert "b/r.csv: time column ms does not increase at sample 2 (line 4): 28 after 28" in error(
-        root
-    )
+    write_table(root / "b/r.csv", ["ms", "p"], [np.array([0, 28, 28, 84]), np.arange(4.0)])
+    write_table(root / "c/r.csv", ["ms", "p"], [np.array([0, 28, 84, 56]), np.arange(4.0)])
+    message = error(root)
+    assert "b/r.csv: time column ms does not increase at sample 2 (line 4): 28 after 28" in message
+    assert "c/r.csv: time column ms does not increase at sample 3 (line 5): 56 after 84" in message
+
+
+def test_a_row_written_twice_is_one_sample(tmp_path):
+    """As FabricSlide's logger left at the end of two files: the same time, the same values."""
+    root = tmp_path / "ds"
+    root.mkdir()
+    (root / "dataset.toml").write_text('time_column = "ms"\ntime_unit = "ms"\n')
+    times, values = np.array([0, 25, 50, 75, 75]), np.array([1, 2, 3, 4, 4])
+    write_table(root / "a/r.csv", ["ms", "p"], [times, values])
+    times, values = np.array([0, 25, 50, 50, 75]), np.array([1, 2, 3, 3, 5])
+    write_table(root / "b/r.csv", ["ms", "p"], [times, values])
+    rec = load_folder(root)
+    assert rec.fs_hz == 40.0
+    np.testing.assert_array_equal(rec.signals[0][:, 0], [1, 2, 3, 4])
+    np.testing.assert_array_equal(rec.signals[1][:, 0], [1, 2, 3, 5])
 
 
 # -- the real array --------------------------------------------------------------------------
