@@ -202,7 +202,9 @@ def describe_array(
         chosen = tuple(names[i] for i in indices)
         if k < 2:
             return SubsetAccuracy(chosen, math.nan)
-        return SubsetAccuracy(chosen, _cross_validated(features[:, indices], recordings.labels, k))
+        return SubsetAccuracy(
+            chosen, _cross_validated(features[:, indices, :], recordings.labels, k)
+        )
 
     single = tuple(accuracy(np.array([j])) for j in range(n))
     sizes = sorted({*(2**p for p in range(int(math.log2(n)) + 1)), n})
@@ -268,8 +270,8 @@ def _envelope_corr(spans: list[np.ndarray], window_n: int, facts: tuple[TaxelFac
 
 
 def _features(span: np.ndarray, fs_hz: float) -> np.ndarray:
-    """float64 ``(n_taxels * 4,)``: :data:`FEATURES` of each taxel, taxel-major."""
-    stats = np.stack(
+    """float64 ``(n_taxels, 4)``: :data:`FEATURES` of each taxel."""
+    return np.stack(
         [
             span.mean(axis=0),
             span.std(axis=0),
@@ -278,7 +280,6 @@ def _features(span: np.ndarray, fs_hz: float) -> np.ndarray:
         ],
         axis=1,
     )
-    return stats.reshape(-1)
 
 
 def _cross_validated(features: np.ndarray, labels: np.ndarray, folds: int) -> float:

@@ -282,3 +282,51 @@ def test_an_unwritable_export_folder_is_refused_in_one_line(tmp_path, capsys, mo
         "Permission denied"
     ]
     assert list(parent.iterdir()) == []
+
+
+# -- a real taxel array ----------------------------------------------------------------------------
+
+
+def _array(seed=5) -> Recordings:
+    rng = np.random.default_rng(seed)
+    labels = [0, 0, 0, 1, 1, 1]
+    signals = [rng.standard_normal((int(rng.integers(500, 700)), 3)) * (1 + c) for c in labels]
+    signals[0][:3, 0] = [-0.0, 5e-324, np.nextafter(1.0, 2.0)]  # bits a careless text would lose
+    return Recordings(
+        signals=tuple(signals),
+        labels=np.array(labels),
+        class_names=("cork", "felt"),
+        fs_hz=123.456,
+        names=tuple(f"r{i}" for i in range(6)),
+        units="counts",
+        name="array",
+        taxel_names=("left", "mid", "right"),
+        taxel_positions_mm=np.array([[0.0, 0.0], [1.5, 0.0], [3.0, 0.25]]),
+    )
+
+
+def test_an_array_exports_as_csvs_with_a_header_and_loads_back_bit_for_bit(tmp_path):
+    made = _array()
+    export_folder(made, tmp_path / "out")
+    assert (tmp_path / "out/cork/r0.csv").read_text().startswith("left,mid,right\n")
+    loaded = load_folder(tmp_path / "out")
+    _assert_same(loaded, made, ["cork", "felt"])
+    assert loaded.taxel_names == made.taxel_names
+    np.testing.assert_array_equal(loaded.taxel_positions_mm, made.taxel_positions_mm)
+
+
+def test_text_on_an_array_lists_its_taxels_and_what_they_say(tmp_path, capsys):
+    export_folder(_array(), tmp_path / "data")
+    assert main(["describe", "--dataset", str(tmp_path / "data")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "taxels      3: left .. right (positions given)" in lines
+    row = next(line for line in lines if line.startswith("mid "))
+    assert row.split()[1:3] == ["1.5,", "0"]
+    say = next(i for i, line in enumerate(lines) if line.startswith("taxels say  envelopes"))
+    table = lines[say : lines.index("", say)]
+    # Table rows are indented by two spaces, the wrapped sentence above them by twelve.
+    reads = [line.split() for line in table if line.startswith("  ") and line[2] != " "]
+    assert reads[0] == ["taxels", "read", "accuracy"]
+    assert [r[0] for r in reads[1:4]] == ["1", "2", "3"]
+    assert reads[3][1:4] == ["(left,", "mid,", "right)"]
+    assert reads[4][:2] == ["each", "alone"] and reads[5] == ["chance", "50.0", "%"]
