@@ -97,6 +97,33 @@ def dataset(tmp: Path, *, toml="sampling_rate_hz = 200.0\n", files=None) -> Path
     return root
 
 
+ARRAY_TOML = 'name = "array"\ntime_column = "ms"\ntime_unit = "ms"\n'
+
+
+def array_csv(rows: int = 150, *, header: str = "ms,a,b", cell: str | None = None) -> str:
+    """A recording of two taxels ``a``, ``b`` 28 ms apart; ``cell`` replaces row 5's ``b``."""
+    rng = np.random.default_rng(rows)
+    lines = [header]
+    for i, (a, b) in enumerate(rng.normal(size=(rows, 2))):
+        lines.append(f"{28 * i},{a:.6f},{cell if cell is not None and i == 5 else f'{b:.6f}'}")
+    return "\n".join(lines) + "\n"
+
+
+def array_folder(tmp: Path, *, toml: str = ARRAY_TOML, bad: dict[str, str]) -> Path:
+    """A folder of two classes x two recordings of two taxels, plus (or replaced by) ``bad``."""
+    files = {f"{label}/r{i}.csv": array_csv() for label in ("rough", "smooth") for i in range(2)}
+    root = tmp / "array"
+    for name, content in {"dataset.toml": toml, **files, **bad}.items():
+        write(root / name, content)
+    return root
+
+
+def array_grid(tmp: Path, **kwargs) -> list[str]:
+    root = array_folder(tmp, **kwargs)
+    scene = scene_file(tmp, dataset=f'kind = "folder"\npath = "{root}"')
+    return ["--grid", str(grid_file(tmp, scene.name))]
+
+
 def dataset_grid(tmp: Path, **kwargs) -> list[str]:
     data = dataset(tmp, **kwargs)
     scene = scene_file(tmp, dataset=f'kind = "folder"\npath = "{data}"')
@@ -286,6 +313,32 @@ CASES: list[Case] = [
         "gone",
     ),
     ("dataset-shorter-than-taxel-delays", short_class_grid, "a/r0.csv"),
+    # real taxel arrays
+    (
+        "dataset-array-different-taxels",
+        lambda t: array_grid(t, bad={"smooth/r1.csv": array_csv(header="ms,a,c")}),
+        "smooth/r1.csv: its taxels differ from rough/r0.csv's (lacks b; adds c)",
+    ),
+    (
+        "dataset-array-text-in-a-taxel",
+        lambda t: array_grid(t, bad={"rough/r1.csv": array_csv(cell="high")}),
+        "rough/r1.csv: line 7, column b: 'high' is not a number",
+    ),
+    (
+        "dataset-array-nan-in-a-taxel",
+        lambda t: array_grid(t, bad={"rough/r1.csv": array_csv(cell="nan")}),
+        "rough/r1.csv: column b: non-finite value nan at sample 5 (line 7)",
+    ),
+    (
+        "dataset-array-positions-count",
+        lambda t: array_grid(t, toml=ARRAY_TOML + "taxel_positions_mm = [[0, 0]]\n", bad={}),
+        "dataset.toml: taxel_positions_mm gives 1 positions for 2 taxels",
+    ),
+    (
+        "dataset-array-time-not-increasing",
+        lambda t: array_grid(t, bad={"smooth/r0.csv": "ms,a,b\n0,1,2\n28,1,2\n20,1,2\n"}),
+        "smooth/r0.csv: time column ms does not increase at sample 2 (line 4)",
+    ),
     # command-line arguments
     ("args-zero-workers", lambda t: ["--grid", "smoke", "--workers", "0"], "--workers"),
     ("args-text-workers", lambda t: ["--grid", "smoke", "--workers", "two"], "--workers"),
@@ -739,6 +792,14 @@ DESCRIBE_CASES: list[Case] = [
         "describe-dataset-no-sampling-rate",
         lambda t: describe_dataset(t, toml='name = "x"\n'),
         "sampling_rate_hz",
+    ),
+    (
+        "describe-array-different-taxels",
+        lambda t: [
+            "--dataset",
+            str(array_folder(t, bad={"smooth/r1.csv": array_csv(header="ms,a,c")})),
+        ],
+        "smooth/r1.csv",
     ),
     (
         "describe-dataset-stray-file",
