@@ -40,6 +40,7 @@ Warnings:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -149,14 +150,11 @@ def taxel_mean(recordings: Recordings) -> Recordings:
     reading of one sensor as large as the array, which the touch statistics judge."""
     if not recordings.is_array:
         return recordings
-    return Recordings(
+    return dataclasses.replace(
+        recordings,
         signals=tuple(s.mean(axis=1) for s in recordings.signals),
-        labels=recordings.labels,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        names=recordings.names,
-        units=recordings.units,
-        name=recordings.name,
+        taxel_names=(),
+        taxel_positions_mm=None,
     )
 
 

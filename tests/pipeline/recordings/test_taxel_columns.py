@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.errors import DatasetError
 from pipeline.recordings.sources import load_folder
+from tests.pipeline.recordings.test_sources import dataset_error
 from tests.shared_data import fabricslide_copy
 
 CLASSES = ("rough", "smooth")
@@ -52,12 +52,13 @@ def array_folder(
     return signals
 
 
-def error(root: Path) -> str:
-    with pytest.raises(DatasetError) as info:
-        load_folder(root)
-    text = str(info.value)
-    assert "\n" not in text
-    return text
+def replace_cell(path: Path, line: int, column: int, text: str) -> None:
+    """Put ``text`` in ``column`` (0-based) of file line ``line`` (1-based)."""
+    lines = path.read_text().splitlines()
+    fields = lines[line - 1].split(",")
+    fields[column] = text
+    lines[line - 1] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n")
 
 
 def test_every_numeric_column_is_a_taxel_by_default_values_exact(tmp_path):
@@ -147,7 +148,7 @@ def test_recordings_with_different_taxel_sets(tmp_path):
     signals = array_folder(tmp_path / "ds")
     values = signals["smooth/r2.csv"]
     write_table(tmp_path / "ds/smooth/r2.csv", ["a", "b", "d"], list(values.T))
-    message = error(tmp_path / "ds")
+    message = dataset_error(tmp_path / "ds")
     assert "smooth/r2.csv: its taxels differ from rough/r0.csv's (lacks c; adds d)" in message
 
 
@@ -155,42 +156,35 @@ def test_a_one_column_recording_among_taxel_recordings(tmp_path):
     array_folder(tmp_path / "ds")
     (tmp_path / "ds/smooth/plain.csv").write_text("1\n2\n3\n")
     assert "smooth/plain.csv: one unnamed column, where the dataset's recordings hold named" in (
-        error(tmp_path / "ds")
+        dataset_error(tmp_path / "ds")
     )
 
 
 def test_a_taxel_column_that_is_not_numeric_names_line_and_column(tmp_path):
     array_folder(tmp_path / "ds")
-    path = tmp_path / "ds/rough/r1.csv"
-    lines = path.read_text().splitlines()
-    fields = lines[5].split(",")
-    fields[2] = "oops"
-    lines[5] = ",".join(fields)
-    path.write_text("\n".join(lines) + "\n")
-    assert "rough/r1.csv: line 6, column b: 'oops' is not a number" in error(tmp_path / "ds")
+    replace_cell(tmp_path / "ds/rough/r1.csv", 6, 2, "oops")
+    message = dataset_error(tmp_path / "ds")
+    assert "rough/r1.csv: line 6, column b: 'oops' is not a number" in message
 
 
 def test_a_declared_taxel_column_of_text_is_refused(tmp_path):
     array_folder(tmp_path / "ds", 'sampling_rate_hz = 500.0\ntaxels = ["a", "label"]\n')
-    assert "rough/r0.csv: line 2, column label: 'x' is not a number" in error(tmp_path / "ds")
+    message = dataset_error(tmp_path / "ds")
+    assert "rough/r0.csv: line 2, column label: 'x' is not a number" in message
 
 
 def test_a_taxel_column_holding_nan_names_sample_line_and_column(tmp_path):
     array_folder(tmp_path / "ds")
-    path = tmp_path / "ds/smooth/r0.csv"
-    lines = path.read_text().splitlines()
-    fields = lines[11].split(",")
-    fields[3] = "nan"
-    lines[11] = ",".join(fields)
-    path.write_text("\n".join(lines) + "\n")
-    assert "smooth/r0.csv: column c: non-finite value nan at sample 10 (line 12)" in error(
+    replace_cell(tmp_path / "ds/smooth/r0.csv", 12, 3, "nan")
+    assert "smooth/r0.csv: column c: non-finite value nan at sample 10 (line 12)" in dataset_error(
         tmp_path / "ds"
     )
 
 
 def test_a_missing_declared_taxel(tmp_path):
     array_folder(tmp_path / "ds", 'sampling_rate_hz = 500.0\ntaxels = ["a", "z"]\n')
-    assert "rough/r0.csv: no column 'z' (the header names a, label, b, c)" in error(tmp_path / "ds")
+    message = dataset_error(tmp_path / "ds")
+    assert "rough/r0.csv: no column 'z' (the header names a, label, b, c)" in message
 
 
 @pytest.mark.parametrize(
@@ -223,7 +217,7 @@ def test_a_missing_declared_taxel(tmp_path):
 )
 def test_bad_array_declarations(tmp_path, toml, expected):
     array_folder(tmp_path / "ds", toml)
-    assert expected in error(tmp_path / "ds")
+    assert expected in dataset_error(tmp_path / "ds")
 
 
 def test_a_time_column_that_does_not_increase_names_file_column_and_line(tmp_path):
@@ -233,7 +227,7 @@ def test_a_time_column_that_does_not_increase_names_file_column_and_line(tmp_pat
     write_table(root / "a/r.csv", ["ms", "p"], [np.array([0, 28, 56, 84]), np.ones(4)])
     write_table(root / "b/r.csv", ["ms", "p"], [np.array([0, 28, 28, 84]), np.arange(4.0)])
     write_table(root / "c/r.csv", ["ms", "p"], [np.array([0, 28, 84, 56]), np.arange(4.0)])
-    message = error(root)
+    message = dataset_error(root)
     assert "b/r.csv: time column ms does not increase at sample 2 (line 4): 28 after 28" in message
     assert "c/r.csv: time column ms does not increase at sample 3 (line 5): 56 after 84" in message
 
