@@ -110,7 +110,7 @@ def _check_magnitudes(recordings: Recordings) -> Recordings:
             first, column = divmod(int(np.argmax(huge)), recordings.n_taxels)
             taxel = f", taxel {recordings.taxel_names[column]}" if recordings.is_array else ""
             problems.append(
-                f"{name}: absurd magnitude {signal.flat[int(np.argmax(huge))]!r} at sample "
+                f"{name}: absurd magnitude {float(signal.flat[int(np.argmax(huge))])!r} at sample "
                 f"{first}{taxel} (more than {MAX_ABS_SAMPLE:g} in any unit: a corrupt or "
                 "misread file)"
             )

@@ -238,9 +238,14 @@ def touch_statistics(
     Raises
     ------
     ValueError
-        ``window_s`` or ``span_s`` not a finite positive number, ``span_s < window_s``, or the
-        shortest recording shorter than one window.
+        ``window_s`` or ``span_s`` not a finite positive number, ``span_s < window_s``, the
+        shortest recording shorter than one window, or recordings of a taxel array.
     """
+    if recordings.is_array:
+        raise ValueError(
+            f"dataset {recordings.name}: touch statistics are of one channel, not of "
+            f"{recordings.n_taxels} taxels (judge their mean, describe_array.taxel_mean)"
+        )
     if not (math.isfinite(window_s) and window_s > 0 and math.isfinite(span_s)):
         raise ValueError(f"window_s and span_s must be finite and > 0, got {window_s}, {span_s}")
     if span_s < window_s:

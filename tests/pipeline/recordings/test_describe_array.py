@@ -148,3 +148,8 @@ def test_a_few_real_fabricslide_recordings_have_no_dead_or_saturated_taxel(tmp_p
     # Each taxel has a time course of its own (0.25 on all 210 recordings).
     assert 0.0 < array.envelope_corr_taxels < 0.6
     assert array.folds == 4 and array.chance == pytest.approx(1 / 7)
+
+
+def test_touch_statistics_refuse_an_array_in_one_line():
+    with pytest.raises(ValueError, match="touch statistics are of one channel, not of 5 taxels"):
+        touch_statistics(informed_array(per_class=2), window_s=0.1, span_s=4.0)

@@ -3,13 +3,16 @@ problems each names by file and column."""
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from pipeline.recordings.sources import load_folder
+from pipeline.design.scene import DatasetKind, DatasetSpec
+from pipeline.errors import DatasetError
+from pipeline.recordings.sources import load_folder, load_recordings
 from tests.pipeline.recordings.test_sources import dataset_error
 from tests.shared_data import fabricslide_copy
 
@@ -290,3 +293,12 @@ def test_a_few_real_fabricslide_recordings_load_as_16_taxels_at_their_mean_rate(
     np.testing.assert_array_equal(rec.signals[index][0], table[0, 3:])
     assert rec.durations_s.min() >= 4.0 - 0.1
     assert rec.class_names == ("BeigeCotton", "BrownCotton", "Canvas")
+
+
+def test_an_absurd_magnitude_names_the_recording_sample_and_taxel(tmp_path):
+    array_folder(tmp_path / "ds")
+    replace_cell(tmp_path / "ds/smooth/r1.csv", 4, 3, "1e300")
+    spec = DatasetSpec(kind=DatasetKind.FOLDER, path=str(tmp_path / "ds"))
+    expected = "smooth/r1.csv: absurd magnitude 1e+300 at sample 2, taxel c (more than"
+    with pytest.raises(DatasetError, match=re.escape(expected)):
+        load_recordings(spec)
