@@ -60,6 +60,7 @@ from pipeline.recordings.taxel_columns import (
     TaxelRecording,
     column_layout,
     header_of,
+    mixed_problems,
     npy_columns,
     parse_with_header,
     taxel_recording,
@@ -441,13 +442,7 @@ def load_folder(path: str | os.PathLike[str]) -> Recordings:
         if n_found == 0:
             problems.append(f"{class_dir.name}/: class folder holds no recordings (.csv, .npy)")
     arrays = [s for s in signals if isinstance(s, TaxelRecording)]
-    if arrays or layout.declared:
-        problems += [
-            f"{name}: one unnamed column, where the dataset's recordings hold named taxels (a "
-            "header line naming the columns, or a 2-D .npy)"
-            for name, s in zip(names, signals, strict=True)
-            if not isinstance(s, TaxelRecording)
-        ]
+    problems += mixed_problems(names, signals, layout)
     taxels = taxel_set(arrays, layout, meta.get("sampling_rate_hz"), problems, _FOLDER_TOML)
     if not problems:
         problems = [p for p in map(signal_problem, names, taxels.signals) if p]

@@ -46,6 +46,7 @@ __all__ = [
     "TimeUnit",
     "column_layout",
     "header_of",
+    "mixed_problems",
     "npy_columns",
     "parse_with_header",
     "taxel_recording",
@@ -350,6 +351,31 @@ def taxel_set(
         fs_hz = uniform_rate_hz(times)
         signals = [uniform_signal(s, t, fs_hz) for s, t in zip(signals, times, strict=True)]
     return TaxelSet(taxels, tuple(signals), fs_hz, positions)
+
+
+def mixed_problems(
+    names: Sequence[str], signals: Sequence[np.ndarray | TaxelRecording], layout: ColumnLayout
+) -> list[str]:
+    """Problems of a dataset whose recordings are some one unnamed column, some named taxels.
+
+    When ``dataset.toml`` declares an array, or most recordings hold taxels, each one-column
+    recording is named; else each recording with taxels is (a stray header line in a dataset of
+    one-column files, say)."""
+    plain = [n for n, s in zip(names, signals, strict=True) if not isinstance(s, TaxelRecording)]
+    arrays = [s for s in signals if isinstance(s, TaxelRecording)]
+    if not plain or (not arrays and not layout.declared):
+        return []
+    if layout.declared or len(arrays) > len(plain):
+        return [
+            f"{name}: one unnamed column, where the dataset's recordings hold named taxels (a "
+            "header line naming the columns, or a 2-D .npy)"
+            for name in plain
+        ]
+    return [
+        f"{a.where}: named columns ({_few(a.taxels)}), where {plain[0]} and the dataset's other "
+        "recordings hold one unnamed column (a header line only if every recording has one)"
+        for a in arrays
+    ]
 
 
 def uniform_rate_hz(times_s: Sequence[np.ndarray]) -> float:

@@ -277,12 +277,13 @@ def test_non_numeric_csv_names_file_and_line(tmp_path):
 
 
 def test_a_header_line_makes_a_recording_of_named_taxels_among_plain_ones_refused(tmp_path):
-    root = make_folder(
-        tmp_path / "ds", {"c": {"head.csv": "force\n1.0\n2.0\n", "plain.csv": [1, 2]}}
-    )
+    """A stray header among one-column files: the file with the header is named, not the rest."""
+    plain = {f"p{i}.csv": [1, 2] for i in range(3)}
+    root = make_folder(tmp_path / "ds", {"c": {"head.csv": "force\n1.0\n2.0\n", **plain}})
     message = dataset_error(root)
-    assert "c/plain.csv: one unnamed column, where the dataset's recordings hold named taxels" in (
-        message
+    assert message.endswith(
+        "c/head.csv: named columns (force), where c/p0.csv and the dataset's other recordings "
+        "hold one unnamed column (a header line only if every recording has one)"
     )
 
 
