@@ -137,7 +137,7 @@ class Recordings:
 
     @property
     def n_taxels(self) -> int:
-        """Taxels each recording holds: 1 for one channel, else ``len(taxel_names)``."""
+        """How many taxels each recording holds (1 for one channel, else ``len(taxel_names)``)."""
         return len(self.taxel_names) or 1
 
     @property
