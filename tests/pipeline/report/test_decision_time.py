@@ -208,3 +208,19 @@ def test_cubes_without_decisions_or_operations_add_what_they_hold():
     assert DECODER_COLUMN not in glance_header(report.answers[0])
     text = render_markdown(report_blocks(report, set(report.figure_stems), version="t"))
     assert "unknown" in text[text.index("### Early exit") :]
+
+
+def test_curves_of_both_trainings_say_which_model_had_which():
+    from types import SimpleNamespace
+
+    from pipeline.report.decision_time import training_sentence
+
+    along, full = DecisionTraining.ALONG_TOUCH, DecisionTraining.FULL_TOUCH
+    curves = [
+        SimpleNamespace(model="ffnn", trained=along),
+        SimpleNamespace(model="cnn", trained=full),
+        SimpleNamespace(model="snn", trained=along),
+    ]
+    assert training_sentence(curves) == (
+        f"FFNN, SNN: {TRAINED_TEXT[along]}. CNN: {TRAINED_TEXT[full]}."
+    )
