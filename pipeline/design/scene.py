@@ -363,7 +363,7 @@ class TrainingSpec:
     )
     seed: Seed = param(0, "1", "training seed", cost=Cost.FREE)
     decisions: DecisionTraining = param(
-        DecisionTraining.FULL_TOUCH,
+        DecisionTraining.ALONG_TOUCH,
         "1",
         "decisions the decoders are trained for: along the touch, or at its end only",
         formerly=DecisionTraining.FULL_TOUCH,

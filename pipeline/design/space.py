@@ -50,7 +50,10 @@ Objectives (:class:`Metric`), read per trial from its result cube
 * ``decoder_energy_j.<model>``: the decoder's mean energy per decision (J) under the same early
   exit, at the high end of its band (:class:`pipeline.results.decoder_energy.DecoderEnergyModel`;
   the high end so that a search never promises what only the most frugal chip delivers); both
-  are NaN, and the trial failed, where the cube keeps no decisions;
+  are NaN, and the trial failed, where the cube keeps no decisions. Both read decoders trained
+  to decide along the touch: they need ``training.decisions = "along_touch"`` (the default) in
+  the base scene or among the searched fields, since a decoder trained for the full touch alone
+  and read early decides later than the design needs;
 * ``array_area_m2``: the comparators' matched gate area of the array that the point's threshold
   mismatch demands by Pelgrom's law (:func:`pipeline.results.matched_area.array_area_m2` of
   ``array.rows * array.cols``, ``sigma_rel`` and ``threshold_v``, m^2; minimise it): needs
@@ -96,7 +99,7 @@ from pipeline.design.grid import (
     _read_base,
     _valid_name,
 )
-from pipeline.design.scene import Model, Scene
+from pipeline.design.scene import DecisionTraining, Model, Scene
 from pipeline.design.transforms import Transform
 from pipeline.design.variants import SceneVariants
 from pipeline.errors import SceneError
@@ -145,6 +148,10 @@ _PER_MODEL = frozenset({Metric.ACCURACY, Metric.YIELD, Metric.DECISION_TIME, Met
 #: comparators' devices, and the chips a yield is taken over).
 MISMATCH_FIELD = "readout.effects.threshold_mismatch"
 CHIPS_COUNT_FIELD = "chips.count"
+#: The field that says what the decoders are trained for, and the objectives of early exit,
+#: which need decoders trained along the touch.
+DECISIONS_FIELD = "training.decisions"
+_EARLY_EXIT = frozenset({Metric.DECISION_TIME, Metric.DECODER_ENERGY})
 
 
 #: The transform each metric's values go through before a sampler is told them (the floor of a
@@ -533,7 +540,8 @@ def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Object
 def _check_objective_needs(
     base: Scene, dimensions: list[Dimension], objectives: list[Objective], problems: list[str]
 ) -> None:
-    """The area objective needs a mismatch to size for; the yield objective needs chips."""
+    """The area objective needs a mismatch to size for; the yield objective needs chips; the
+    early exit's need decoders trained along the touch."""
     searched = [d.field for d in dimensions]
     for objective in objectives:
         where = f"objectives.{objective.name}"
@@ -554,3 +562,9 @@ def _check_objective_needs(
                     f"{where}: needs {CHIPS_COUNT_FIELD} above 1 in the base scene or among the "
                     "searched fields (a yield is taken over chips)"
                 )
+        along = base.training.decisions is DecisionTraining.ALONG_TOUCH
+        if objective.metric in _EARLY_EXIT and not along and DECISIONS_FIELD not in searched:
+            problems.append(
+                f'{where}: needs {DECISIONS_FIELD} = "along_touch" in the base scene or among the '
+                "searched fields (decoders trained for the full touch decide late when read early)"
+            )

@@ -36,6 +36,7 @@ from pipeline.report.curves import Curve, MetricFit, metric_fits
 from pipeline.report.decision_time import (
     LATENCY_STEM,
     LatencyCurve,
+    earliest_decisions,
     full_touch_energies,
     gather_decisions,
     latency_curves,
@@ -190,8 +191,10 @@ def build_report(
         full_scale = float(base_value(cubes[threshold[0]], FULL_SCALE_V))
     decoder = decoder if decoder is not None else DecoderEnergyModel()
     decisions = gather_decisions(cubes)
+    earliest = earliest_decisions(decisions)
+    decides_after = {found: e.decision_s for found, e in earliest.items()}
     answers = design_answers(
-        designs, evidence, energy, frame, full_touch_energies(decisions, decoder)
+        designs, evidence, energy, frame, full_touch_energies(decisions, decoder), decides_after
     )
     dataset = dataset_kind(cubes)
     classes = n_classes(cubes)
@@ -218,7 +221,7 @@ def build_report(
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
         searches=search_fronts(cubes),
-        latency=latency_curves(decisions, answers, decoder),
+        latency=latency_curves(decisions, answers, decoder, earliest),
         decoder=decoder,
         mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
         yield_answers=yield_answers(designs, evidence, energy),

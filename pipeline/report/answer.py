@@ -72,7 +72,9 @@ class Candidate:
     design that cannot be compared); ``holm_p`` its Holm-adjusted p-value. ``power`` is None when
     the array size or the rates are unknown; frame figures are None when the frame readout or the
     array size is unknown. ``decoder_energy`` is the decoder's energy per decision at the full
-    touch, a band (None where the cubes count no operations).
+    touch, a band (None where the cubes count no operations); ``decides_after_s`` the earliest
+    decision not significantly below the full touch (:mod:`pipeline.report.decision_time`; None
+    where the cubes keep no decisions).
     """
 
     design: Design
@@ -84,6 +86,7 @@ class Candidate:
     frame_data_rate_bps: float | None
     frame_power: ReadoutPower | None
     decoder_energy: EnergyBand | None = None
+    decides_after_s: float | None = None
 
     @property
     def power_w(self) -> float:
@@ -157,18 +160,19 @@ def design_answers(
     energy: EnergyModel,
     frame: FrameReadout | None,
     decoder: Mapping[tuple[str, str], EnergyBand] | None = None,
+    decides_after: Mapping[tuple[str, str], float] | None = None,
 ) -> tuple[ModelAnswer, ...]:
     """One :class:`ModelAnswer` per model that any design trained, in the order first met.
 
     ``decoder`` gives the decoder's energy per decision at the full touch by (result key,
-    model), where the cubes count its operations (:mod:`pipeline.report.decision_time`).
+    model), where the cubes count its operations, ``decides_after`` the earliest decision (s)
+    where they keep decisions (:mod:`pipeline.report.decision_time`).
     """
     models = list(dict.fromkeys(m for d in designs for m in d.accuracy))
-    return tuple(
-        answer
-        for model in models
-        if (answer := model_answer(designs, evidence, model, energy, frame, decoder)) is not None
+    found = (
+        model_answer(designs, evidence, m, energy, frame, decoder, decides_after) for m in models
     )
+    return tuple(answer for answer in found if answer is not None)
 
 
 def model_answer(
@@ -178,6 +182,7 @@ def model_answer(
     energy: EnergyModel,
     frame: FrameReadout | None,
     decoder: Mapping[tuple[str, str], EnergyBand] | None = None,
+    decides_after: Mapping[tuple[str, str], float] | None = None,
 ) -> ModelAnswer | None:
     """The answer for ``model`` (see the module docstring); None if no design trained it."""
     mine = [d for d in designs if model in d.accuracy]
@@ -201,6 +206,7 @@ def model_answer(
             frame_data_rate_bps=frame.data_rate_bps(n) if known else None,
             frame_power=frame.power(n, energy) if known else None,
             decoder_energy=(decoder or {}).get((d.key, model)),
+            decides_after_s=(decides_after or {}).get((d.key, model)),
         )
 
     top = candidate(best, None, None)
@@ -233,12 +239,18 @@ GLANCE_COLUMNS = (
 
 #: The small table's column of the decoder's energy, where the cubes count its operations.
 DECODER_COLUMN = "decoder energy per decision"
+#: The small table's column of the earliest decision, after the accuracy, where the cubes keep
+#: decisions.
+DECIDES_COLUMN = "decides after"
 
 
 def glance_header(answer: ModelAnswer) -> tuple[str, ...]:
     """The small table's header: the model's name, then :data:`GLANCE_COLUMNS` (and
-    :data:`DECODER_COLUMN` after the energy per decision, where the cubes count operations)."""
+    :data:`DECODER_COLUMN` after the energy per decision, where the cubes count operations, and
+    :data:`DECIDES_COLUMN` after the accuracy, where they keep decisions)."""
     columns = list(GLANCE_COLUMNS)
+    if decides(answer):
+        columns.insert(columns.index("accuracy [95 % interval]") + 1, DECIDES_COLUMN)
     if has_decoder_energy(answer):
         columns.insert(columns.index("energy per decision") + 1, DECODER_COLUMN)
     return (answer.model.upper(), *columns)
@@ -247,6 +259,11 @@ def glance_header(answer: ModelAnswer) -> tuple[str, ...]:
 def has_decoder_energy(answer: ModelAnswer) -> bool:
     """Whether any design of the answer states its decoder's energy per decision."""
     return any(c.decoder_energy is not None for c in answer.candidates)
+
+
+def decides(answer: ModelAnswer) -> bool:
+    """Whether any design of the answer states its earliest decision."""
+    return any(c.decides_after_s is not None for c in answer.candidates)
 
 
 def decoder_energy_text(band: EnergyBand | None) -> str:
@@ -260,7 +277,7 @@ def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
     """The small table: the best design, the cheapest not significantly below it by data rate
     and by power (one row with both roles when they are the same design)."""
     rows = []
-    decoder = has_decoder_energy(answer)
+    decoder, early = has_decoder_energy(answer), decides(answer)
     for chosen, roles in _roles(answer):
         a = chosen.accuracy
         power = chosen.power
@@ -270,6 +287,7 @@ def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
                 ", ".join(roles),
                 chosen.design.label,
                 pct_interval(a.mean, a.low, a.high),
+                *((_decides_text(chosen.decides_after_s),) if early else ()),
                 rate(chosen.data_rate_bps, "bit/s"),
                 f"{si(chosen.power_w, 'W')}{share}",
                 _energy(chosen),
@@ -280,6 +298,10 @@ def glance_rows(answer: ModelAnswer) -> tuple[tuple[str, ...], ...]:
             )
         )
     return tuple(rows)
+
+
+def _decides_text(seconds: float | None) -> str:
+    return "unknown" if seconds is None else f"{seconds:.3g} s"
 
 
 def how_sure(answer: ModelAnswer) -> str:

@@ -9,28 +9,39 @@ model, decision_s, repeat, recording) and the decoder's operation counts ``decod
 
 For one design and model, the *decision times* are those at which the model decides for some
 recording (the spiking decoder at every step, the rate-coded networks at window boundaries);
-the *full touch* is the last of them.
+the *full touch* is the last of them. What the decoders were trained for is the point's
+``training.decisions`` (:class:`~pipeline.design.scene.DecisionTraining`; a cube written before
+the field, without its coordinate, was trained for the full touch): trained ``along_touch``, the
+accuracy at ``t`` is that of a decoder trained to decide at ``t``; trained ``full_touch``, of
+one trained for the end of the touch and read early, which places the earliest decision later
+than the data need. The section says which.
 
 * Accuracy at each decision time ``t``: the fraction of (recording, repeat) pairs right at ``t``
   over the recordings decided at ``t`` in every repeat, with its 95 % interval
   (:func:`pipeline.results.stats.accuracy_interval`: Wilson score for one repeat, stratified
   bootstrap over recordings for several).
-* The earliest decision time not significantly below the full touch: each earlier time is
-  compared with the full touch on the same recordings and splits by the report's paired test
-  (:meth:`pipeline.report.evidence.Evidence.compare`: exact McNemar for one repeat, paired
-  bootstrap otherwise), in a fixed sequence from the full touch backwards: the first time
-  significantly below it (p < alpha, difference < 0) stops the sequence, and the earliest is the
-  time after it. Testing in a fixed order keeps the family-wise error at alpha without a
-  correction (each hypothesis is tested only if every later one was not rejected), and unlike a
-  Holm correction over all times it does not make a model with more decision times look
-  earlier.
+* The earliest decision time not significantly below the full touch (:func:`earliest_not_below`),
+  with decision times ``t_0 < ... < t_F`` (``t_F`` the full touch): for ``k = F-1, F-2, ..., 0``
+  in turn, ``accuracy(t_k) - accuracy(t_F)`` is tested by the report's paired test on the
+  (recording, repeat) pairs decided at both (:meth:`pipeline.report.evidence.Evidence.compare`:
+  two-sided exact McNemar p for one repeat, paired stratified bootstrap p otherwise). The
+  sequence stops at the first ``t_k`` with ``p < alpha`` (0.05) and a negative difference, or
+  at one with no recording in common; the earliest decision is the last ``t_k`` tested before
+  the stop that did not stop it, ``t_F`` when the first test stops it. A time before the stop is
+  never chosen, even where it would not be significantly below on its own. Testing in a fixed
+  order keeps the family-wise error at alpha without a correction (each hypothesis is tested
+  only if every later one was not rejected), and unlike a Holm correction over all times it does
+  not make a model with more decision times look earlier.
 * Early exit (:func:`pipeline.results.early_exit.early_exit`) at each confidence threshold of
   :data:`~pipeline.results.early_exit.EXIT_THRESHOLDS`: the mean decision time and the accuracy.
 * Energy per decision: the decoder's, a band from the operations counted up to the decision
   (:func:`pipeline.results.decoder_energy.decoder_energy_j`), beside the readout's, its power times
-  the seconds of touch observed up to the decision.
+  the seconds of touch observed up to the decision, and the two together (the band's ends each
+  plus the readout's).
 
-The curves are drawn for each model's best design of the answer (:mod:`pipeline.report.answer`).
+The curves are drawn for each model's best design of the answer (:mod:`pipeline.report.answer`);
+the answer's small table gives every design it names its earliest decision ("decides after",
+:func:`earliest_decisions`).
 """
 
 from __future__ import annotations
@@ -42,9 +53,10 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from pipeline.design.scene import DecisionTraining, scene_field
 from pipeline.report.answer import ModelAnswer, decoder_energy_text
 from pipeline.report.blocks import Block, Figure, Heading, Items, Paragraph, Table
-from pipeline.report.cubes import point_keys, sweep_dims
+from pipeline.report.cubes import field_values, point_keys, sweep_dims
 from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.seeds import rng_for
 from pipeline.report.text import comparison, pct, pct_interval, si
@@ -66,6 +78,11 @@ DECISION_VARIABLES = (DECISION_CORRECT, DECISION_CONFIDENCE)
 OPERATION_VARIABLES = DECODER_VARIABLES
 #: The stem of the latency figure.
 LATENCY_STEM = "latency"
+#: The scene field that says what the decoders were trained for.
+DECISIONS_FIELD = scene_field("training.decisions")
+#: What the decoders of a cube without :data:`DECISIONS_FIELD` were trained for (every cube
+#: written before the choice).
+BEFORE_THE_CHOICE = DecisionTraining.FULL_TOUCH
 
 
 @dataclass(frozen=True)
@@ -86,6 +103,8 @@ class DesignDecisions:
     operations
         float64 (3, times): mean accumulates, multiply-accumulates and neuron updates per
         decision, cumulative; NaN where the cube does not state them.
+    trained
+        What the decoder was trained for (the point's ``training.decisions``).
     """
 
     decision_s: np.ndarray
@@ -93,6 +112,7 @@ class DesignDecisions:
     confidence: np.ndarray
     labels: np.ndarray
     operations: np.ndarray
+    trained: DecisionTraining
 
     def energy(self, model: DecoderEnergyModel) -> EnergyBand:
         """The decoder's energy per decision at each time (float64 (times,) at both ends)."""
@@ -135,12 +155,13 @@ class LatencyCurve:
     ``mean``, ``low``, ``high`` float64 (times,) are the accuracy and its 95 % interval at each
     of ``decision_s``; ``decoder`` the decoder's energy per decision there (J, both ends);
     ``readout_power_w`` the design's readout power (NaN: unknown), so that a decision read at
-    ``t`` cost the readout ``readout_power_w * t``.
+    ``t`` cost the readout ``readout_power_w * t``; ``trained`` what the decoder was trained for.
     """
 
     model: str
     key: str
     label: str
+    trained: DecisionTraining
     decision_s: np.ndarray
     mean: np.ndarray
     low: np.ndarray
@@ -163,6 +184,17 @@ class LatencyCurve:
     def readout_j(self, index: int) -> float:
         """The readout's energy for a decision at ``decision_s[index]`` (J; NaN: unknown)."""
         return self.readout_power_w * float(self.decision_s[index])
+
+    def together_at(self, index: int) -> EnergyBand:
+        """Decoder and readout together for a decision at ``decision_s[index]`` (J, both ends;
+        NaN where either is unknown)."""
+        return together(self.energy_at(index), self.readout_j(index))
+
+
+def together(decoder: EnergyBand, readout_j: float) -> EnergyBand:
+    """The energy of a decision for decoder and readout together: each end of the decoder's
+    band plus the readout's (J; NaN where either is unknown)."""
+    return EnergyBand(float(decoder.low_j) + readout_j, float(decoder.high_j) + readout_j)
 
 
 def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], DesignDecisions]:
@@ -188,6 +220,8 @@ def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], D
         )  # (points, model, 3, times)
         times = cube[DECISION_DIM].values.astype(np.float64)
         labels = cube[LABEL].values.astype(np.int64)
+        trained = field_values(cube, DECISIONS_FIELD)
+        trained = [BEFORE_THE_CHOICE] * correct.shape[0] if trained is None else trained.ravel()
         for p, key in enumerate(point_keys(cube)):
             for m, model in enumerate(str(v) for v in cube[MODEL_DIM].values):
                 decided = (correct[p, m] >= 0).any(axis=(-2, -1))
@@ -199,6 +233,7 @@ def gather_decisions(cubes: Mapping[str, xr.Dataset]) -> dict[tuple[str, str], D
                     confidence=confidence[p, m][decided].astype(np.float64),
                     labels=labels,
                     operations=operations[p, m][:, decided].astype(np.float64),
+                    trained=DecisionTraining(str(trained[p])),
                 )
     return found
 
@@ -238,6 +273,16 @@ def earliest_not_below(
     )
 
 
+def earliest_decisions(
+    decisions: Mapping[tuple[str, str], DesignDecisions],
+) -> dict[tuple[str, str], EarliestDecision]:
+    """The earliest decision not significantly below the full touch (:func:`earliest_not_below`)
+    of every (result key, model) that holds decisions."""
+    return {
+        (key, model): earliest_not_below(d, key, model) for (key, model), d in decisions.items()
+    }
+
+
 def accuracy_along(
     decisions: DesignDecisions, key: str, model: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
@@ -270,9 +315,10 @@ def latency_curve(
     readout_power_w: float,
     energy: DecoderEnergyModel,
     thresholds: Sequence[float] = EXIT_THRESHOLDS,
+    earliest: EarliestDecision | None = None,
 ) -> LatencyCurve:
-    """Accuracy against decision time, the earliest time not below the full touch, early exit
-    and the energies per decision of one model at one design."""
+    """Accuracy against decision time, the earliest time not below the full touch (``earliest``
+    when already found), early exit and the energies per decision of one model at one design."""
     mean, low, high, interval = accuracy_along(decisions, key, model)
     exits = []
     for threshold in thresholds:
@@ -290,6 +336,7 @@ def latency_curve(
         model=model,
         key=key,
         label=label,
+        trained=decisions.trained,
         decision_s=decisions.decision_s,
         mean=mean,
         low=low,
@@ -297,7 +344,7 @@ def latency_curve(
         interval=interval,
         decoder=decisions.energy(energy),
         readout_power_w=readout_power_w,
-        earliest=earliest_not_below(decisions, key, model),
+        earliest=earliest or earliest_not_below(decisions, key, model),
         exits=tuple(exits),
     )
 
@@ -319,8 +366,10 @@ def latency_curves(
     decisions: Mapping[tuple[str, str], DesignDecisions],
     answers: Sequence[ModelAnswer],
     energy: DecoderEnergyModel,
+    earliest: Mapping[tuple[str, str], EarliestDecision] | None = None,
 ) -> tuple[LatencyCurve, ...]:
-    """One :class:`LatencyCurve` per model whose best design (the answer's) holds decisions."""
+    """One :class:`LatencyCurve` per model whose best design (the answer's) holds decisions
+    (``earliest``: their earliest decisions, where already found)."""
     curves = []
     for answer in answers:
         design = answer.best.design
@@ -328,7 +377,13 @@ def latency_curves(
         if found is not None:
             curves.append(
                 latency_curve(
-                    found, design.key, answer.model, design.label, answer.best.power_w, energy
+                    found,
+                    design.key,
+                    answer.model,
+                    design.label,
+                    answer.best.power_w,
+                    energy,
+                    earliest=(earliest or {}).get((design.key, answer.model)),
                 )
             )
     return tuple(curves)
@@ -350,6 +405,7 @@ def latency_blocks(
     if not curves:
         return
     yield Heading(3, LATENCY_TITLE)
+    yield Paragraph(training_sentence(curves))
     methods = "; ".join(sorted({c.interval for c in curves if c.interval})) or "none"
     yield Paragraph(
         "Accuracy of a decision read after t seconds of touch, for each model at its best "
@@ -359,7 +415,10 @@ def latency_blocks(
         "is compared with the full touch by a paired test on the same recordings and splits "
         "(exact McNemar for one repeat, paired bootstrap otherwise), in a fixed sequence from "
         "the full touch backwards; the first time significantly below it (p < "
-        f"{ALPHA:g}, a loss) ends the sequence. Testing in a fixed order needs no correction "
+        f"{ALPHA:g}, a loss) ends the sequence, and the earliest decision is the time tested "
+        "just before it (the full touch when the first test ends it): no time before the end "
+        "is chosen, even one that alone would not be below. Testing in a fixed order needs no "
+        "correction "
         "for the number of times tested, so a model read more often does not look earlier for "
         "it. Not significantly below is not as accurate: the difference's interval bounds the "
         "loss."
@@ -387,7 +446,8 @@ def latency_blocks(
         "probability of the class it decides) reaches the threshold, else at the full touch; "
         "the mean decision time and the accuracy are over every recording and repeat. The "
         "energies are means per decision up to each recording's exit: the decoder's (a band, "
-        "below) and the readout's (its power times the seconds of touch observed)."
+        "below), the readout's (its power times the seconds of touch observed) and the two "
+        "together."
     )
     yield Table(
         (
@@ -397,6 +457,7 @@ def latency_blocks(
             "accuracy",
             "decoder energy per decision",
             "readout energy per decision",
+            TOGETHER_COLUMN,
         ),
         tuple(
             (
@@ -406,6 +467,7 @@ def latency_blocks(
                 pct(row.accuracy),
                 decoder_energy_text(row.decoder),
                 si(row.readout_j, "J"),
+                decoder_energy_text(together(row.decoder, row.readout_j)),
             )
             for c in curves
             for row in c.exits
@@ -418,8 +480,8 @@ def latency_blocks(
         "accumulates where the inputs are spikes and as multiply-accumulates where they are "
         "real numbers, and neuron updates; each operation is priced at both ends of its "
         "declared band, so the energy is a band. The readout's energy is its power times the "
-        "seconds of touch observed up to the decision (the answer's energy model). The "
-        "per-operation energies:"
+        "seconds of touch observed up to the decision (the answer's energy model); together, "
+        "each end of the decoder's band plus the readout's. The per-operation energies:"
     )
     yield Items(decoder.assumptions())
     rows = []
@@ -436,6 +498,7 @@ def latency_blocks(
                     pct_interval(c.mean[k], c.low[k], c.high[k]),
                     decoder_energy_text(c.energy_at(k)),
                     si(c.readout_j(k), "J"),
+                    decoder_energy_text(c.together_at(k)),
                 )
             )
     yield Table(
@@ -446,8 +509,39 @@ def latency_blocks(
             "accuracy [95 % interval]",
             "decoder energy per decision",
             "readout energy per decision",
+            TOGETHER_COLUMN,
         ),
         tuple(rows),
+    )
+
+
+#: The time section's column of the energy per decision of decoder and readout together.
+TOGETHER_COLUMN = "decoder and readout together"
+
+#: What the time section says of decoders trained for each choice of ``training.decisions``.
+TRAINED_TEXT = {
+    DecisionTraining.ALONG_TOUCH: (
+        "trained along the touch (training.decisions = along_touch): the accuracy at each "
+        "decision time is that of a decoder trained to decide then"
+    ),
+    DecisionTraining.FULL_TOUCH: (
+        "trained for the full touch alone (training.decisions = full_touch) and read early, "
+        "the windows not yet seen set to their training mean: their early decisions are below "
+        "what a decoder trained to decide then gets, so the earliest decision not "
+        "significantly below the full touch comes later than the recordings need (train "
+        "along_touch, the default, to answer how long a touch must last)"
+    ),
+}
+
+
+def training_sentence(curves: Sequence[LatencyCurve]) -> str:
+    """Which training the decoders of the curves had, in one sentence."""
+    kinds = list(dict.fromkeys(c.trained for c in curves))
+    if len(kinds) == 1:
+        return f"The decoders were {TRAINED_TEXT[kinds[0]]}."
+    return " ".join(
+        f"{', '.join(c.model.upper() for c in curves if c.trained is kind)}: {TRAINED_TEXT[kind]}."
+        for kind in kinds
     )
 
 

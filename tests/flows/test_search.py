@@ -56,3 +56,24 @@ def test_a_point_the_store_lost_is_computed_again(client, tmp_path):
         open_results(root)["tiny.trials"]["result_key"].values.tolist()
         == trials["result_key"].values.tolist()
     )
+
+
+def test_decision_time_is_an_objective_of_decoders_trained_for_it(client, tmp_path):
+    import tomllib
+
+    import numpy as np
+
+    from pipeline.results.objectives import objective_values
+    from storage import open_results
+
+    data = tomllib.loads(SPACE)
+    data["objectives"] = {"accuracy.ffnn": "max", "decision_s.ffnn": "min"}
+    space = Space.from_dict(data)
+    root = tmp_path / "run"
+    summary = run_optimize(space, root, budget=2, client=client)
+    assert (summary["trials"], summary["computed"]) == (2, 2)
+    trials = open_results(root)["tiny.trials"]
+    assert set(np.ravel(trials["training.decisions"].values)) == {"along_touch"}
+    decision_s = objective_values(trials, space.objectives)[:, 1]
+    # Each trial's mean early-exit time: within its touch of 1.5 s, after its first window.
+    assert np.all((decision_s >= 0.1) & (decision_s <= 1.5)), decision_s

@@ -196,9 +196,9 @@ def test_full_touch_reproduces_the_code_before_the_choice(model, request):
 
 
 def test_the_choice_keys_the_results_and_full_touch_keeps_the_old_keys():
-    full = Scene.paper()
-    assert full.training.decisions is DecisionTraining.FULL_TOUCH
-    paper = full.replace(**{"training.decisions": "along_touch"})
+    paper = Scene.paper()
+    assert paper.training.decisions is DecisionTraining.ALONG_TOUCH  # the default
+    full = paper.replace(**{"training.decisions": "full_touch"})
     assert "decisions" not in full.canonical(("training",))
     assert '"decisions":"along_touch"' in paper.canonical(("training",)).replace(" ", "")
     assert cache_key(full, "rates") == cache_key(paper, "rates")

@@ -99,6 +99,13 @@ def test_training_along_the_touch_changes_the_results_key_alone(name):
     assert new["results"] != keys["results"]
 
 
+def test_the_default_scenes_train_along_the_touch_and_reuse_the_earlier_spikes_and_rates():
+    for scene, full in ((SMOKE, EARLIER_KEYS["smoke"]), (PAPER, EARLIER_KEYS["paper"])):
+        assert scene.training.decisions == "along_touch"
+        assert cache_key(scene, "rates") == full[1]["rates"]
+        assert cache_key(scene, "results") != full[1]["results"]
+
+
 class Encoder(enum.StrEnum):
     """A test-only option: today's level-crossing encoder and another one."""
 
