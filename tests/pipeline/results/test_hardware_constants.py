@@ -2,6 +2,7 @@
 problem in one line naming the file and the key."""
 
 import dataclasses
+from pathlib import Path
 
 import pytest
 
@@ -152,3 +153,11 @@ def test_an_unreadable_file_is_one_line_naming_it(tmp_path, text, expected):
 def test_constants_are_frozen_values():
     with pytest.raises(dataclasses.FrozenInstanceError):
         Constants().origin = "x"
+
+
+def test_the_example_file_of_the_how_to_loads():
+    example = Path(__file__).parents[3] / "examples" / "constants.toml"
+    constants = load_constants(example)
+    assert sorted(constants.overrides) == ["a_vt_v_m", "ac_high_j", "event_energy_j"]
+    assert constants.a_vt_v_m == pytest.approx(3.5e-9)
+    assert all(o.source.startswith("example: ") for o in constants.overrides.values())
