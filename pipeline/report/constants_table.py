@@ -20,7 +20,8 @@ CONSTANTS_COLUMNS = ("constant", "value", "overridden", "what it is", "source")
 
 
 def constants_rows(constants: Constants) -> tuple[tuple[str, str, str, str, str], ...]:
-    """One row per declared constant, in :data:`DECLARED` order: name, the value used in its
+    """One row per declared constant, in
+    :data:`~pipeline.results.hardware_constants.DECLARED` order: name, the value used in its
     declared unit, ``"yes"`` where overridden (else ``"no"``), what it is, its value's
     source."""
     return tuple(

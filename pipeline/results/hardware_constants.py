@@ -104,7 +104,7 @@ def _declared() -> dict[str, Declared]:
 
 
 DECLARED: dict[str, Declared] = _declared()
-"""Every hardware constant by name: the readout's power model (in
+"""Every hardware constant by name, in order the readout's power model (in
 :class:`~pipeline.results.readout_constants.EnergyModel`'s field order), ``a_vt_v_m``, then the
 decoder's operations, low and high end each."""
 

@@ -67,8 +67,8 @@ A_VT = Parameter(
     "matching data for the process at hand replaces it",
     positive=True,
 )
-"""How :data:`A_VT_V_M` is stated: its unit, what it is and where it comes from (a constants file
-overrides it, :mod:`pipeline.results.hardware_constants`)."""
+"""The declaration of :data:`A_VT_V_M`, with its unit, what it is and where it comes from (a
+constants file overrides it, :mod:`pipeline.results.hardware_constants`)."""
 MATCHED_DEVICES_PER_TAXEL = 4
 """Matched input transistors per taxel (two comparators, up and down, a differential pair each)."""
 

@@ -4,7 +4,9 @@ The equations that use them are in :mod:`pipeline.results.readout_power`. Each c
 of :class:`EnergyModel` whose :class:`Parameter` says its command-line option and unit, what it
 is and where its default comes from; the command line takes each in that unit
 (``--front-end-nw``, ``--event-energy-pj``, ...), and the report states every one with its
-source (:meth:`EnergyModel.assumptions`). Units in the field names, SI.
+source (:meth:`EnergyModel.assumptions`). Units in the field names, SI. A designer's constants
+file overrides any of them by field name, each with its source
+(:mod:`pipeline.results.hardware_constants`).
 
 The constants, their defaults and sources:
 
