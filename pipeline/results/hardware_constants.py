@@ -3,8 +3,8 @@ r"""The hardware constants a designer can bring: every declared constant, a file
 The report's hardware figures rest on constants declared once where they are used, each with its
 value, unit, meaning and source: the readout's power model
 (:class:`pipeline.results.readout_constants.EnergyModel`, each field's
-:class:`~pipeline.results.readout_constants.Parameter`), Pelgrom's coefficient
-(:data:`pipeline.results.matched_area.A_VT`) and the decoder's per-operation energies
+:class:`~pipeline.results.readout_constants.Parameter`), Pelgrom's coefficient (``A_VT``, beside
+:data:`pipeline.results.matched_area.A_VT_V_M`) and the decoder's per-operation energies
 (:class:`pipeline.results.decoder_energy.DecoderEnergyModel`, each operation a band whose low and
 high ends are two constants, ``<operation>_low_j`` and ``<operation>_high_j``). :data:`DECLARED`
 gathers them by name; the names and units of a constants file are derived from it, never listed

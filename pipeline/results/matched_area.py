@@ -17,7 +17,7 @@ gate area
 and a taxel, with two comparators (up and down) of two input transistors each
 (:data:`MATCHED_DEVICES_PER_TAXEL`), ``A_taxel = 4 W L``; the array ``A_array = n A_taxel``
 (:func:`taxel_area_m2`, :func:`array_area_m2`). :data:`A_VT_V_M` is declared once with its process
-(:data:`A_VT_PROCESS`), unit, meaning and source (:data:`A_VT`); a designer's own value (a
+(:data:`A_VT_PROCESS`), unit, meaning and source (``A_VT``); a designer's own value (a
 foundry's matching data) comes in as ``a_vt_v_m``. This is the matched gate area the
 mismatch demands, not a layout: wiring, the front end and the comparators' other devices are
 not counted, so it is a lower bound, and a meaningful one only where it exceeds the process's
@@ -53,7 +53,7 @@ __all__ = [
 
 A_VT_V_M = 5e-9
 """Pelgrom's threshold-matching coefficient A_VT, in V m (5 mV um), of :data:`A_VT_PROCESS`
-(declared as :data:`A_VT`)."""
+(declared as ``A_VT``)."""
 A_VT_PROCESS = "180 nm bulk CMOS (gate oxide about 4 nm)"
 """The process :data:`A_VT_V_M` stands for."""
 A_VT = Parameter(

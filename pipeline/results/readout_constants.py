@@ -64,7 +64,8 @@ CHIP_TAXELS, CHIP_EVENT_RATE_HZ = 192, 2200.0
 @dataclass(frozen=True)
 class Parameter:
     """How one hardware constant is stated: declared once, where the constant is kept (the
-    :class:`EnergyModel` fields here, :data:`pipeline.results.matched_area.A_VT`).
+    :class:`EnergyModel` fields here, ``A_VT`` beside
+    :data:`pipeline.results.matched_area.A_VT_V_M`).
 
     ``unit`` is the unit the constant is given in (``scale`` SI units each, e.g. pJ = 1e-12 J) on
     the command line and in a constants file (:mod:`pipeline.results.hardware_constants`);
