@@ -118,9 +118,8 @@ def reference_plan(grid: Grid) -> dict[str, Scene]:
     limits: dict[str, DatasetLimits] = {}
     unique: dict[str, Scene] = {}
     for sweep in grid.sweeps:
-        fixed = grid.base.replace(**sweep.fixed) if sweep.fixed else grid.base
         for _, values in sweep.index_values():
-            scene = fixed.replace(**values)
+            scene = grid.base.replace(**{**sweep.fixed, **values})
             recordings = reference_key(scene, RECORDINGS)
             if recordings not in limits:
                 limits[recordings] = DatasetLimits.describe(scene.dataset)

@@ -16,7 +16,8 @@
   statistics themselves (accuracy intervals, paired comparisons, Holm's correction, trends).
 - Read the answer, the report's first section: :func:`report_answers` (per model, the most
   accurate design and the cheapest ones not significantly below it).
-- Write the report: :func:`write_run_report`.
+- Write the report: :func:`write_run_report`, with hardware constants of your own
+  (``constants=load_constants("mine.toml")``, :func:`load_constants`).
 
 Nothing here imports Prefect.
 """
@@ -32,6 +33,7 @@ from pipeline.design.scene import Scene
 from pipeline.design.space import Space, load_space
 from pipeline.errors import EskinError
 from pipeline.report.evidence import compare_points as compare
+from pipeline.results.hardware_constants import load_constants
 from pipeline.run.grid_keys import unique_points
 from pipeline.run.simulate import SceneResult, run_scene
 from storage import open_results, open_tree
@@ -48,6 +50,7 @@ __all__ = [
     "format_summary",
     "format_sweep_summary",
     "json_safe",
+    "load_constants",
     "load_grid",
     "load_space",
     "open_results",

@@ -21,6 +21,7 @@ from flows.cli_output import StageProgress, format_server_info, print_out
 from flows.report import needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, result_summary
 from pipeline.errors import EskinError
+from pipeline.results.hardware_constants import Constants, load_constants
 from pipeline.results.readout_constants import PARAMETERS, EnergyModel
 
 if TYPE_CHECKING:
@@ -284,7 +285,7 @@ def handle_report(args: argparse.Namespace) -> int:
         out,
         adc_bits=args.adc_bits,
         adc_rate_hz=args.adc_rate_hz,
-        energy=_energy(args),
+        constants=_constants(args),
         show_progress=not args.quiet,
     )
     print(path)
@@ -298,7 +299,11 @@ def handle_power(args: argparse.Namespace) -> int:
 
     try:
         budget = power_budget(
-            args.taxels, args.event_rate_hz, args.bits, args.sampling_rate_hz, _energy(args)
+            args.taxels,
+            args.event_rate_hz,
+            args.bits,
+            args.sampling_rate_hz,
+            _constants(args).energy_model(),
         )
     except ValueError as exc:
         raise EskinError(str(exc)) from None
@@ -336,6 +341,14 @@ def handle_serve(args: argparse.Namespace) -> int:
     return 0
 
 
-def _energy(args: argparse.Namespace) -> EnergyModel:
-    """The energy model of the ``--<constant>`` options (a default where one is not given)."""
-    return EnergyModel.from_options({name: getattr(args, name) for name in PARAMETERS})
+def _constants(args: argparse.Namespace) -> Constants:
+    """The hardware constants of ``--constants FILE`` (every constant as declared without it),
+    each ``--<constant>`` option given overriding its constant on top."""
+    constants = load_constants(args.constants) if args.constants else Constants()
+    given = EnergyModel.from_options({name: getattr(args, name) for name in PARAMETERS})
+    for name, p in PARAMETERS.items():
+        if getattr(args, name) is not None:
+            constants = constants.overriding(
+                name, getattr(given, name), f"set on the command line ({p.option})"
+            )
+    return constants

@@ -5,7 +5,8 @@ the docs reads (sphinx-argparse). Each command's body is in :mod:`flows.cli_comm
 ``handler`` on the parsed namespace. A usage error exits with status 2 and one line
 ``eskin: error: ...`` on stderr. The energy model's constants are options of ``eskin report`` and
 ``eskin power``, each declared once on its field
-(:class:`pipeline.results.readout_constants.EnergyModel`).
+(:class:`pipeline.results.readout_constants.EnergyModel`), and both take a file of any declared
+hardware constants (``--constants FILE``, :mod:`pipeline.results.hardware_constants`).
 """
 
 from __future__ import annotations
@@ -401,6 +402,13 @@ def _energy_options() -> argparse.ArgumentParser:
         "energy model (defaults calibrated on the chip of Alea et al., IEEE TBioCAS 2024, and "
         "taken from the literature: see docs/how-to/report.md)"
     )
+    group.add_argument(
+        "--constants",
+        metavar="FILE",
+        help="a TOML file of hardware constants overriding the declared ones (power model, "
+        "Pelgrom's A_VT, the decoder's per-operation energies), each with its value, unit and "
+        "source (see docs/how-to/constants.md); the options below override it in turn",
+    )
     defaults = EnergyModel()
     for name, p in PARAMETERS.items():
         group.add_argument(
@@ -420,7 +428,7 @@ def _checked(
     ``at_most``), named in argparse's one-line error."""
     from pipeline.results.readout_constants import Parameter
 
-    rule = Parameter(option, "", 1.0, "", "", count=whole)
+    rule = Parameter("", 1.0, "", "", option=option, count=whole)
 
     def parse(text: str) -> float:
         try:

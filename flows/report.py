@@ -5,8 +5,8 @@ claims, tables and fronts (:mod:`pipeline.report.analysis`), draws them
 (:mod:`pipeline.report.figures`) and renders the files of the report
 (:mod:`pipeline.report.document`), and :mod:`storage.report` writes the folder whole. The command
 line's frame-readout options become a :class:`~pipeline.report.designs.FrameReadout` here, checked
-before anything is read or written; its energy options arrive as an
-:class:`~pipeline.results.readout_constants.EnergyModel`.
+before anything is read or written; its hardware constants (``--constants FILE`` and the energy
+options) arrive as :class:`~pipeline.results.hardware_constants.Constants`.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
     from pipeline.report import FrameReadout, Report
     from pipeline.report.answer import ModelAnswer
+    from pipeline.results.hardware_constants import Constants
     from pipeline.results.readout_constants import EnergyModel
 
 DEFAULT_ADC_BITS = 12
@@ -38,6 +39,7 @@ def write_run_report(
     adc_bits: int = DEFAULT_ADC_BITS,
     adc_rate_hz: float | None = None,
     energy: EnergyModel | None = None,
+    constants: Constants | None = None,
     show_progress: bool = False,
 ) -> Path:
     """Write the report of the sweep store at ``root``; return the path of its ``report.html``.
@@ -54,8 +56,11 @@ def write_run_report(
         sample and frame rate per taxel in Hz (default: the recordings' sampling rate, as the
         cubes state it).
     energy
-        The readout power estimate's constants (default: those of
-        :class:`pipeline.results.readout_constants.EnergyModel`, calibrated on a chip).
+        The readout power estimate's constants (default: those of ``constants``).
+    constants
+        The hardware constants, a designer's overrides among them
+        (:func:`pipeline.results.hardware_constants.load_constants` of ``eskin report
+        --constants FILE``); default: every constant as declared. The report lists them.
 
     Raises
     ------
@@ -85,7 +90,11 @@ def write_run_report(
 
     frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
     report = build_report(
-        cubes, frame=frame, energy=energy, runs=sweep_runs(read_sweep_records(store.root))
+        cubes,
+        frame=frame,
+        energy=energy,
+        runs=sweep_runs(read_sweep_records(store.root)),
+        constants=constants,
     )
     if frame is None:
         print(
@@ -104,6 +113,7 @@ def report_answers(
     adc_bits: int = DEFAULT_ADC_BITS,
     adc_rate_hz: float | None = None,
     energy: EnergyModel | None = None,
+    constants: Constants | None = None,
 ) -> tuple[ModelAnswer, ...]:
     """The report's answer, one per model, from a run's cubes: the most accurate design and the
     cheapest designs (by data rate, by readout power) whose accuracy is not significantly below
@@ -113,9 +123,9 @@ def report_answers(
     ----------
     cubes
         ``{sweep name: cube}`` as :func:`storage.store.open_results` returns them.
-    adc_bits, adc_rate_hz, energy
-        As for :func:`write_run_report`: the frame readout the answer compares with and the
-        power estimate's constants.
+    adc_bits, adc_rate_hz, energy, constants
+        As for :func:`write_run_report`: the frame readout the answer compares with, the
+        power estimate's constants and the hardware constants.
 
     Returns
     -------
@@ -132,7 +142,7 @@ def report_answers(
     if problems := _adc_problems(adc_bits, adc_rate_hz):
         raise EskinError("; ".join(problems))
     frame = _frame_readout(cubes, adc_bits, adc_rate_hz)
-    return tuple(build_report(cubes, frame=frame, energy=energy).answers)
+    return tuple(build_report(cubes, frame=frame, energy=energy, constants=constants).answers)
 
 
 def _adc_problems(adc_bits: int, adc_rate_hz: float | None) -> list[str]:

@@ -51,12 +51,13 @@ def reference_key(scene: Scene, level) -> str:
 
 
 def reference_points(grid: Grid) -> list[tuple[str, tuple[int, ...], Scene]]:
-    """Every point as ``Scene.replace`` makes it, one point at a time."""
-    found = []
-    for s in grid.sweeps:
-        fixed = grid.base.replace(**s.fixed) if s.fixed else grid.base
-        found += [(s.name, index, fixed.replace(**values)) for index, values in s.index_values()]
-    return found
+    """Every point as ``Scene.replace`` makes it, one point at a time, its ``set`` and axis
+    values together."""
+    return [
+        (s.name, index, grid.base.replace(**{**s.fixed, **values}))
+        for s in grid.sweeps
+        for index, values in s.index_values()
+    ]
 
 
 MANY_AXES = {

@@ -36,10 +36,13 @@ sweep would clash it takes the last two parts (``amplifier_noise_sigma_v``).
 
 Everything that can be checked without the recordings is checked when the grid loads, and every
 problem is reported at once: unknown fields, empty axes, duplicate values, zipped axes of unequal
-length, and values a scene refuses. :func:`pipeline.run.fit.check_fits` then checks the points
-against the recordings (windows longer than a recording, arrays whose delays eat it, classes
-smaller than the folds) before any work starts, naming the shortest recording. A point's result
-cache key, which tells which points are the same scene, is the run layer's
+length, and values a scene refuses. A sweep is checked point by point, each point's whole scene
+(base, ``set`` and the point's axis values together, :func:`point_problems`), never its ``set``
+alone: a ``set`` that needs a swept field (``chips.deployment = "shared"`` needs the mismatch effect
+its axis names) is valid wherever every point has that field. :func:`pipeline.run.fit.check_fits`
+then checks the points against the recordings (windows longer than a recording, arrays whose delays
+eat it, classes smaller than the folds) before any work starts, naming the shortest recording. A
+point's result cache key, which tells which points are the same scene, is the run layer's
 (:mod:`pipeline.run.grid_keys`); what a point and a plan cost is :mod:`pipeline.design.grid_cost`.
 
 Expanding and checking a grid costs a few tens of microseconds per point, linear in the points:
@@ -260,21 +263,21 @@ class Grid:
 def sweep_points(base: Scene, sweep: Sweep) -> list[GridPoint]:
     """The scenes of one sweep (already validated when the grid loaded).
 
-    Each point's scene is ``base.replace(**sweep.fixed).replace(**values)`` with the point's
-    ``values``, built as :class:`pipeline.design.variants.SceneVariants` builds it: each scene
-    part is validated once per distinct combination of the swept values in it, and the points
-    share equal parts (so that their keys write each part's canonical form once).
+    Each point's scene is ``base.replace(**sweep.fixed, **values)`` with the point's
+    ``values`` (the whole scene at once: ``set`` is never a scene of its own), built as
+    :class:`pipeline.design.variants.SceneVariants` builds it: each scene part is validated once
+    per distinct combination of the swept values in it, and the points share equal parts (so
+    that their keys write each part's canonical form once).
     """
-    fixed = base.replace(**sweep.fixed) if sweep.fixed else base
-    variants = _variants(fixed, sweep)
+    variants = _variants(base, sweep)
     return [
         GridPoint(sweep.name, index, variants.scene(indices))
         for index, indices in _positions(sweep)
     ]
 
 
-def _variants(fixed: Scene, sweep: Sweep) -> SceneVariants:
-    return SceneVariants(fixed, [(axis.field, axis.values) for axis in sweep.axes])
+def _variants(base: Scene, sweep: Sweep) -> SceneVariants:
+    return SceneVariants(base, [(axis.field, axis.values) for axis in sweep.axes], sweep.fixed)
 
 
 def _positions(sweep: Sweep) -> Iterator[tuple[tuple[int, ...], tuple[int, ...]]]:
@@ -469,24 +472,43 @@ def _read_sweep(
     if len(problems) > count:
         return None
     sweep = Sweep(name, _name_dims(axes), mode, dict(fixed), bool(correlate), title)
-    try:
-        fixed_base = base.replace(**sweep.fixed) if sweep.fixed else base
-    except SceneError as exc:
-        problems.append(f"{where}.set: {'; '.join(exc.problems)}")
-        return None
-    if not check_points:
-        return sweep
-    # Each scene part is validated once per combination of the values in it, not per point.
-    variants = _variants(fixed_base, sweep)
+    if check_points:
+        problems += point_problems(base, sweep)
+    return sweep
+
+
+def point_problems(base: Scene, sweep: Sweep) -> list[str]:
+    """What the scenes of ``sweep``'s points refuse, each point's whole scene checked (base,
+    ``set`` and the point's axis values together), or ``[]``.
+
+    A problem is named with its sweep and the point's axis values (``sweeps.s at
+    readout.threshold_v = 1.5: readout.threshold_v: ...``); one found at every point of a sweep
+    of several (a ``set`` the scene refuses whatever the axes say) is said once, ``at every
+    point``. Each scene part is validated once per combination of the swept values in it, not
+    per point.
+    """
+    where = f"sweeps.{sweep.name}"
+    variants = _variants(base, sweep)
+    refused = []
     for _, indices in _positions(sweep):
-        refused = variants.problems(indices)
-        if refused:
+        found = variants.problems(indices)
+        if found:
+            refused.append((indices, found))
+    if not refused:
+        return []
+    everywhere: list[str] = []
+    if len(refused) == math.prod(sweep.shape) > 1:
+        everywhere = [p for p in refused[0][1] if all(p in found for _, found in refused)]
+    problems = [f"{where} at every point: {'; '.join(everywhere)}"] if everywhere else []
+    for indices, found in refused:
+        rest = [p for p in found if p not in everywhere]
+        if rest:
             at = ", ".join(
                 f"{axis.field} = {axis.values[i]!r}"
                 for axis, i in zip(sweep.axes, indices, strict=True)
             )
-            problems.append(f"{where} at {at}: {'; '.join(refused)}")
-    return sweep
+            problems.append(f"{where} at {at}: {'; '.join(rest)}")
+    return problems
 
 
 def _name_dims(axes: Sequence[tuple[str, tuple[Any, ...]]]) -> tuple[SweepAxis, ...]:

@@ -26,8 +26,10 @@ field a continuous one (``step`` optional, ``log = true`` samples ``log(value)``
 needs ``low > 0``); ``choices`` lists the values of a categorical dimension (any values the field
 takes, strings included). Everything is checked when the space loads, and every problem is
 reported at once (:class:`pipeline.errors.SceneError`): unknown keys and fields, malformed
-ranges, bounds and choices the field refuses (each checked at the base scene), unknown models,
-fewer than two or more than three objectives.
+ranges, bounds and choices a scene refuses, unknown models, fewer than two or more than three
+objectives. Bounds and choices are checked together, every combination of them (the corners of
+the space, each a whole scene with the base's other fields), never one dimension alone at the
+base: a chip deployment that needs the mismatch effect another dimension searches is valid.
 
 Objectives (:class:`Metric`), read per trial from its result cube
 (:func:`pipeline.results.objectives.objective_values`):
@@ -77,6 +79,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import hashlib
+import itertools
 import json
 import math
 import tomllib
@@ -494,13 +497,39 @@ def _is_float(kind: Any) -> bool:
 
 
 def _check_against_base(base: Scene, dimensions: list[Dimension], problems: list[str]) -> None:
-    """Every bound and choice must make a valid scene with the other fields at the base."""
-    for dimension in dimensions:
-        variants = SceneVariants(base, [(dimension.field, dimension.extremes())])
-        for i, value in enumerate(dimension.extremes()):
-            problems += [
-                f"space.{dimension.field} = {value!r}: {p}" for p in variants.problems([i])
-            ]
+    """Every combination of the dimensions' bounds and choices (the corners of the space) must
+    make a valid scene, each checked whole with the base's other fields.
+
+    A problem is said once for the values it needs: ``space.<field> = <value>: ...`` when every
+    corner with that value has it and no other does (a bound the field refuses),
+    ``space at <field> = <value>, ...: ...`` for a combination, ``space at every point: ...``
+    when every corner has it; otherwise at each corner that has it.
+    """
+    if not dimensions:
+        return
+    extremes = [d.extremes() for d in dimensions]
+    axes = [(d.field, e) for d, e in zip(dimensions, extremes, strict=True)]
+    variants = SceneVariants(base, axes)
+    corners = list(itertools.product(*(range(len(e)) for e in extremes)))
+    found: dict[str, list[tuple[int, ...]]] = {}
+    for corner in corners:
+        for problem in variants.problems(corner):
+            found.setdefault(problem, []).append(corner)
+
+    def at(pairs: list[tuple[int, int]]) -> str:
+        return ", ".join(f"{dimensions[d].field} = {extremes[d][i]!r}" for d, i in pairs)
+
+    for problem, where in found.items():
+        fixed = [
+            (d, where[0][d]) for d in range(len(dimensions)) if len({c[d] for c in where}) == 1
+        ]
+        matching = sum(all(c[d] == i for d, i in fixed) for c in corners)
+        if matching != len(where):
+            problems += [f"space at {at(list(enumerate(c)))}: {problem}" for c in where]
+        elif len(fixed) == 1:
+            problems.append(f"space.{at(fixed)}: {problem}")
+        else:
+            problems.append(f"space at {at(fixed) or 'every point'}: {problem}")
 
 
 def _read_objectives(data: Any, base: Scene, problems: list[str]) -> list[Objective]:

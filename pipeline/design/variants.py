@@ -10,7 +10,7 @@ with a memo).
 from __future__ import annotations
 
 import operator
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from pipeline.design import fields
@@ -21,13 +21,14 @@ from pipeline.errors import SceneError
 class SceneVariants:
     """Copies of one scene with the same dotted fields replaced, each field from its own list.
 
-    ``variants.scene(indices)`` is ``scene.replace(**{field: values[i] ...})`` over ``axes``
-    and ``indices``: the same scene, or a :class:`~pipeline.errors.SceneError` with the same
-    problems, but each scene part (``dataset``, ``array``, ...) is read and validated once per
-    distinct combination of the value indices of the fields in it (a part no field is in, once),
-    and the scenes share their parts. A grid whose fields take a few values each thus validates a
-    few parts, not every point, and its scenes' canonical forms can be written once per part
-    (:meth:`~pipeline.design.scene.Scene.canonical` with a memo).
+    ``variants.scene(indices)`` is ``scene.replace(**fixed, **{field: values[i] ...})`` over
+    ``axes`` and ``indices`` (``fixed`` set first, the axes' values after it): the same scene, or a
+    :class:`~pipeline.errors.SceneError` with the same problems, but each scene part (``dataset``,
+    ``array``, ...) is read and validated once per distinct combination of the value indices of the
+    fields in it (a part no field is in, once), and the scenes share their parts. A grid whose
+    fields take a few values each thus validates a few parts, not every point, and its scenes'
+    canonical forms can be written once per part (:meth:`~pipeline.design.scene.Scene.canonical`
+    with a memo).
 
     Parameters
     ----------
@@ -36,6 +37,11 @@ class SceneVariants:
     axes : sequence of (str, sequence)
         Dotted scene fields (``"readout.threshold_v"``), each with its values. A field must
         start with a top-level scene field (``dataset``, ..., ``name``, ``seed``).
+    fixed : mapping of str to value, optional
+        Dotted scene fields set at every variant before the axes' values (a sweep's ``set``).
+        They are not checked on their own: a part is checked whole, with the axes' values in it,
+        so that a fixed field that needs a swept one (a chip deployment that needs the swept
+        mismatch effect) is valid wherever the variant is.
 
     Raises
     ------
@@ -43,15 +49,23 @@ class SceneVariants:
         A field does not start with a top-level scene field.
     """
 
-    def __init__(self, scene: Scene, axes: Sequence[tuple[str, Sequence[Any]]]):
+    def __init__(
+        self,
+        scene: Scene,
+        axes: Sequence[tuple[str, Sequence[Any]]],
+        fixed: Mapping[str, Any] | None = None,
+    ):
         self._cls = type(scene)
         self._data = scene.to_dict()
+        fixed = dict(fixed or {})
+        for dotted, value in fixed.items():
+            fields.put(self._data, dotted, _copy_plain(value))
         self._fields = [name for name, _ in axes]
         self._values = [values for _, values in axes]
-        self.source = f"scene {scene.name!r} with {sorted(self._fields)}"
+        self.source = f"scene {scene.name!r} with {sorted({*fixed, *self._fields})}"
         tops = [name.split(".")[0] for name in self._fields]
         order = [slot.name for slot in fields.read_order(self._cls)]
-        unknown = sorted(set(tops) - set(order))
+        unknown = sorted({*tops, *(name.split(".")[0] for name in fixed)} - set(order))
         if unknown:
             raise ValueError(f"not top-level scene fields: {', '.join(unknown)}")
         self._positions = {top: tuple(i for i, t in enumerate(tops) if t == top) for top in order}
@@ -64,7 +78,6 @@ class SceneVariants:
 
     def problems(self, indices: Sequence[int]) -> list[str]:
         """What :meth:`scene` would raise at ``indices`` (one index per axis), or ``[]``."""
-        parts: dict[str, Any] = {}
         problems: list[str] = []
         parts: dict[str, Any] = {}
         for top, part_indices in self._part_indices:

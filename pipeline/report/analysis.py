@@ -50,6 +50,7 @@ from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
 from pipeline.results.decoder_energy import DecoderEnergyModel
+from pipeline.results.hardware_constants import Constants
 from pipeline.results.readout_constants import EnergyModel
 from pipeline.results.variables import ACCURACY_LOW, ACCURACY_MEAN, RESULT_KEY
 
@@ -97,6 +98,7 @@ class Report:
     decoder: DecoderEnergyModel = field(default_factory=DecoderEnergyModel)
     mismatch_note: str | None = None
     yield_answers: tuple[YieldAnswer, ...] = ()
+    constants: Constants = field(default_factory=Constants)
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -127,6 +129,7 @@ def build_report(
     energy: EnergyModel | None = None,
     runs: Sequence[SweepRun] = (),
     decoder: DecoderEnergyModel | None = None,
+    constants: Constants | None = None,
 ) -> Report:
     """All the report's numbers and sentences from a run root's cubes.
 
@@ -138,13 +141,16 @@ def build_report(
         The frame-based ADC readout the answer, Table I and the fronts compare with; None leaves
         that comparison unknown.
     energy
-        Constants of the readout power estimate (default:
-        :class:`~pipeline.results.readout_constants.EnergyModel`'s).
+        Constants of the readout power estimate (default: ``constants.energy_model()``).
     runs
         The run log's sweeps of this root (the sweep's own cost).
     decoder
-        Per-operation energies of the decoder (default:
-        :class:`~pipeline.results.decoder_energy.DecoderEnergyModel`'s).
+        Per-operation energies of the decoder (default: ``constants.decoder_model()``).
+    constants
+        The hardware constants (:class:`~pipeline.results.hardware_constants.Constants`: the
+        declared ones, with a designer's overrides), which size the matched area and, unless
+        ``energy`` or ``decoder`` is given, price the readout and the decoder; the report lists
+        them. Default: every constant as declared.
 
     Raises
     ------
@@ -163,11 +169,12 @@ def build_report(
             "describe themselves: run 'eskin sweep' on this root again to rebuild them (points "
             "already in the store are not recomputed)"
         )
-    energy = energy if energy is not None else EnergyModel()
+    constants = constants if constants is not None else Constants()
+    energy = energy if energy is not None else constants.energy_model()
     # Points of several chips as one design each (mean over chips), the chips kept beside.
     cubes = {name: pooled(cube) for name, cube in cubes.items()}
     evidence = gather_evidence(cubes)
-    designs = gather_designs(cubes)
+    designs = gather_designs(cubes, constants.a_vt_v_m)
     curves: dict[Panel, tuple[Curve, ...]] = {}
     missing: dict[Panel, str] = {}
     for panel in PANEL_FIELDS:
@@ -189,7 +196,7 @@ def build_report(
     full_scale = 1.0
     if threshold:
         full_scale = float(base_value(cubes[threshold[0]], FULL_SCALE_V))
-    decoder = decoder if decoder is not None else DecoderEnergyModel()
+    decoder = decoder if decoder is not None else constants.decoder_model()
     decisions = gather_decisions(cubes)
     earliest = earliest_decisions(decisions)
     decides_after = {found: e.decision_s for found, e in earliest.items()}
@@ -225,6 +232,7 @@ def build_report(
         decoder=decoder,
         mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
         yield_answers=yield_answers(designs, evidence, energy),
+        constants=constants,
     )
 
 

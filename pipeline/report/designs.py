@@ -52,9 +52,9 @@ from pipeline.report.cubes import (
 from pipeline.report.panels import COLS, MISMATCH_SIGMA_REL, N_WINDOWS, ROWS, THRESHOLD_V, WINDOW_S
 from pipeline.report.text import label
 from pipeline.results.cube import work_seconds
+from pipeline.results.hardware_constants import Constants
 from pipeline.results.matched_area import (
     A_VT_PROCESS,
-    A_VT_SOURCE,
     A_VT_V_M,
     MATCHED_DEVICES_PER_TAXEL,
     array_area_m2,
@@ -136,6 +136,7 @@ class Design:
     threshold_v: float = math.nan
     mismatch_sigma_rel: float = math.nan
     yields: Mapping[str, ChipYield] = field(default_factory=dict)
+    a_vt_v_m: float = A_VT_V_M
 
     @property
     def taxel_area_m2(self) -> float:
@@ -144,14 +145,16 @@ class Design:
         for."""
         if not (self.mismatch_sigma_rel >= 0 and self.threshold_v >= 0):
             return math.nan
-        return float(taxel_area_m2(self.mismatch_sigma_rel, self.threshold_v))
+        return float(taxel_area_m2(self.mismatch_sigma_rel, self.threshold_v, self.a_vt_v_m))
 
     @property
     def array_area_m2(self) -> float:
         """:attr:`taxel_area_m2` times the taxels (m^2); NaN when either is unknown."""
         if self.n_taxels is None or not math.isfinite(self.taxel_area_m2):
             return math.nan
-        return float(array_area_m2(self.n_taxels, self.mismatch_sigma_rel, self.threshold_v))
+        return float(
+            array_area_m2(self.n_taxels, self.mismatch_sigma_rel, self.threshold_v, self.a_vt_v_m)
+        )
 
     @property
     def label(self) -> str:
@@ -222,15 +225,19 @@ class FrameReadout:
         )
 
 
-def area_sentence() -> str:
-    """What the array-area cost is and what it rests on, in one paragraph."""
+def area_sentence(constants: Constants | None = None) -> str:
+    """What the array-area cost is and what it rests on, in one paragraph, with the A_VT of
+    ``constants`` (default: the declared one) and its source."""
+    constants = constants if constants is not None else Constants()
+    process = "" if "a_vt_v_m" in constants.overrides else f" for {A_VT_PROCESS}"
     return (
         "Array area is the comparators' matched gate area that a design's threshold mismatch "
         "demands by Pelgrom's law: offset sigma = sigma_rel x threshold = A_VT / sqrt(W L) per "
         f"input transistor, {MATCHED_DEVICES_PER_TAXEL} of them per taxel (two comparators, a "
-        f"differential pair each), with A_VT = {A_VT_V_M * 1e9:g} mV um for {A_VT_PROCESS} "
-        f"({A_VT_SOURCE}). It is a lower bound (wiring, the front end and the other devices are "
-        "not counted); designs that name no mismatch assume perfect matching and have no area."
+        f"differential pair each), with A_VT = {constants.a_vt_v_m * 1e9:g} mV um{process} "
+        f"({constants.source('a_vt_v_m')}). It is a lower bound (wiring, the front end and the "
+        "other devices are not counted); designs that name no mismatch assume perfect matching "
+        "and have no area."
     )
 
 
@@ -265,8 +272,11 @@ def cost(design: Design, model: str, which: Cost, energy: EnergyModel) -> float:
     raise ValueError(f"unknown cost {which}")
 
 
-def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
-    """Every distinct point of every cube, in the order first met; models all-NaN left out."""
+def gather_designs(
+    cubes: Mapping[str, xr.Dataset], a_vt_v_m: float = A_VT_V_M
+) -> tuple[Design, ...]:
+    """Every distinct point of every cube, in the order first met; models all-NaN left out;
+    their areas sized with Pelgrom's coefficient ``a_vt_v_m`` (V m)."""
     found: dict[str, dict[str, Any]] = {}
     for name, cube in cubes.items():
         dims = sweep_dims(cube)
@@ -312,6 +322,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 )
             found[key] = {
                 "key": key,
+                "a_vt_v_m": a_vt_v_m,
                 "sweeps": [name],
                 "settings": list(settings[p]),
                 "rows": _int(fields[ROWS], p),

@@ -41,6 +41,7 @@ from pipeline.report.answer import (
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.chip_population import method_sentence as chips_method_sentence
+from pipeline.report.constants_table import constants_blocks
 from pipeline.report.cost import ROOT_SENTENCE, observation_sentence
 from pipeline.report.decision_time import latency_blocks
 from pipeline.report.designs import Cost, area_sentence
@@ -115,6 +116,7 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
     blocks += _front_blocks(report, drawn)
     blocks += _search_blocks(report)
     blocks += _time_blocks(report, drawn)
+    blocks += constants_blocks(report.constants)
     return blocks
 
 
@@ -294,7 +296,7 @@ def _front_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
                 "under the sweep's own cost."
             )
         if front.cost is Cost.AREA:
-            yield Paragraph(area_sentence())
+            yield Paragraph(area_sentence(report.constants))
         rows = [_front_row(front, p) for m in front.models for p in front.front(m)]
         rows += [_front_row(front, p) for p in front.marked]
         yield Table(_FRONT_COLUMNS, tuple(rows))

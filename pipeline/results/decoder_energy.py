@@ -30,8 +30,10 @@ table. Neuron updates are priced at Loihi's for every model (a ReLU's update on 
 processor costs less: for the rate-coded networks the high end overstates). Not modelled: the
 output's softmax, moving activations between layers, static power of the decoder's chip.
 
-Units: energies in J, counts per decision. The readout's power and energy are in
-:mod:`pipeline.results.readout_power`.
+Each end of each band is a constant a designer's constants file can override
+(``<operation>_low_j``, ``<operation>_high_j``, with its source:
+:mod:`pipeline.results.hardware_constants`). Units: energies in J, counts per decision. The
+readout's power and energy are in :mod:`pipeline.results.readout_power`.
 """
 
 from __future__ import annotations

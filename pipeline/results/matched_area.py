@@ -17,7 +17,8 @@ gate area
 and a taxel, with two comparators (up and down) of two input transistors each
 (:data:`MATCHED_DEVICES_PER_TAXEL`), ``A_taxel = 4 W L``; the array ``A_array = n A_taxel``
 (:func:`taxel_area_m2`, :func:`array_area_m2`). :data:`A_VT_V_M` is declared once with its process
-(:data:`A_VT_PROCESS`) and source (:data:`A_VT_SOURCE`). This is the matched gate area the
+(:data:`A_VT_PROCESS`), unit, meaning and source (``A_VT``); a designer's own value (a
+foundry's matching data) comes in as ``a_vt_v_m``. This is the matched gate area the
 mismatch demands, not a layout: wiring, the front end and the comparators' other devices are
 not counted, so it is a lower bound, and a meaningful one only where it exceeds the process's
 minimum device (0.22 um x 0.18 um = 0.04 um^2 in 180 nm CMOS), which is not applied. A design
@@ -37,10 +38,11 @@ from typing import Any
 import numpy as np
 
 from pipeline.results.broadcast import keep, non_negative, plain
+from pipeline.results.readout_constants import Parameter
 
 __all__ = [
+    "A_VT",
     "A_VT_PROCESS",
-    "A_VT_SOURCE",
     "A_VT_V_M",
     "MATCHED_DEVICES_PER_TAXEL",
     "array_area_m2",
@@ -50,16 +52,23 @@ __all__ = [
 ]
 
 A_VT_V_M = 5e-9
-"""Pelgrom's threshold-matching coefficient A_VT, in V m (5 mV um), of :data:`A_VT_PROCESS`."""
+"""Pelgrom's threshold-matching coefficient A_VT, in V m (5 mV um), of :data:`A_VT_PROCESS`
+(declared as ``A_VT``)."""
 A_VT_PROCESS = "180 nm bulk CMOS (gate oxide about 4 nm)"
 """The process :data:`A_VT_V_M` stands for."""
-A_VT_SOURCE = (
+A_VT = Parameter(
+    "mV um",
+    1e-9,
+    "Pelgrom's threshold-matching coefficient A_VT of the comparators' input pairs, "
+    f"{A_VT_PROCESS}",
     "assumed from the trend of A_VT with gate-oxide thickness, about 1 mV um per nm of oxide, "
     "reviewed in P. R. Kinget, 'Device mismatch and tradeoffs in the design of analog "
     "circuits', IEEE JSSC 40(6), 2005, Sec. II; an order-of-magnitude figure: a foundry's "
-    "matching data for the process at hand replaces it"
+    "matching data for the process at hand replaces it",
+    positive=True,
 )
-"""Where :data:`A_VT_V_M` comes from."""
+"""The declaration of :data:`A_VT_V_M`, with its unit, what it is and where it comes from (a
+constants file overrides it, :mod:`pipeline.results.hardware_constants`)."""
 MATCHED_DEVICES_PER_TAXEL = 4
 """Matched input transistors per taxel (two comparators, up and down, a differential pair each)."""
 

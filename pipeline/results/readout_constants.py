@@ -4,7 +4,9 @@ The equations that use them are in :mod:`pipeline.results.readout_power`. Each c
 of :class:`EnergyModel` whose :class:`Parameter` says its command-line option and unit, what it
 is and where its default comes from; the command line takes each in that unit
 (``--front-end-nw``, ``--event-energy-pj``, ...), and the report states every one with its
-source (:meth:`EnergyModel.assumptions`). Units in the field names, SI.
+source (:meth:`EnergyModel.assumptions`). Units in the field names, SI. A designer's constants
+file overrides any of them by field name, each with its source
+(:mod:`pipeline.results.hardware_constants`).
 
 The constants, their defaults and sources:
 
@@ -61,31 +63,40 @@ CHIP_TAXELS, CHIP_EVENT_RATE_HZ = 192, 2200.0
 
 @dataclass(frozen=True)
 class Parameter:
-    """How one :class:`EnergyModel` constant is stated: declared once, on its field.
+    """How one hardware constant is stated: declared once, where the constant is kept (the
+    :class:`EnergyModel` fields here, ``A_VT`` beside
+    :data:`pipeline.results.matched_area.A_VT_V_M`).
 
-    ``option`` is the command-line option, which takes the value in ``unit`` (``scale`` SI units
-    each, e.g. pJ = 1e-12 J); ``what`` says what it is, ``source`` where its default comes from;
-    ``calibrated`` marks the constant fitted to :data:`CHIP` (the others are literature values
-    or assumptions); ``count`` marks an integer count >= 1 (no unit).
+    ``unit`` is the unit the constant is given in (``scale`` SI units each, e.g. pJ = 1e-12 J) on
+    the command line and in a constants file (:mod:`pipeline.results.hardware_constants`);
+    ``what`` says what it is, ``source`` where its default comes from; ``option`` is its
+    command-line option (empty: none); ``calibrated`` marks the constant fitted to :data:`CHIP`
+    (the others are literature values or assumptions); ``count`` marks an integer count >= 1 (no
+    unit); ``positive`` a constant that must be above 0.
     """
 
-    option: str
     unit: str
     scale: float
     what: str
     source: str
+    option: str = ""
     calibrated: bool = False
     count: bool = False
+    positive: bool = False
 
-    def problem(self, value: Any) -> str | None:
-        """Why ``value`` (in :attr:`unit`) is not valid, or None."""
+    def problem(self, value: Any, name: str = "") -> str | None:
+        """Why ``value`` (in :attr:`unit`) is not valid, or None; the reason starts with
+        ``name`` (default :attr:`option`)."""
+        name = name or self.option
         if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-            return f"{self.option} {value!r}: need a number"
+            return f"{name} {value!r}: need a number"
         if self.count:
             if not (math.isfinite(value) and value >= 1 and value == int(value)):
-                return f"{self.option} {value:g}: need a whole number >= 1"
+                return f"{name} {value:g}: need a whole number >= 1"
+        elif self.positive and not (math.isfinite(value) and value > 0):
+            return f"{name} {value:g}: need a finite number > 0"
         elif not math.isfinite(value) or value < 0:
-            return f"{self.option} {value:g}: need a finite number >= 0"
+            return f"{name} {value:g}: need a finite number >= 0"
         return None
 
 
@@ -128,80 +139,80 @@ class EnergyModel:
     front_end_w_per_taxel: float = _constant(
         10e-9,
         Parameter(
-            "--front-end-nw",
             "nW per taxel",
             1e-9,
             "static bias of one taxel's front end (both readouts)",
             f"calibrated on the chip of {CHIP}, as the remainder once the other constants "
             "are taken",
             calibrated=True,
+            option="--front-end-nw",
         ),
     )
     comparator_w_per_taxel: float = _constant(
         2e-9,
         Parameter(
-            "--comparator-nw",
             "nW per taxel",
             1e-9,
             "static bias of one taxel's two level-crossing comparators (event readout)",
             "assumed: continuous-time comparators biased in weak inversion, of the order of 1 "
             "nA each at about 1 V, as in low-power level-crossing ADCs",
+            option="--comparator-nw",
         ),
     )
     event_energy_j: float = _constant(
         10e-12,
         Parameter(
-            "--event-energy-pj",
             "pJ per event",
             1e-12,
             "energy of the comparators' switching and the address-event encoder, per event",
             "assumed from event-driven readouts and address-event interfaces in the "
             "neuromorphic-sensor literature (tens of pJ per event is typical)",
+            option="--event-energy-pj",
         ),
     )
     link_energy_j_per_bit: float = _constant(
         1e-12,
         Parameter(
-            "--link-energy-pj-per-bit",
             "pJ per bit",
             1e-12,
             "energy per bit sent on the link (both readouts)",
             "assumed from low-power wired serial links (of the order of 1 pJ per bit)",
+            option="--link-energy-pj-per-bit",
         ),
     )
     adc_fom_j_per_step: float = _constant(
         10e-15,
         Parameter(
-            "--adc-fom-fj",
             "fJ per conversion step",
             1e-15,
             "Walden figure of merit of the frame readout's ADC, one conversion costing "
             "FOM * 2**bits",
             "assumed from low-power SAR ADCs at kHz sampling rates in B. Murmann's ADC "
             "Performance Survey (good designs lie between about 1 and 10 fJ per step)",
+            option="--adc-fom-fj",
         ),
     )
     adc_static_w: float = _constant(
         100e-9,
         Parameter(
-            "--adc-static-nw",
             "nW per ADC",
             1e-9,
             "static power of one ADC that its figure of merit leaves out (reference buffer, "
             "sampling driver of the multiplexer)",
             "an order-of-magnitude assumption for a kS/s low-power SAR ADC, whose published "
             "figure of merit usually counts the core alone",
+            option="--adc-static-nw",
         ),
     )
     taxels_per_adc: int = _constant(
         16,
         Parameter(
-            "--taxels-per-adc",
             "taxels",
             1.0,
             "taxels multiplexed onto one ADC of the frame readout",
             "assumed: one ADC per column of 16 taxels, as in column-parallel sensor readouts",
             count=True,
+            option="--taxels-per-adc",
         ),
     )
 

@@ -9,6 +9,7 @@ from flows.report import write_report, write_run_report
 from pipeline.errors import EskinError
 from pipeline.report import Panel, build_report
 from pipeline.report.figures import draw_report
+from pipeline.results.hardware_constants import Constants
 from pipeline.results.readout_constants import EnergyModel
 from storage import StoreError
 from storage.report import MARKER
@@ -66,11 +67,49 @@ def test_the_energy_options_of_eskin_report_become_its_energy_model(tmp_path, mo
     monkeypatch.setattr("flows.report.write_run_report", fake)
     argv = ["report", "--root", str(tmp_path), "--front-end-nw", "5", "--taxels-per-adc", "8"]
     assert main([*argv, "--event-energy-pj", "20"]) == 0
-    assert seen["energy"] == EnergyModel(
+    assert seen["constants"].energy_model() == EnergyModel(
         front_end_w_per_taxel=5e-9, event_energy_j=20e-12, taxels_per_adc=8
     )
+    assert seen["constants"].source("taxels_per_adc") == (
+        "set on the command line (--taxels-per-adc)"
+    )
     assert main(["report", "--root", str(tmp_path)]) == 0
-    assert seen["energy"] == EnergyModel()
+    assert seen["constants"] == Constants()
+
+
+def test_a_constants_file_of_eskin_report_overrides_its_constants_options_on_top(
+    tmp_path, monkeypatch
+):
+    seen = {}
+    monkeypatch.setattr(
+        "flows.report.write_run_report",
+        lambda root, out=None, **kwargs: seen.update(kwargs) or tmp_path / "report.html",
+    )
+    mine = tmp_path / "mine.toml"
+    mine.write_text(
+        'a_vt_v_m = { value = 2, unit = "mV um", source = "foundry X" }\n'
+        'event_energy_j = { value = 4, unit = "pJ per event", source = "our comparator" }\n',
+        encoding="utf-8",
+    )
+    argv = ["report", "--root", str(tmp_path), "--constants", str(mine)]
+    assert main([*argv, "--event-energy-pj", "20"]) == 0
+    constants = seen["constants"]
+    assert constants.origin == str(mine) and constants.a_vt_v_m == pytest.approx(2e-9)
+    assert constants.source("a_vt_v_m") == "foundry X"
+    assert constants.value("event_energy_j") == 20e-12  # the option overrides the file
+    assert constants.source("event_energy_j") == "set on the command line (--event-energy-pj)"
+
+
+def test_a_bad_constants_file_is_one_line_naming_file_and_key_and_writes_nothing(tmp_path, capsys):
+    root = tmp_path / "root"
+    root.mkdir()
+    mine = tmp_path / "mine.toml"
+    mine.write_text('a_vt_v_m = { value = -2, unit = "V m", source = "x" }\n', encoding="utf-8")
+    assert main(["report", "--root", str(root), "--constants", str(mine)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"eskin: error: invalid constants file {mine}")
+    assert "a_vt_v_m.unit: 'V m' is not its unit" in err and "a_vt_v_m.value -2" in err
+    assert list(root.iterdir()) == []
 
 
 @pytest.mark.parametrize(

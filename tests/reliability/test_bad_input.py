@@ -440,6 +440,19 @@ CASES.append(
         "chips.count",
     )
 )
+# A sweep's set is checked with its axes at every point: shared chips need an effect drawn per
+# chip, which no point of this sweep names (the culprit: the sweep, every point, the field).
+CASES.append(
+    (
+        "grid-shared-chips-without-an-effect-at-any-point",
+        lambda t: sweeps_grid(
+            t,
+            '[sweeps.a]\nset = { "chips.count" = 4, "chips.deployment" = "shared" }\n'
+            'axes = { "readout.threshold_v" = [0.05, 0.09] }\n',
+        ),
+        "sweeps.a at every point: chips.deployment: 'shared' needs a readout effect",
+    )
+)
 
 
 def tree(path: Path):
@@ -891,3 +904,61 @@ def test_power_refuses_bad_values_in_one_line(capsys, tmp_path, monkeypatch, arg
     monkeypatch.chdir(tmp_path)
     assert_one_line_exit_2(capsys, ["power", *argv], expected)
     assert list(tmp_path.iterdir()) == []
+
+
+# -- hardware constants (eskin report and eskin power --constants FILE) -------------------------
+
+A_VT = 'unit = "mV um", source = "foundry X"'
+CONSTANTS_CASES: list[tuple[str, str, str]] = [
+    ("constants-unknown-name", f"pelgrom = {{ value = 3, {A_VT} }}\n", "pelgrom: unknown constant"),
+    (
+        "constants-wrong-unit",
+        'a_vt_v_m = { value = 3, unit = "V m", source = "x" }\n',
+        "a_vt_v_m.unit: 'V m' is not its unit (give it in mV um)",
+    ),
+    (
+        "constants-not-a-number",
+        f'a_vt_v_m = {{ value = "three", {A_VT} }}\n',
+        "a_vt_v_m.value 'three': need a number",
+    ),
+    (
+        "constants-negative",
+        'event_energy_j = { value = -1.0, unit = "pJ per event", source = "x" }\n',
+        "event_energy_j.value -1: need a finite number >= 0",
+    ),
+    ("constants-zero-a-vt", f"a_vt_v_m = {{ value = 0, {A_VT} }}\n", "a_vt_v_m.value 0"),
+    ("constants-no-source", 'a_vt_v_m = { value = 3, unit = "mV um" }\n', "a_vt_v_m: needs source"),
+    ("constants-bare-number", "a_vt_v_m = 3\n", "a_vt_v_m: expected a table"),
+    (
+        "constants-band-upside-down",
+        'ac_low_j = { value = 30.0, unit = "pJ per operation", source = "x" }\n',
+        "ac_low_j: 30 pJ per operation is above ac_high_j",
+    ),
+    ("constants-not-toml", "a_vt_v_m = {\n", "not valid TOML"),
+]
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"), [c[1:] for c in CONSTANTS_CASES], ids=[c[0] for c in CONSTANTS_CASES]
+)
+@pytest.mark.parametrize("command", ["report", "power"])
+def test_a_bad_constants_file_is_one_line_naming_file_and_key(
+    capsys, tmp_path, monkeypatch, command, text, expected
+):
+    mine = write(tmp_path / "mine.toml", text)
+    root = tmp_path / "root"
+    root.mkdir()
+    monkeypatch.chdir(tmp_path)
+    argv = ["--root", str(root)] if command == "report" else POWER
+    assert_one_line_exit_2(capsys, [command, *argv, "--constants", str(mine)], expected)
+    out, err = capsys.readouterr()
+    assert (out, err) == ("", "")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml", "root"]
+    assert list(root.iterdir()) == []
+
+
+def test_a_missing_constants_file_is_one_line_naming_it(capsys, tmp_path):
+    gone = tmp_path / "gone.toml"
+    assert_one_line_exit_2(
+        capsys, ["power", *POWER, "--constants", str(gone)], f"invalid constants file {gone}"
+    )

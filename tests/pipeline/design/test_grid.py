@@ -2,6 +2,7 @@
 
 import itertools
 import json
+import time
 
 import pytest
 
@@ -184,11 +185,12 @@ def test_with_dataset_refuses_a_grid_whose_sweeps_set_the_dataset():
 
 
 def reference_problems(data: dict) -> list[str]:
-    """The problems of a grid's points as ``Scene.replace`` finds them, one point at a time."""
+    """The problems of a grid's points as ``Scene.replace`` finds them, one point at a time, its
+    ``set`` and axis values together."""
     base = Scene.builtin(data["base"])
     problems = []
     for name, spec in data["sweeps"].items():
-        fixed = base.replace(**spec.get("set", {}))
+        fixed = spec.get("set", {})
         axes = spec["axes"]
         if spec.get("mode") == "zip":
             rows = [
@@ -198,7 +200,7 @@ def reference_problems(data: dict) -> list[str]:
             rows = [dict(zip(axes, v, strict=True)) for v in itertools.product(*axes.values())]
         for values in rows:
             try:
-                fixed.replace(**values)
+                base.replace(**{**fixed, **values})
             except SceneError as exc:
                 at = ", ".join(f"{f} = {v!r}" for f, v in values.items())
                 problems.append(f"sweeps.{name} at {at}: {'; '.join(exc.problems)}")
@@ -318,3 +320,122 @@ def test_a_grid_too_large_to_plan_is_refused_from_its_axis_sizes(monkeypatch):
     (first,) = caught.value.problems
     assert first.startswith("sweeps: 8 points (sweeps.a has 4) are more than this machine can plan")
     assert "(7 at most)" in first and "search the space with `eskin optimize` instead" in first
+
+
+# ---------------------------------------------------------------------------------------------
+# Point by point: each point's whole scene, never a sweep's ``set`` alone
+
+
+SHARED_CHIPS = {"chips.count": 100, "chips.deployment": "shared"}
+
+
+def test_a_set_that_needs_a_swept_field_is_valid_where_every_point_has_it():
+    data = {
+        "base": "paper",
+        "sweeps": {
+            "shared": {
+                "set": SHARED_CHIPS,
+                "axes": {"readout.effects.threshold_mismatch.sigma_rel": [0.0, 0.1, 0.2]},
+            }
+        },
+    }
+    grid = Grid.from_dict(data)
+    points = grid.points()
+    assert [(p.sweep, p.index, p.scene) for p in points] == reference_points(grid)
+    assert [p.scene.readout.effects[Effect.THRESHOLD_MISMATCH].sigma_rel for p in points] == [
+        0.0,
+        0.1,
+        0.2,
+    ]
+    assert {(p.scene.chips.count, p.scene.chips.deployment.value) for p in points} == {
+        (100, "shared")
+    }
+    # The same scenes as the set that named the effect too (what a grid had to write before).
+    named = {"readout.effects": {"threshold_mismatch": {}}, **SHARED_CHIPS}
+    twice = Grid.from_dict(
+        {**data, "sweeps": {"shared": {**data["sweeps"]["shared"], "set": named}}}
+    )
+    assert [p.scene for p in twice.points()] == [p.scene for p in points]
+
+
+def test_problems_name_the_sweep_the_point_and_the_field_all_at_once_in_one_line():
+    data = {
+        "base": "paper",
+        "sweeps": {
+            # No point has an effect drawn per chip: refused at every point, said once.
+            "unmatched": {"set": SHARED_CHIPS, "axes": {"readout.threshold_v": [0.05, 0.1]}},
+            # One point's axis value is refused; the set is refused at every point.
+            "mixed": {
+                "set": {"array.rows": 0},
+                "axes": {"readout.threshold_v": [0.05, -0.1]},
+            },
+            # The effect only at some points: the others are named one by one.
+            "some": {
+                "set": SHARED_CHIPS,
+                "mode": "zip",
+                "axes": {
+                    "readout.effects.threshold_mismatch.sigma_rel": [0.1, 0.2],
+                    "readout.threshold_v": [0.05, 0.1],
+                },
+            },
+        },
+    }
+    with pytest.raises(SceneError) as info:
+        Grid.from_dict(data)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("invalid grid <dict> (3 problems): ")
+    # "some" is valid: each of its points has the effect its set needs.
+    assert info.value.problems == [
+        "sweeps.unmatched at every point: chips.deployment: 'shared' needs a readout effect "
+        "drawn per chip (amplifier_offset, comparator_offset, threshold_mismatch); with none "
+        "every chip is identical",
+        "sweeps.mixed at every point: array.rows: 0 is out of range: must be between 1 and 256",
+        "sweeps.mixed at readout.threshold_v = -0.1: readout.threshold_v: -0.1 is out of "
+        "range: must be > 0 V",
+    ]
+
+
+def test_a_point_without_what_the_set_needs_is_named_alone():
+    data = {
+        "base": "paper",
+        "sweeps": {
+            "s": {
+                "set": {"chips.count": 10, "chips.deployment": "shared"},
+                "axes": {
+                    "readout.effects": [{}, {"comparator_offset": {"sigma_v": 0.01}}],
+                    "readout.threshold_v": [0.05, 0.1],
+                },
+            }
+        },
+    }
+    with pytest.raises(SceneError) as info:
+        Grid.from_dict(data)
+    expected = reference_problems(data)
+    assert info.value.problems == expected
+    assert [p.split(":")[0] for p in expected] == [
+        "sweeps.s at readout.effects = {}, readout.threshold_v = 0.05",
+        "sweeps.s at readout.effects = {}, readout.threshold_v = 0.1",
+    ]
+
+
+def test_checking_every_point_of_a_large_grid_stays_cheap():
+    data = {
+        "base": "paper",
+        "sweeps": {
+            "large": {
+                "set": SHARED_CHIPS,
+                "axes": {
+                    "readout.effects.threshold_mismatch.sigma_rel": [i / 100 for i in range(20)],
+                    "readout.threshold_v": [0.01 + i / 100 for i in range(25)],
+                    "coding.window_s": [0.05, 0.1, 0.2, 0.4],
+                    "seed": [0, 1],
+                },
+            }
+        },
+    }
+    started = time.perf_counter()
+    grid = Grid.from_dict(data)
+    elapsed = time.perf_counter() - started
+    assert len(grid.points()) == 4000
+    # A few tens of microseconds per point; a generous bound for a busy machine.
+    assert elapsed < 4000 * 500e-6, elapsed

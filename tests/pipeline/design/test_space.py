@@ -162,3 +162,36 @@ def test_area_needs_a_mismatch_and_yield_needs_chips():
     searched = space(objectives={"accuracy.ffnn": "max", "array_area_m2": "min"})
     searched["space"][f"{MISMATCH_FIELD}.sigma_rel"] = {"low": 0.05, "high": 0.5}
     assert Space.from_dict(searched).objectives[1].metric is Metric.AREA
+
+
+def test_bounds_and_choices_are_checked_together_each_corner_a_whole_scene():
+    chips = {
+        "chips.deployment": {"choices": ["per_chip", "shared"]},
+        "chips.count": {"low": 2, "high": 10},
+    }
+    mismatch = {f"{MISMATCH_FIELD}.sigma_rel": {"low": 0.05, "high": 0.3}}
+    # Sharing chips needs an effect drawn per chip: the mismatch another dimension searches.
+    loaded = Space.from_dict(space(base="paper", space={**chips, **mismatch}))
+    assert (
+        loaded.scene(
+            {"chips.deployment": "shared", "chips.count": 4, f"{MISMATCH_FIELD}.sigma_rel": 0.1}
+        ).chips.count
+        == 4
+    )
+    # Without it, the choice that needs it is named once, with its value.
+    assert problems(space(base="paper", space=chips)) == [
+        "space.chips.deployment = 'shared': chips.deployment: 'shared' needs a readout effect "
+        "drawn per chip (amplifier_offset, comparator_offset, threshold_mismatch); with none "
+        "every chip is identical"
+    ]
+    # A combination two dimensions refuse together is named by both values.
+    snn = {"name": "b", "training": {"models": ["ffnn", "snn"]}}
+    steps = {
+        "coding.window_s": {"choices": [0.01, 0.1]},
+        "training.snn.step_s": {"choices": [0.001, 0.05]},
+        "readout.threshold_v": {"low": 0.05, "high": 0.2},
+    }
+    assert problems(space(base=snn, space=steps)) == [
+        "space at coding.window_s = 0.01, training.snn.step_s = 0.05: training.snn.step_s: "
+        "0.05 s is longer than coding.window_s = 0.01 s"
+    ]

@@ -1,7 +1,10 @@
 """The result keys of a grid's points: those of the reference key at every point, equal scenes
 one point by key."""
 
+import copy
 import dataclasses
+import tomllib
+from importlib import resources
 from pathlib import Path
 
 from pipeline.design.grid import Grid, load_grid
@@ -86,3 +89,20 @@ def test_the_encoder_example_sweeps_both_encoders_with_the_decay_keyed_for_one()
     paper = Scene.paper().replace(**{"readout.threshold_v": 0.05})
     lcs = [p for p in points if p.scene.readout.encoder.value == "lcs"]
     assert cache_key(paper, "results") in {p.key for p in lcs}  # the paper's own points
+
+
+def test_the_paper_grid_keys_are_those_of_its_chip_sweeps_with_the_effect_named_twice():
+    # The chip sweeps once named the mismatch effect in their set as well as on their axis (a
+    # set was checked alone, before its axes); the same scenes keep the same cache keys.
+    text = resources.files("pipeline.design.grids").joinpath("paper.toml").read_text("utf-8")
+    data = tomllib.loads(text)
+    twice = copy.deepcopy(data)
+    chip_sweeps = [n for n, s in data["sweeps"].items() if "chips.deployment" in s.get("set", {})]
+    assert chip_sweeps == ["mismatch_shared", "mismatch_robust"]
+    for name in chip_sweeps:
+        assert "readout.effects" not in data["sweeps"][name]["set"]
+        twice["sweeps"][name]["set"]["readout.effects"] = {"threshold_mismatch": {}}
+    paper = keyed_points(load_grid("paper"))
+    before = keyed_points(Grid.from_dict(twice))
+    assert [(p.sweep, p.index, p.key) for p in paper] == [(p.sweep, p.index, p.key) for p in before]
+    assert len(paper) == 63
