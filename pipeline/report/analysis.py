@@ -232,16 +232,10 @@ def _claims(
     window = curves.get(Panel.WINDOW, ())
     taxels = curves.get(Panel.TAXELS, ())
     return (
-        optimum_claim(
-            Panel.THRESHOLD, threshold, evidence, paper.THRESHOLD_V, "V", paper.CLAIMS["threshold"]
-        ),
-        sides_claim(
-            Panel.THRESHOLD, threshold, evidence, ("lower",), "V", paper.CLAIMS["threshold_lower"]
-        ),
-        optimum_claim(Panel.WINDOW, window, evidence, paper.WINDOW_S, "s", paper.CLAIMS["window"]),
-        sides_claim(
-            Panel.WINDOW, window, evidence, ("lower", "higher"), "s", paper.CLAIMS["window_sides"]
-        ),
+        optimum_claim(Panel.THRESHOLD, threshold, evidence, paper.THRESHOLD_V, "V", "threshold"),
+        sides_claim(Panel.THRESHOLD, threshold, evidence, ("lower",), "V", "threshold_lower"),
+        optimum_claim(Panel.WINDOW, window, evidence, paper.WINDOW_S, "s", "window"),
+        sides_claim(Panel.WINDOW, window, evidence, ("lower", "higher"), "s", "window_sides"),
         taxel_gain_claim(taxels, evidence),
         taxel_saturation_claim(taxels, evidence),
         metric_claim(fits),

@@ -4,7 +4,8 @@ Order: the answer to the designer's question at a glance (per model, one small t
 design and the cheapest designs not significantly below it, by data rate and by power, with one
 sentence on how sure that is; then the power front figure), then, once and collapsed in HTML,
 the method and every comparison with the best (:mod:`pipeline.report.answer`); the paper's
-claims judged by tests (:mod:`pipeline.report.claims`), Table I with the paper's rows
+claims judged by tests (:mod:`pipeline.report.claims`: a table of verdicts, the tests folded
+below it), Table I with the paper's rows
 (:mod:`pipeline.report.tables`), the figures (the paper's, then a curve for every other 1-D
 sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipeline.report.fronts`;
 the power front is drawn once, at the top), every search's front
@@ -41,6 +42,7 @@ from pipeline.report.answer import (
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.chip_population import method_sentence as chips_method_sentence
+from pipeline.report.claims import CLAIM_TESTS_TITLE, CLAIMS_COLUMNS, claims_table
 from pipeline.report.cost import ROOT_SENTENCE, observation_sentence
 from pipeline.report.decision_time import latency_blocks
 from pipeline.report.designs import Cost, area_sentence
@@ -109,7 +111,11 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
             )
         )
     blocks += _answer_blocks(report, drawn)
-    blocks += [Heading(2, "Against the paper"), *(Paragraph(c.sentence) for c in report.claims)]
+    blocks += [
+        Heading(2, "Against the paper"),
+        Table(CLAIMS_COLUMNS, claims_table(report.claims)),
+        Details(CLAIM_TESTS_TITLE, tuple(Paragraph(c.sentence) for c in report.claims)),
+    ]
     blocks += _table_blocks(report)
     blocks += _figure_blocks(report, drawn)
     blocks += _front_blocks(report, drawn)
