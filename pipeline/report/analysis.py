@@ -45,6 +45,7 @@ from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
 from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
+from pipeline.report.recordings_needed import RecordingsNeeded, recordings_needed
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
@@ -67,7 +68,8 @@ class Report:
     ``mismatch_note`` sets
     Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
     (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
-    design.
+    design. ``recordings_needed`` says, per model, how many recordings per class would tell the
+    answer's designs from the best (:mod:`pipeline.report.recordings_needed`).
     """
 
     grids: tuple[str, ...]
@@ -96,6 +98,7 @@ class Report:
     decoder: DecoderEnergyModel = field(default_factory=DecoderEnergyModel)
     mismatch_note: str | None = None
     yield_answers: tuple[YieldAnswer, ...] = ()
+    recordings_needed: tuple[RecordingsNeeded, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -195,6 +198,7 @@ def build_report(
     )
     dataset = dataset_kind(cubes)
     classes = n_classes(cubes)
+    cost = sweep_cost(cubes, runs)
     return Report(
         grids=tuple(dict.fromkeys(str(c.attrs.get("grid", "?")) for c in cubes.values())),
         dataset=dataset,
@@ -214,7 +218,7 @@ def build_report(
         sweep_plots=plots,
         heatmaps=maps,
         undrawn=undrawn,
-        sweep_cost=sweep_cost(cubes, runs),
+        sweep_cost=cost,
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
         searches=search_fronts(cubes),
@@ -222,6 +226,7 @@ def build_report(
         decoder=decoder,
         mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
         yield_answers=yield_answers(designs, evidence, energy),
+        recordings_needed=recordings_needed(answers, evidence, classes, dataset, cost),
     )
 
 

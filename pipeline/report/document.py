@@ -49,6 +49,7 @@ from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.panels import PANEL_TITLES, Panel
+from pipeline.report.recordings_needed import needed_sentence
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.seeds import REPORT_SEED
 from pipeline.report.sweeps import Heatmap, SweepPlot
@@ -155,9 +156,12 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
         return
     by_yield = {y.model: y for y in report.yield_answers}
+    needed = {n.model: n for n in report.recordings_needed}
     for answer in report.answers:
         yield Table(glance_header(answer), glance_rows(answer))
         yield Paragraph(how_sure(answer))
+        if answer.model in needed:
+            yield Paragraph(needed_sentence(needed[answer.model]))
         if answer.model in by_yield:
             yield Paragraph(yield_sentence(by_yield[answer.model]))
     if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
