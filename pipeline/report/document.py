@@ -54,7 +54,15 @@ from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.seeds import REPORT_SEED
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.tables import TABLE_COLUMNS, table_notes, table_rows
-from pipeline.report.text import NO_INTERVAL_WHY, comparison, pct, pct_interval, rate, si
+from pipeline.report.text import (
+    NO_INTERVAL_WHY,
+    area_text,
+    comparison,
+    pct,
+    pct_interval,
+    rate,
+    si,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure as MplFigure
@@ -350,7 +358,7 @@ def _cost_text(which: Cost, value: float) -> str:
         case Cost.COMPUTE:
             return f"{value:.3g} s"
         case Cost.AREA:
-            return f"{value * 1e12:.3g} um^2"
+            return area_text(value)
     return si(value, "W")
 
 
