@@ -155,7 +155,15 @@ def needed_sentence(found: RecordingsNeeded) -> str:
 
 
 def _who(needed: Needed) -> str:
-    return f"{' and '.join(needed.roles)} ({needed.label})"
+    """``the cheapest by data rate and by power, also the runner-up (label)``."""
+    cheapest = [r.removeprefix(_CHEAPEST) for r in needed.roles if r.startswith(_CHEAPEST)]
+    others = [r for r in needed.roles if not r.startswith(_CHEAPEST)]
+    named = [_CHEAPEST + " and by ".join(cheapest)] if cheapest else []
+    text = ", also ".join(named + others) if named else " and ".join(others)
+    return f"{text} ({needed.label})"
+
+
+_CHEAPEST = "the cheapest by "
 
 
 def _compared(answer: ModelAnswer) -> list[tuple[Candidate, str]]:

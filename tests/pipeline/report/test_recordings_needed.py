@@ -39,8 +39,8 @@ def test_the_cheapest_and_the_runner_up_each_get_the_recordings_a_5_point_loss_n
     sentence = needed_sentence(found)
     assert sentence.startswith(
         f"FFNN: to show a loss of 5 points or more against the best, record about "
-        f"{needed.per_class} touches per class for the cheapest by data rate and the cheapest "
-        f"by power and the runner-up ({needed.label}) (this run has 10 per class;"
+        f"{needed.per_class} touches per class for the cheapest by data rate and by power, also "
+        f"the runner-up ({needed.label}) (this run has 10 per class;"
     )
     assert f"(dataset.recordings_per_class = {needed.per_class}): at this run's" in sentence
 
