@@ -18,8 +18,9 @@ Each test (one per model and sweep) goes the claim's way, against it, or neither
   test it (no per-recording results, a single swept value, the claim's sweep not in this run).
 
 The report shows them as a table (:func:`claims_table`): per claim, the paper's figure, this
-run's figure with its 95 % interval (the difference the test judged, in percentage points, a
-slope, or a correlation's ``r`` and ``p``) and the verdict; each claim's sentence, with every test,
+run's figure with its 95 % interval and the p-value that judged it (the difference the test
+judged, in percentage points, Holm-adjusted where the claim makes several comparisons; a slope;
+or a correlation's ``r`` and ``p``) and the verdict; each claim's sentence, with every test,
 is below it.
 
 * Optimum at the paper's value ``x_p`` (threshold 0.09 V, window 0.1 s), a "best of N" claim:
@@ -136,7 +137,7 @@ def claims_table(claims: Sequence[Claim]) -> tuple[tuple[str, ...], ...]:
             (
                 f"{row.figure}: {row.claim}",
                 row.value,
-                claim.figure if claim.in_run else claim.finding,
+                claim.figure if claim.in_run else "not in this run",
                 str(claim.verdict),
             )
         )
@@ -160,21 +161,31 @@ def optimum_claim(
         b = curve.best
         at = f"{name} is most accurate at {curve.x[b]:g} {unit} ({_acc(curve, b)})"
         ref = curve.index(reference)
-        figures.append(_against(name, curve, evidence, ref, b, unit))
+        best_at = f"{name} best at {curve.x[b]:g} {unit}"
         if ref is None:
             parts.append(f"{at}; {reference:g} {unit} was not swept")
             verdicts.append(Verdict.UNCLEAR)
+            figures.append(f"{best_at}; {reference:g} {unit} not swept")
             continue
         others = [j for j in range(curve.x.size) if j != ref]
         if not others:
             parts.append(f"{at}; it is the only value swept")
             verdicts.append(Verdict.UNCLEAR)
+            figures.append(f"{best_at}, the only value")
             continue
         tests = _holm_tests(curve, evidence, [(j, ref) for j in others])
         if tests is None:
             parts.append(f"{at}; {NO_INTERVAL_WHY}")
             verdicts.append(Verdict.UNCLEAR)
+            figures.append(f"{best_at}; {NO_INTERVAL}")
             continue
+        if ref == b:
+            figures.append(f"{best_at} ({_acc(curve, b)})")
+        else:  # the paper's value against the best, as the Holm family tested it
+            t, p = _oriented(tests[others.index(b)], True)
+            figures.append(
+                f"{best_at}; {reference:g} {unit} against it: {_points(t, p, len(others))}"
+            )
         better = [(j, t, p) for j, (t, p) in zip(others, tests, strict=True) if _up(t, p)]
         family = _family(len(others)).removeprefix(", ")
         if better:
@@ -240,8 +251,8 @@ def sides_claim(
         family = _family(len(distinct))
         texts, mine = [], []
         figures += [
-            f"{name} {curve.x[i]:g} against {curve.x[j]:g} {unit}: {_points(t)}"
-            for (_, i, j), (t, _) in zip(pairs, tests, strict=True)
+            f"{name} {curve.x[i]:g} against {curve.x[j]:g} {unit}: {_points(t, p, len(distinct))}"
+            for (_, i, j), (t, p) in zip(pairs, tests, strict=True)
         ]
         for (side, i, j), (t, p) in zip(pairs, tests, strict=True):
             significant = p < ALPHA
@@ -301,7 +312,7 @@ def taxel_gain_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
             figures.append(f"{pair}{NO_INTERVAL})")
             continue
         ((t, p),) = tests
-        figures.append(f"{pair}{_points(t)})")
+        figures.append(f"{pair}{_points(t, p, 1)})")
         if p < ALPHA:
             state = "a significant gain" if t.difference > 0 else "a significant loss"
             verdicts.append(Verdict.CONSISTENT if t.difference > 0 else Verdict.CONTRADICTS)
@@ -336,8 +347,8 @@ def taxel_saturation_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim
             figures.append(f"{name}: {NO_INTERVAL}")
             continue
         figures += [
-            f"{name} {curve.x[j]:g} against {curve.x[ref]:g} taxels: {_points(t)}"
-            for j, (t, _) in zip(above, tests, strict=True)
+            f"{name} {curve.x[j]:g} against {curve.x[ref]:g} taxels: {_points(t, p, len(above))}"
+            for j, (t, p) in zip(above, tests, strict=True)
         ]
         family = _family(len(above))
         changes = [
@@ -427,7 +438,8 @@ def mismatch_claim(curves: Sequence[Curve], evidence: Evidence) -> Claim:
         per10 = 0.1  # the slope per 10 % mismatch (sigma_rel 0.1)
         figures.append(
             f"{name} {signed_points(per10 * fit.slope)} points per 10 % mismatch "
-            f"[{signed_points(per10 * fit.low)}, {signed_points(per10 * fit.high)}]"
+            f"[{signed_points(per10 * fit.low)}, {signed_points(per10 * fit.high)}], "
+            f"p = {p_value(fit.p_value)}"
         )
         ends = ""
         if curve.chip_low is not None:
@@ -539,27 +551,14 @@ def _claim(
     return Claim(panel, key, "; ".join(parts), tally(verdicts), "; ".join(figures))
 
 
-def _points(test: PairedComparison) -> str:
-    """A difference with its 95 % interval, e.g. ``-2.5 points [-6.7, +1.7]``."""
+def _points(test: PairedComparison, holm_p: float, m: int) -> str:
+    """A difference with its 95 % interval and the p-value that judged it (Holm-adjusted in a
+    family of ``m`` > 1), e.g. ``-2.5 points [-6.7, +1.7], p = 0.38``."""
+    p = f"Holm p = {p_value(holm_p)}" if m > 1 else f"p = {p_value(test.p_value)}"
     return (
         f"{signed_points(test.difference)} points [{signed_points(test.low)}, "
-        f"{signed_points(test.high)}]"
+        f"{signed_points(test.high)}], {p}"
     )
-
-
-def _against(
-    name: str, curve: Curve, evidence: Evidence, ref: int | None, best: int, unit: str
-) -> str:
-    """The claims table's cell of an optimum: the best value, and the paper's value against
-    it (its accuracy where it is the best)."""
-    start = f"{name} best at {curve.x[best]:g} {unit}"
-    if ref is None:
-        return f"{start}; the paper's value not swept"
-    if ref == best:
-        return f"{start} ({_acc(curve, best)})"
-    test = evidence.compare(curve.keys[ref], curve.keys[best], curve.model)
-    found = NO_INTERVAL if test is None else _points(test)
-    return f"{start}; {curve.x[ref]:g} {unit} against it: {found}"
 
 
 def tally(verdicts: Sequence[Verdict]) -> Verdict:
