@@ -100,7 +100,7 @@ CLAIMS_COLUMNS = ("claim", "the paper", "this run [95 % interval]", "verdict")
 class Claim:
     """One of the paper's claims beside what this run's cubes say about it.
 
-    ``key`` names the claim in :data:`pipeline.report.paper.CLAIMS`; ``finding`` is every test
+    ``key`` names the claim in ``pipeline.report.paper.CLAIMS``; ``finding`` is every test
     in words, ``figure`` this run's figures in short (the claims table's cell); ``in_run`` is
     False when the run holds no cube the claim is judged on (its verdict is then cannot tell).
     """

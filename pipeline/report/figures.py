@@ -8,10 +8,11 @@ Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the cla
 Every model is drawn on every panel. Points of several chips
 (:mod:`pipeline.report.chip_population`) draw the spread of their chips' accuracies (5th to 95th
 percentile) as a shaded band around the curve, apart from the error bars; one line style per
-deployment. Panels and series come in their declared order (:func:`~pipeline.report.panels.
-declared_rank`): the models as :class:`~pipeline.design.scene.Model` declares them, the
-deployments as :class:`~pipeline.design.scene.Deployment` does, whatever the order of the cubes'
-names or of a cube's models.
+deployment. Panels and series come in their declared order
+(:func:`~pipeline.report.panels.declared_rank`): the models as
+:class:`~pipeline.design.scene.Model` declares them, the deployments as
+:class:`~pipeline.design.scene.Deployment` does, whatever the order of the cubes' names or of a
+cube's models.
 """
 
 from __future__ import annotations

@@ -70,13 +70,13 @@ def absent(panel: Panel) -> str:
     return f"not in this run: it needs {needs[panel]}"
 
 
-#: The categories a figure draws as panels or series, each in its declared order: the models
-#: as :class:`~pipeline.design.scene.Model` declares them, the chips' deployments as
-#: :class:`~pipeline.design.scene.Deployment` does.
 DECLARED = {
     "model": tuple(m.value for m in Model),
     "deployment": tuple(d.value for d in Deployment),
 }
+"""The categories a figure draws as panels or series, each in its declared order (the models as
+:class:`~pipeline.design.scene.Model` declares them, the chips' deployments as
+:class:`~pipeline.design.scene.Deployment` does)."""
 
 
 def declared_rank(kind: str, value: str) -> int:

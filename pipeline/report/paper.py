@@ -73,7 +73,7 @@ CLAIM_ROWS = {
     ),
     "mismatch": ClaimRow("Fig. 10", "accuracy falls with threshold mismatch", "a fall (plot only)"),
 }
-"""The claims of :data:`CLAIMS` that the report judges, in the report's order."""
+"""The claims of ``CLAIMS`` that the report judges, in the report's order."""
 
 
 @dataclass(frozen=True)

@@ -26,8 +26,8 @@ from pipeline.report.cost import SweepCost
 from pipeline.report.evidence import Evidence
 from pipeline.results.sample_size import ALPHA, POWER, recordings_per_class
 
-#: The loss the recordings are counted for (a fraction of accuracy: 5 points).
 LOSS = 0.05
+"""The loss the recordings are counted for, as a fraction of accuracy (5 points)."""
 #: The built-in dataset's kind, whose touches the scene can make more of.
 BUILT_IN = "synthetic"
 #: The scene field that sets how many built-in touches each class has.
