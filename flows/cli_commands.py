@@ -17,7 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from flows import cluster, interrupts
-from flows.cli_output import StageProgress, format_server_info, print_out
+from flows.cli_output import (
+    AUTH_STRING_FILE,
+    StageProgress,
+    format_server_info,
+    print_out,
+    with_record_access,
+)
 from flows.report import needs_report_folder
 from flows.summaries import format_summary, format_sweep_summary, result_summary
 from pipeline.errors import EskinError
@@ -130,7 +136,7 @@ def _run_flow(
     incomplete."""
     from flows.environment import hermetic_environment
     from flows.record import recording
-    from flows.server import prefect_server
+    from flows.server import auth_file, prefect_server
 
     interrupts.handle_interrupts()
     start = time.perf_counter()
@@ -139,6 +145,7 @@ def _run_flow(
         hermetic_environment(store.root)
         if args.json or args.quiet:
             os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
+        local = "PREFECT_API_URL" not in os.environ  # else the user's server, and login
         with (
             prefect_server(show_progress=not args.quiet) as api_url,
             recording(api_url) as record,
@@ -147,7 +154,9 @@ def _run_flow(
     # The whole run as the user waits for it, the server start included.
     summary["seconds"] = time.perf_counter() - start
     summary["prefect_record"] = "complete" if record.complete else "incomplete"
-    print_out(args.json, summary, format_text)
+    if local:
+        summary[AUTH_STRING_FILE] = str(auth_file())
+    print_out(args.json, summary, lambda s: with_record_access(format_text(s), s))
     if not record.complete:
         print(record.incomplete_note(), file=sys.stderr)
     return 0
@@ -253,7 +262,7 @@ def handle_server(args: argparse.Namespace) -> int:
             pass
         info = {"running": True, "api_url": api_url, "ui_url": api_url.removesuffix("/api")}
         if server.auth_file().is_file() and "PREFECT_API_URL" not in os.environ:
-            info["auth_string_file"] = str(server.auth_file())
+            info[AUTH_STRING_FILE] = str(server.auth_file())
     elif args.action == "stop":
         if not args.force:
             server.check_stoppable()
@@ -268,7 +277,7 @@ def handle_server(args: argparse.Namespace) -> int:
         info = {"running": found is not None, "state_dir": str(server.server_dir())}
         if found is not None:
             info |= {"api_url": found.api_url, "ui_url": found.ui_url, "pid": found.pid}
-            info["auth_string_file"] = str(server.auth_file())
+            info[AUTH_STRING_FILE] = str(server.auth_file())
     print_out(args.json, info, format_server_info)
     return 0
 

@@ -14,7 +14,10 @@ from typing import Any
 
 from flows.summaries import json_safe
 
-__all__ = ["StageProgress", "format_server_info", "print_out"]
+__all__ = ["StageProgress", "format_server_info", "print_out", "with_record_access"]
+
+#: The summary's key for the file that holds the local Prefect server's auth string.
+AUTH_STRING_FILE = "auth_string_file"
 
 
 def print_out(
@@ -44,9 +47,22 @@ def format_server_info(info: Mapping[str, Any]) -> str:
     lines = [
         f"Prefect server: {info['ui_url']}" + (f" (PID {info['pid']})" if "pid" in info else "")
     ]
-    if "auth_string_file" in info:
-        lines.append(f"The UI asks for the auth string in {info['auth_string_file']}")
+    if AUTH_STRING_FILE in info:
+        lines.append(f"The UI asks for the auth string in {info[AUTH_STRING_FILE]}")
     return "\n".join(lines)
+
+
+def with_record_access(text: str, summary: Mapping[str, Any]) -> str:
+    """A run's printed summary ``text`` with, after its Prefect link, where the UI's login
+    string is: the local server's UI asks for its auth string once per browser, and the file
+    that holds it is named (never the string itself). Unchanged when the summary names no
+    flow run or no such file (a server named by ``PREFECT_API_URL`` is the user's own)."""
+    if not (summary.get("flow_run_url") and summary.get(AUTH_STRING_FILE)):
+        return text
+    return (
+        f"{text}\nThe Prefect UI asks once per browser for its auth string: paste the content "
+        f"of {summary[AUTH_STRING_FILE]} (eskin server status names it too)."
+    )
 
 
 class StageProgress:

@@ -12,9 +12,12 @@ Stages, each a module with the frozen dataclasses it returns:
   frame-based readout (:class:`~pipeline.report.designs.FrameReadout`);
 - :mod:`~pipeline.report.answer`: per model, the cheapest design not significantly below the
   best (Holm-corrected paired tests);
+- :mod:`~pipeline.report.recordings_needed`: how many recordings per class would tell the
+  answer's designs from the best;
 - :mod:`~pipeline.report.curves`: accuracy curves along a sweep and Fig. 9's lines;
 - :mod:`~pipeline.report.sweeps`: a curve for any other 1-D sweep, a heat map for a 2-D sweep;
-- :mod:`~pipeline.report.claims`: the paper's claims, each judged by a paired or trend test;
+- :mod:`~pipeline.report.claims`: the paper's claims, each judged by a paired or trend test,
+  as a table of verdicts;
 - :mod:`~pipeline.report.tables`: Table I, the paper's rows beside this run's answer designs;
 - :mod:`~pipeline.report.fronts`: accuracy against data rate, event rate, bits, compute time
   and readout power, with designs indistinguishable from the front marked;

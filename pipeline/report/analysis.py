@@ -46,6 +46,7 @@ from pipeline.report.evidence import Evidence, gather_evidence
 from pipeline.report.fronts import Front, hardware_fronts
 from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
+from pipeline.report.recordings_needed import RecordingsNeeded, recordings_needed
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
 from pipeline.report.trials import SearchFront, search_fronts
@@ -69,7 +70,8 @@ class Report:
     ``mismatch_note`` sets
     Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
     (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
-    design.
+    design. ``recordings_needed`` says, per model, how many recordings per class would tell the
+    answer's designs from the best (:mod:`pipeline.report.recordings_needed`).
     """
 
     grids: tuple[str, ...]
@@ -99,6 +101,7 @@ class Report:
     mismatch_note: str | None = None
     yield_answers: tuple[YieldAnswer, ...] = ()
     constants: Constants = field(default_factory=Constants)
+    recordings_needed: tuple[RecordingsNeeded, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -205,6 +208,7 @@ def build_report(
     )
     dataset = dataset_kind(cubes)
     classes = n_classes(cubes)
+    cost = sweep_cost(cubes, runs)
     return Report(
         grids=tuple(dict.fromkeys(str(c.attrs.get("grid", "?")) for c in cubes.values())),
         dataset=dataset,
@@ -224,7 +228,7 @@ def build_report(
         sweep_plots=plots,
         heatmaps=maps,
         undrawn=undrawn,
-        sweep_cost=sweep_cost(cubes, runs),
+        sweep_cost=cost,
         time_to_accuracy=time_to_accuracy(curves.get(Panel.OBSERVATION, ())),
         missing=missing,
         searches=search_fronts(cubes),
@@ -233,6 +237,7 @@ def build_report(
         mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
         yield_answers=yield_answers(designs, evidence, energy),
         constants=constants,
+        recordings_needed=recordings_needed(answers, evidence, classes, dataset, cost),
     )
 
 
@@ -243,16 +248,10 @@ def _claims(
     window = curves.get(Panel.WINDOW, ())
     taxels = curves.get(Panel.TAXELS, ())
     return (
-        optimum_claim(
-            Panel.THRESHOLD, threshold, evidence, paper.THRESHOLD_V, "V", paper.CLAIMS["threshold"]
-        ),
-        sides_claim(
-            Panel.THRESHOLD, threshold, evidence, ("lower",), "V", paper.CLAIMS["threshold_lower"]
-        ),
-        optimum_claim(Panel.WINDOW, window, evidence, paper.WINDOW_S, "s", paper.CLAIMS["window"]),
-        sides_claim(
-            Panel.WINDOW, window, evidence, ("lower", "higher"), "s", paper.CLAIMS["window_sides"]
-        ),
+        optimum_claim(Panel.THRESHOLD, threshold, evidence, paper.THRESHOLD_V, "V", "threshold"),
+        sides_claim(Panel.THRESHOLD, threshold, evidence, ("lower",), "V", "threshold_lower"),
+        optimum_claim(Panel.WINDOW, window, evidence, paper.WINDOW_S, "s", "window"),
+        sides_claim(Panel.WINDOW, window, evidence, ("lower", "higher"), "s", "window_sides"),
         taxel_gain_claim(taxels, evidence),
         taxel_saturation_claim(taxels, evidence),
         metric_claim(fits),

@@ -28,9 +28,12 @@ By yield, for runs whose designs are simulated as several chips each
 accuracy over its chips (``accuracy_p05``, the share of chips a designer can sign off on) is the
 *best by yield*; every other design of several chips is compared with it by a bootstrap over
 chips and recordings together (:meth:`pipeline.report.evidence.Evidence.compare_yield`),
-Holm-corrected; the cheapest by data rate and by power not significantly below it are the
-answer by yield (:func:`yield_answers`), said in one sentence beside the answer above
-(:func:`yield_sentence`).
+Holm-corrected; the smallest array (by the matched comparator gate area its mismatch demands,
+:mod:`pipeline.results.matched_area`) and the cheapest by power not significantly below it are
+the answer by yield (:func:`yield_answers`, which keeps the cheapest by data rate too), said in
+one sentence beside the answer above (:func:`yield_sentence`). Mismatch is bought with area: a
+design that names no mismatch assumes perfect matching, has no finite area and is never the
+smallest array.
 
 What the report shows of it: per model a small table (:func:`glance_rows`) and one sentence on
 how sure it is (:func:`how_sure`); then, once, the method (:func:`method_sentences`) and every
@@ -50,6 +53,7 @@ from pipeline.report.evidence import ALPHA, Evidence
 from pipeline.report.panels import REPEATS
 from pipeline.report.text import (
     NO_INTERVAL_WHY,
+    area_text,
     comparison,
     fold_spread,
     pct,
@@ -484,7 +488,8 @@ class YieldCandidate:
 
     ``versus_best`` is ``yield(design) - yield(best)`` (None for the best itself and for a design
     that cannot be compared), ``holm_p`` its Holm-adjusted p-value; the costs are NaN when
-    unknown.
+    unknown (``area_m2``, the array's matched comparator gate area, for every design that names
+    no mismatch: :mod:`pipeline.results.matched_area`).
     """
 
     design: Design
@@ -493,6 +498,7 @@ class YieldCandidate:
     holm_p: float | None
     data_rate_bps: float
     power_w: float
+    area_m2: float = math.nan
 
     @property
     def below_best(self) -> bool:
@@ -509,9 +515,10 @@ class YieldCandidate:
 @dataclass(frozen=True)
 class YieldAnswer:
     """The answer by yield for one model: the ``best`` design by yield and the cheapest by data
-    rate and by power not significantly below it (None when no design states that cost);
-    ``comparisons`` the size of the Holm family, ``untested`` the designs not compared;
-    ``candidates`` every design of several chips, the best first."""
+    rate, by power and by array area not significantly below it (None when no design states
+    that cost: a design without an area is never the smallest); ``comparisons`` the size of the
+    Holm family, ``untested`` the designs not compared; ``candidates`` every design of several
+    chips, the best first."""
 
     model: str
     best: YieldCandidate
@@ -520,6 +527,7 @@ class YieldAnswer:
     comparisons: int
     untested: int
     candidates: tuple[YieldCandidate, ...] = ()
+    by_area: YieldCandidate | None = None
 
 
 def yield_answers(
@@ -555,6 +563,7 @@ def yield_answer(
             holm_p=p,
             data_rate_bps=cost(d, model, Cost.DATA_RATE, energy),
             power_w=cost(d, model, Cost.POWER, energy),
+            area_m2=cost(d, model, Cost.AREA, energy),
         )
 
     top = candidate(best, None, None)
@@ -575,31 +584,52 @@ def yield_answer(
         comparisons=len(tested),
         untested=len(tests) - len(tested),
         candidates=(top, *rest),
+        by_area=cheapest("area_m2"),
     )
 
 
 def yield_sentence(answer: YieldAnswer) -> str:
-    """The answer by yield in one sentence (see the module docstring)."""
+    """The answer by yield in one sentence (see the module docstring): the best design by yield,
+    and among the designs not significantly below it the smallest array (by matched comparator
+    area) and the cheapest by power. A design that names no mismatch states no area (perfect
+    matching needs an infinite one), so it is never the smallest; when it is the best, the
+    sentence says so."""
     best = answer.best
     text = (
         f"{answer.model.upper()} by yield (the 5th percentile of accuracy over a design's "
         f"{_chips(best.chips)}): the best is {best.design.label}, "
         f"{_yield(best.chips)}"
     )
+    unbuildable = (
+        ""
+        if math.isfinite(best.area_m2)
+        else " The best names no threshold mismatch: it assumes perfect matching, "
+        "which no finite comparator gives (Pelgrom's law), so it is never the smallest array."
+    )
     if not answer.comparisons and not answer.untested:
-        return text + "; no other design of several chips to compare it with."
+        return text + "; no other design of several chips to compare it with." + unbuildable
     roles: dict[int, tuple[YieldCandidate, list[str]]] = {}
-    for c, role in ((answer.by_data_rate, "data rate"), (answer.by_power, "power")):
+    for c, role in (
+        (answer.by_area, "the smallest array"),
+        (answer.by_power, "the cheapest by power"),
+    ):
         if c is not None:
             roles.setdefault(id(c), (c, []))[1].append(role)
     named = []
+    if answer.by_area is None:
+        named.append("none states an array area (none names a threshold mismatch)")
     for c, found in roles.values():
-        by = " and by ".join(found)
+        which = " and ".join(found)
+        area = (
+            f" ({area_text(c.area_m2)} of matched comparator gate area)"
+            if "the smallest array" in found
+            else ""
+        )
         if c is best:
-            named.append(f"it is also the cheapest by {by}")
+            named.append(f"it is also {which}{area}")
         elif c.versus_best is not None:
             named.append(
-                f"the cheapest by {by} is {c.design.label}, {_yield(c.chips)}, "
+                f"{which} is {c.design.label}{area}, {_yield(c.chips)}, "
                 f"{comparison(c.versus_best, c.holm_p if answer.comparisons > 1 else None)}"
             )
     family = (
@@ -613,6 +643,7 @@ def yield_sentence(answer: YieldAnswer) -> str:
         + f"chips and recordings, {family}), "
         + "; ".join(named)
         + "."
+        + unbuildable
     )
 
 

@@ -4,7 +4,8 @@ Order: the answer to the designer's question at a glance (per model, one small t
 design and the cheapest designs not significantly below it, by data rate and by power, with one
 sentence on how sure that is; then the power front figure), then, once and collapsed in HTML,
 the method and every comparison with the best (:mod:`pipeline.report.answer`); the paper's
-claims judged by tests (:mod:`pipeline.report.claims`), Table I with the paper's rows
+claims judged by tests (:mod:`pipeline.report.claims`: a table of verdicts, the tests folded
+below it), Table I with the paper's rows
 (:mod:`pipeline.report.tables`), the figures (the paper's, then a curve for every other 1-D
 sweep and a heat map for every 2-D one), the hardware cost fronts (:mod:`pipeline.report.fronts`;
 the power front is drawn once, at the top), every search's front
@@ -41,6 +42,7 @@ from pipeline.report.answer import (
 )
 from pipeline.report.blocks import Block, Details, Figure, Heading, Items, Paragraph, Table
 from pipeline.report.chip_population import method_sentence as chips_method_sentence
+from pipeline.report.claims import CLAIM_TESTS_TITLE, CLAIMS_COLUMNS, claims_table
 from pipeline.report.constants_table import constants_blocks
 from pipeline.report.cost import ROOT_SENTENCE, observation_sentence
 from pipeline.report.decision_time import latency_blocks
@@ -48,11 +50,20 @@ from pipeline.report.designs import Cost, area_sentence
 from pipeline.report.evidence import ALPHA, RESAMPLES
 from pipeline.report.fronts import Front, FrontPoint
 from pipeline.report.panels import PANEL_TITLES, Panel
+from pipeline.report.recordings_needed import needed_sentence
 from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.seeds import REPORT_SEED
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.tables import TABLE_COLUMNS, table_notes, table_rows
-from pipeline.report.text import NO_INTERVAL_WHY, comparison, pct, pct_interval, rate, si
+from pipeline.report.text import (
+    NO_INTERVAL_WHY,
+    area_text,
+    comparison,
+    pct,
+    pct_interval,
+    rate,
+    si,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure as MplFigure
@@ -110,7 +121,11 @@ def report_blocks(report: Report, drawn: set[str], *, version: str) -> list[Bloc
             )
         )
     blocks += _answer_blocks(report, drawn)
-    blocks += [Heading(2, "Against the paper"), *(Paragraph(c.sentence) for c in report.claims)]
+    blocks += [
+        Heading(2, "Against the paper"),
+        Table(CLAIMS_COLUMNS, claims_table(report.claims)),
+        Details(CLAIM_TESTS_TITLE, tuple(Paragraph(c.sentence) for c in report.claims)),
+    ]
     blocks += _table_blocks(report)
     blocks += _figure_blocks(report, drawn)
     blocks += _front_blocks(report, drawn)
@@ -151,9 +166,12 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
         yield Paragraph("No design of this run has an accuracy: there is nothing to choose from.")
         return
     by_yield = {y.model: y for y in report.yield_answers}
+    needed = {n.model: n for n in report.recordings_needed}
     for answer in report.answers:
         yield Table(glance_header(answer), glance_rows(answer))
         yield Paragraph(how_sure(answer))
+        if answer.model in needed:
+            yield Paragraph(needed_sentence(needed[answer.model]))
         if answer.model in by_yield:
             yield Paragraph(yield_sentence(by_yield[answer.model]))
     if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
@@ -342,7 +360,7 @@ def _cost_text(which: Cost, value: float) -> str:
         case Cost.COMPUTE:
             return f"{value:.3g} s"
         case Cost.AREA:
-            return f"{value * 1e12:.3g} um^2"
+            return area_text(value)
     return si(value, "W")
 
 

@@ -152,6 +152,16 @@ class Evidence:
             resamples=RESAMPLES,
         )
 
+    def differences(self, a: str, b: str, model: str) -> np.ndarray | None:
+        """float64 (n,): per recording both predicted, ``(s_i(a) - s_i(b)) / R``, the share of
+        the ``R`` common repeats (chips' repeats included) it is right in ``a`` less that in
+        ``b``; None when no paired comparison can be made."""
+        paired = self._paired(a, b, model) if self.has(a, model) and self.has(b, model) else None
+        if paired is None:
+            return None
+        ca, cb, _ = paired
+        return (ca.astype(np.float64) - cb).mean(axis=0)
+
     def _compare(self, a: str, b: str, model: str) -> PairedComparison | None:
         if not (self.has(a, model) and self.has(b, model)):
             return None
@@ -159,6 +169,15 @@ class Evidence:
             from pipeline.report.chip_population import chip_mean
 
             return self._over_chips(a, b, model, chip_mean, "mean")
+        paired = self._paired(a, b, model)
+        if paired is None:
+            return None
+        ca, cb, labels = paired
+        return compare_paired(ca, cb, labels, rng=rng_for(a, b, model), resamples=RESAMPLES)
+
+    def _paired(self, a: str, b: str, model: str) -> tuple[np.ndarray, ...] | None:
+        """bool ``(repeats, n)`` of ``a`` and ``b`` on the repeats and recordings both
+        predicted, and those recordings' labels; None when they share none."""
         ca, cb = self.correct[(a, model)], self.correct[(b, model)]
         chipped = ((a, model) in self.per_chip, (b, model) in self.per_chip)
         if chipped[0] != chipped[1]:
@@ -176,13 +195,7 @@ class Evidence:
         cols = (ca >= 0).all(axis=0) & (cb >= 0).all(axis=0)
         if not rows.any() or not cols.any():
             return None
-        return compare_paired(
-            ca[:, cols] == 1,
-            cb[:, cols] == 1,
-            self.labels[cols],
-            rng=rng_for(a, b, model),
-            resamples=RESAMPLES,
-        )
+        return ca[:, cols] == 1, cb[:, cols] == 1, self.labels[cols]
 
 
 def gather_evidence(cubes: Mapping[str, xr.Dataset]) -> Evidence:

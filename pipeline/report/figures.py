@@ -8,7 +8,11 @@ Every accuracy axis has a dashed line at chance, ``1 / n_classes``, when the cla
 Every model is drawn on every panel. Points of several chips
 (:mod:`pipeline.report.chip_population`) draw the spread of their chips' accuracies (5th to 95th
 percentile) as a shaded band around the curve, apart from the error bars; one line style per
-deployment.
+deployment. Panels and series come in their declared order
+(:func:`~pipeline.report.panels.declared_rank`): the models as
+:class:`~pipeline.design.scene.Model` declares them, the deployments as
+:class:`~pipeline.design.scene.Deployment` does, whatever the order of the cubes' names or of a
+cube's models.
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ from pipeline.report.curves import Curve, MetricFit
 from pipeline.report.decision_time import LATENCY_STEM, LATENCY_TITLE, LatencyCurve
 from pipeline.report.designs import Cost
 from pipeline.report.fronts import Front
-from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel
+from pipeline.report.panels import PANEL_TITLES, THRESHOLD_V, WINDOW_S, Panel, declared_rank
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.text import si
 from pipeline.results.cube import field_attrs
@@ -154,6 +158,7 @@ def curve_figure(
     ``ticks`` labels the positions 0, 1, ... of a swept field that is not a number.
     """
     figure, ax = _new()
+    curves = _declared(curves)
     sweeps = list(dict.fromkeys(c.sweep for c in curves))
     groups = list(dict.fromkeys(c.group for c in curves))
     for curve in curves:
@@ -184,7 +189,8 @@ def grouped_figure(
 ) -> Figure:
     """One panel per group of curves (the chips' deployments), side by side on one accuracy
     axis: each model's accuracy with its 95 % interval bars and, for designs of several chips,
-    the chips' 5th-95th percentile band."""
+    the chips' 5th-95th percentile band. Panels and curves come in their declared order."""
+    curves = _declared(curves)
     groups = list(dict.fromkeys(c.group for c in curves))
     figure = Figure(
         figsize=(max(_SIZE_IN[0], 3.6 * len(groups)), _SIZE_IN[1] + 0.4), layout="constrained"
@@ -218,7 +224,9 @@ def sweep_figure(plot: SweepPlot, chance: float | None) -> Figure:
 
 
 def heatmap_figure(found: Heatmap) -> Figure:
-    """Accuracy (%) of a two-dimensional sweep, one annotated panel per model."""
+    """Accuracy (%) of a two-dimensional sweep, one annotated panel per model, in the models'
+    declared order."""
+    order = sorted(range(len(found.models)), key=lambda m: declared_rank("model", found.models[m]))
     n = len(found.models)
     width = max(_SIZE_IN[0], (0.7 * len(found.cols) + 2.5) * n + 1.0)
     figure = Figure(figsize=(width, _SIZE_IN[1] + 0.25 * len(found.rows)), layout="constrained")
@@ -230,7 +238,8 @@ def heatmap_figure(found: Heatmap) -> Figure:
     if high - low < 1e-9:
         low, high = low - 0.5, high + 0.5
     image = None
-    for ax, model, grid in zip(axes, found.models, values, strict=True):
+    models = [found.models[m] for m in order]
+    for ax, model, grid in zip(axes, models, values[order], strict=True):
         image = ax.imshow(
             np.ma.masked_invalid(grid), cmap="viridis", vmin=low, vmax=high, aspect="auto"
         )
@@ -255,6 +264,7 @@ def metric_figure(fits: Sequence[MetricFit], chance: float | None) -> Figure:
     FigureCanvasAgg(figure)
     axes = figure.subplots(1, 2, sharey=True)
     labels = {"ssnr_db": "SSNR (dB)", "ste_s2": "STE (s$^2$)"}
+    fits = sorted(fits, key=lambda f: declared_rank("model", f.model))
     for ax, metric in zip(axes, ("ssnr_db", "ste_s2"), strict=True):
         for fit in (f for f in fits if f.metric == metric):
             color = _color(fit.model)
@@ -289,7 +299,7 @@ def front_figure(front: Front, chance: float | None) -> Figure:
     """Accuracy against one cost: every design, each model's front as a step, the designs off
     the front but indistinguishable from it marked, the frame readout as reference lines."""
     figure, ax = _new(width=_SIZE_IN[0] * 1.6)
-    for model in front.models:
+    for model in sorted(front.models, key=lambda m: declared_rank("model", m)):
         color = _color(model)
         mine = [p for p in front.points if p.model == model]
         plain = [p for p in mine if not p.on_front and not p.indistinguishable]
@@ -349,7 +359,7 @@ def latency_figure(curves: Sequence[LatencyCurve], chance: float | None) -> Figu
     interval as a band, and a dotted line at the earliest decision not significantly below the
     full touch."""
     figure, ax = _new()
-    for curve in curves:
+    for curve in sorted(curves, key=lambda c: declared_rank("model", c.model)):
         color = _color(curve.model)
         many = curve.decision_s.size > 40  # a spiking decoder's steps: a line, no markers
         ax.plot(
@@ -403,6 +413,20 @@ def _draw_curve(
             linestyle=style,
             label=f"{label}: chips, 5th-95th percentile",
         )
+
+
+def _declared(curves: Sequence[Curve]) -> list[Curve]:
+    """Curves by deployment, then sweep (as met), then model, deployments and models in their
+    declared order (:func:`~pipeline.report.panels.declared_rank`), never alphabetically."""
+    sweeps = list(dict.fromkeys(c.sweep for c in curves))
+    return sorted(
+        curves,
+        key=lambda c: (
+            declared_rank("deployment", c.group),
+            sweeps.index(c.sweep),
+            declared_rank("model", c.model),
+        ),
+    )
 
 
 def _interval_bars(mean: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:

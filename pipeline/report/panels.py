@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import enum
 
-from pipeline.design.scene import scene_field
+from pipeline.design.scene import Deployment, Model, scene_field
 
 # The scene fields the report reads, by their dotted names (checked against the declarations).
 THRESHOLD_V = scene_field("readout.threshold_v")
@@ -68,3 +68,21 @@ def absent(panel: Panel) -> str:
         Panel.OBSERVATION: f"a sweep of {N_WINDOWS} alone",
     }
     return f"not in this run: it needs {needs[panel]}"
+
+
+DECLARED = {
+    "model": tuple(m.value for m in Model),
+    "deployment": tuple(d.value for d in Deployment),
+}
+"""The categories a figure draws as panels or series, each in its declared order (the models as
+:class:`~pipeline.design.scene.Model` declares them, the chips' deployments as
+:class:`~pipeline.design.scene.Deployment` does)."""
+
+
+def declared_rank(kind: str, value: str) -> int:
+    """Where ``value`` comes among the categories of ``kind`` (``"model"``, ``"deployment"``) in
+    a figure: its place in the declaration (:data:`DECLARED`), never alphabetical; a value the
+    declaration does not name comes after every one it names (sort stably to keep such values
+    in the order met)."""
+    declared = DECLARED[kind]
+    return declared.index(value) if value in declared else len(declared)

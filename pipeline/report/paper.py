@@ -39,6 +39,44 @@ CLAIMS = {
 
 
 @dataclass(frozen=True)
+class ClaimRow:
+    """One claim as the report's claims table names it: the paper's figure that makes it, the
+    claim in a few words and the paper's own figure for it ("plot only" where the paper gives
+    no number)."""
+
+    figure: str
+    claim: str
+    value: str
+
+
+CLAIM_ROWS = {
+    "threshold": ClaimRow(
+        "Fig. 7a",
+        "optimum threshold",
+        f"{THRESHOLD_V:g} V ({THRESHOLD_BITS:g} bits), both networks",
+    ),
+    "threshold_lower": ClaimRow(
+        "Fig. 7a", "lower thresholds lose accuracy", "a loss below the optimum (plot only)"
+    ),
+    "window": ClaimRow("Fig. 7b", "optimum window", f"{WINDOW_S:g} s, both networks"),
+    "window_sides": ClaimRow(
+        "Fig. 7b", "shorter and longer windows lose accuracy", "a loss on both sides (plot only)"
+    ),
+    "taxel_gain": ClaimRow(
+        "Fig. 8", f"gain from {TAXELS[0]} to {TAXELS[1]} taxels", f"{TAXEL_GAIN:+.0%} (FFNN)"
+    ),
+    "taxel_saturation": ClaimRow(
+        "Fig. 8", f"saturation above {TAXELS[1]} taxels", f"flat, about {SATURATION_ACCURACY:.0%}"
+    ),
+    "metrics": ClaimRow(
+        "Fig. 9", "accuracy rises with SSNR, falls with STE", "strong correlations (plot only)"
+    ),
+    "mismatch": ClaimRow("Fig. 10", "accuracy falls with threshold mismatch", "a fall (plot only)"),
+}
+"""The claims of ``CLAIMS`` that the report judges, in the report's order."""
+
+
+@dataclass(frozen=True)
 class TableRow:
     """One row of Table I (the paper's columns), as text."""
 

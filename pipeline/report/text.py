@@ -93,6 +93,11 @@ def si(value: float, unit: str) -> str:
     return f"{value:.3g} {unit}"
 
 
+def area_text(value_m2: float) -> str:
+    """An area in m^2 as ``1.23 um^2``; "unknown" for NaN."""
+    return f"{value_m2 * 1e12:.3g} um^2" if math.isfinite(value_m2) else "unknown"
+
+
 def times(ratio: float) -> str:
     """A ratio as ``12x`` (``1.5x`` below 10); "unknown" when not finite."""
     if not math.isfinite(ratio):

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from flows import server
 from flows.assembly import summarize
 from flows.cli import main
 from flows.cluster import available_cores
@@ -34,8 +35,12 @@ def test_cold_run_summary(smoke_sweep):
         "flow_run_url",
         "dashboard",
         "prefect_record",
+        "auth_string_file",
     }
     assert summary["prefect_record"] == "complete"
+    # Where the local server's UI login string is, never the string itself.
+    assert summary["auth_string_file"] == str(server.auth_file())
+    assert server.auth_file().read_text().strip() not in json.dumps(summary)
     cubes = open_results(root)
     assert summary["sweeps"] == {name: summarize(cube) for name, cube in cubes.items()}
     assert summary["flow_run_url"].startswith("http://127.0.0.1:")
@@ -161,6 +166,14 @@ def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep, tm
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "7 points (7 cached, 0 computed)" in proc.stdout
     assert "best accuracy" in proc.stdout and "open_results" in proc.stdout
+    # The last lines: the Prefect link, then where the UI's login string is (not the string).
+    *_, link, login = proc.stdout.strip().splitlines()
+    assert link.startswith("Prefect flow run: http://127.0.0.1:")
+    assert login == (
+        "The Prefect UI asks once per browser for its auth string: paste the content of "
+        f"{server.auth_file()} (eskin server status names it too)."
+    )
+    assert server.auth_file().read_text().strip() not in proc.stdout
     after = open_results(root)
     for name in SMOKE_SWEEPS:
         xr.testing.assert_identical(before[name], after[name])

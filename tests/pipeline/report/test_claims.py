@@ -3,9 +3,9 @@
 import pytest
 
 from pipeline.report import Panel, build_report
-from pipeline.report.claims import Verdict
+from pipeline.report.claims import CLAIMS_COLUMNS, Verdict, claims_table, tally
 from pipeline.report.evidence import gather_evidence
-from pipeline.report.paper import CLAIMS
+from pipeline.report.paper import CLAIM_ROWS
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
 
 
@@ -23,15 +23,11 @@ def paper_like():
 
 def test_paper_like_cubes_support_every_claim(paper_like):
     assert paper_like.missing == {}
-    verdicts = {(c.panel, c.paper): c.verdict for c in paper_like.claims}
-    assert len(verdicts) == 8
-    # The optimum's location and the saturation are claims of no significant difference: the
-    # cubes are consistent with them; every other claim is confirmed by a significant test.
-    no_difference = (CLAIMS["threshold"], CLAIMS["window"], CLAIMS["taxel_saturation"])
-    consistent = {k for k in verdicts if k[1] in no_difference}
-    assert len(consistent) == 3
-    assert {verdicts[k] for k in consistent} == {Verdict.CONSISTENT}, verdicts
-    assert {v for k, v in verdicts.items() if k not in consistent} == {Verdict.SUPPORTS}
+    verdicts = {c.key: c.verdict for c in paper_like.claims}
+    # The optimum's location and the saturation are claims of no significant difference, every
+    # other claim one of a significant difference: every test goes the claim's way.
+    assert list(verdicts) == list(CLAIM_ROWS)
+    assert set(verdicts.values()) == {Verdict.CONSISTENT}, verdicts
     gain, saturation = claims(paper_like)[Panel.TAXELS]
     # 44 of 120 recordings right with 1 taxel, 72 with 16: +64 %.
     assert "+64% (the paper: +63%)" in gain.finding and "a significant gain" in gain.finding
@@ -76,7 +72,9 @@ def test_claims_say_where_the_data_disagrees():
     assert "against 0.09 V next to it: significantly more accurate" in lower.sentence
     for panel in (Panel.WINDOW, Panel.TAXELS, Panel.SPIKE_METRICS, Panel.OBSERVATION):
         assert report.missing[panel].startswith("not in this run")
-    assert {c.verdict for c in found[Panel.SPIKE_METRICS]} == {Verdict.ABSENT}
+    (metrics,) = found[Panel.SPIKE_METRICS]
+    assert metrics.verdict is Verdict.UNCLEAR and not metrics.in_run
+    assert "no correlate sweep is in this run" in metrics.sentence
 
 
 def test_a_difference_too_small_to_tell_is_cannot_tell():
@@ -87,7 +85,7 @@ def test_a_difference_too_small_to_tell_is_cannot_tell():
     sweeps = {"threshold": {"axes": {"readout.threshold_v": [0.03, 0.09, 0.2]}}}
     report = build_report(make_cubes(sweeps, flat, models=("ffnn",)))
     optimum, lower = claims(report)[Panel.THRESHOLD]
-    assert optimum.verdict is Verdict.CONSISTENT and lower.verdict is Verdict.SUPPORTS
+    assert optimum.verdict is Verdict.CONSISTENT and lower.verdict is Verdict.CONSISTENT
     window = build_report(
         make_cubes(
             {"window": {"axes": {"coding.window_s": [0.05, 0.1, 0.2]}}},
@@ -135,3 +133,45 @@ def test_two_values_test_the_one_pair_once_for_both_sides():
     assert sides.verdict is Verdict.PARTLY
     assert sides.finding.count("one comparison") == 2 and "Holm" not in sides.finding
     assert "+10.0 points" in sides.finding and "-10.0 points" in sides.finding
+
+
+@pytest.mark.parametrize(
+    ("tests", "verdict"),
+    [
+        ((), Verdict.UNCLEAR),
+        ((Verdict.CONSISTENT, Verdict.CONSISTENT), Verdict.CONSISTENT),
+        ((Verdict.CONSISTENT, Verdict.UNCLEAR), Verdict.PARTLY),
+        ((Verdict.CONSISTENT, Verdict.CONTRADICTS), Verdict.PARTLY),
+        ((Verdict.PARTLY, Verdict.UNCLEAR), Verdict.PARTLY),
+        ((Verdict.CONTRADICTS, Verdict.UNCLEAR), Verdict.CONTRADICTS),
+        ((Verdict.CONTRADICTS,), Verdict.CONTRADICTS),
+        ((Verdict.UNCLEAR, Verdict.UNCLEAR), Verdict.UNCLEAR),
+    ],
+)
+def test_the_verdict_rules(tests, verdict):
+    # consistent: every test the claim's way; in part: some; contradicts: one against it and
+    # none for it; cannot tell: none significant where a difference is claimed, or no test.
+    assert tally(tests) is verdict
+
+
+def test_the_claims_table_has_a_row_per_claim_with_the_figures_and_the_verdict(paper_like):
+    rows = claims_table(paper_like.claims)
+    assert len(CLAIMS_COLUMNS) == 4 and all(len(r) == 4 for r in rows)
+    by_claim = {r[0]: r for r in rows}
+    gain = by_claim["Fig. 8: gain from 1 to 16 taxels"]
+    # 44 of 120 right with 1 taxel, 72 with 16 (FFNN): +28 discordant recordings, all one way.
+    assert gain[1] == "+63% (FFNN)" and gain[3] == "consistent"
+    assert gain[2].startswith("FFNN +64% (16 against 1 taxels: +23.3 points [")
+    optimum = by_claim["Fig. 7a: optimum threshold"]
+    assert optimum[1] == "0.09 V (3.5 bits), both networks"
+    assert optimum[2].startswith("FFNN best at 0.09 V (60.0 % [")
+    (mismatch,) = (r for r in rows if r[0].startswith("Fig. 10"))
+    assert "FFNN -5.0 points per 10 % mismatch [" in mismatch[2]
+    assert {r[3] for r in rows} <= {str(v) for v in Verdict}
+
+
+def test_a_claim_not_in_the_run_says_so_in_the_table():
+    report = build_report(make_cubes({"threshold": PAPER_LIKE_SWEEPS["threshold"]}))
+    rows = {r[0]: r for r in claims_table(report.claims)}
+    row = rows["Fig. 10: accuracy falls with threshold mismatch"]
+    assert row[2] == "not in this run" and row[3] == "cannot tell"

@@ -5,6 +5,7 @@ To accept a deliberate change of the report's text, rewrite the golden file with
 g(write=True)"`` and review the diff.
 """
 
+import html
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,7 @@ from pipeline.report import FrameReadout, Panel, SweepRun, build_report
 from pipeline.report.designs import Cost
 from pipeline.report.document import report_blocks, report_files
 from pipeline.report.figures import draw_report
+from pipeline.report.recordings_needed import needed_sentence
 from pipeline.report.render import render_markdown
 from pipeline.results.readout_constants import EnergyModel
 from tests.report_helpers import PAPER_LIKE_SWEEPS, make_cubes
@@ -86,12 +88,18 @@ def test_the_first_screen_is_the_answer_tables_one_sentence_each_and_the_power_f
     page = report_files(report, figures, version=VERSION)["report.html"].decode()
     opened, closed = page.index("<details>"), page.index("</details>")
     first = page[:opened]
-    # Per model one small table headed by its name, and one sentence; then the power front.
+    # Per model one small table headed by its name, one sentence on how sure it is and one on
+    # the recordings that would decide it; then the power front.
     assert first.count("<table>") == len(report.answers) == 2
     for answer in report.answers:
-        assert f"<thead><tr><th>{answer.model.upper()}</th><th>design</th>" in first
-        assert first.count(f"<p>{answer.model.upper()}: ") == 1
-    assert first.count("<p>") == 1 + len(report.answers)  # the run's one line, then those
+        name = answer.model.upper()
+        assert f"<thead><tr><th>{name}</th><th>design</th>" in first
+        assert first.count(f"<p>{name}: ") == 2
+        needed = needed_sentence(
+            next(n for n in report.recordings_needed if n.model == answer.model)
+        )
+        assert f"<p>{html.escape(needed)}</p>" in first
+    assert first.count("<p>") == 1 + 2 * len(report.answers)  # the run's one line, then those
     assert first.count("<svg") == 1
     assert "<figcaption>Accuracy against estimated readout power" in first
     assert "Alea et al." in first

@@ -144,3 +144,62 @@ def test_figures_are_on_their_own_agg_canvas_not_pyplot(figures):
     # pyplot figures get a canvas manager (global figure registry); ours have none.
     for figure in figures.values():
         assert isinstance(figure.canvas, FigureCanvasAgg) and figure.canvas.manager is None
+
+
+def legend_texts(ax):
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_every_figure_draws_its_models_in_their_declared_order():
+    # A cube that trained the CNN alone comes first (cubes are read by name): the designs meet
+    # the CNN first, yet every panel, front and heat map puts the FFNN first, as the Model enum
+    # declares them.
+    cnn_only = make_cubes({"threshold": PAPER_LIKE_SWEEPS["threshold"]}, models=("cnn",))
+    both = make_cubes(
+        {
+            "window": PAPER_LIKE_SWEEPS["window"],
+            "noise": PAPER_LIKE_SWEEPS["noise"],
+            "grid2": {"axes": {"readout.threshold_v": [0.05, 0.2], "coding.window_s": [0.1, 0.2]}},
+        }
+    )
+    report = build_report({"a_threshold": cnn_only["threshold"], **both})
+    assert [a.model for a in report.answers] == ["cnn", "ffnn"]  # as met
+    drawn = draw_report(report)
+    window = legend_texts(drawn[Panel.WINDOW.value].axes[0])
+    assert [t for t in window if t in ("FFNN", "CNN")] == ["FFNN", "CNN"]
+    for front in report.fronts:
+        assert front.models[0] == "cnn"  # the points' order
+        # matplotlib lists lines before error bars: within each kind of entry, FFNN first.
+        labels = legend_texts(drawn[front.cost.stem].axes[0])
+        kinds = {}
+        for label in labels:
+            model, _, kind = label.partition(" ")
+            if model in ("FFNN", "CNN"):
+                kinds.setdefault(kind, []).append(model)
+        assert any(len(models) == 2 for models in kinds.values()), labels
+        assert all(
+            models == ["FFNN", "CNN"][-len(models) :] or models == ["FFNN"]
+            for models in kinds.values()
+        ), labels
+    (heat,) = report.heatmaps
+    titles = [ax.get_title() for ax in drawn[heat.stem].axes if ax.get_title()]
+    assert titles == ["FFNN", "CNN"]
+    for ax in drawn[Panel.SPIKE_METRICS.value].axes:
+        assert [t.split(":")[0] for t in legend_texts(ax) if ":" in t] == ["FFNN", "CNN"]
+
+
+def test_deployments_are_panels_in_their_declared_order_whatever_the_curves_order():
+    import dataclasses
+
+    from pipeline.report.figures import grouped_figure
+
+    report = build_report(make_cubes({"threshold": PAPER_LIKE_SWEEPS["threshold"]}))
+    cnn, ffnn = sorted(report.curves[Panel.THRESHOLD], key=lambda c: c.model)
+    shuffled = [
+        dataclasses.replace(curve, group=group)
+        for group in ("shared", "robust", "per_chip")  # neither declared nor alphabetical
+        for curve in (cnn, ffnn)
+    ]
+    figure = grouped_figure("t", shuffled, "x", None)
+    assert [ax.get_title() for ax in figure.axes] == ["per_chip", "shared", "robust"]
+    assert legend_texts(figure.axes[0])[:2] == ["FFNN", "CNN"]
