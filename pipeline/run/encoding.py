@@ -99,7 +99,7 @@ def encode_trains(
                 )
                 for taxel in range(taxels.n_taxels)
             )
-    n_taxels = array.n_taxels
+    n_taxels = len(true_trains) // len(durations)  # the taxels read: a real array's or the grid's
     true_set = SpikeTrains.concatenate(true_trains, n_taxels, np.asarray(durations))
     if readout.is_ideal:
         return Encoded(true_set, true_set)
