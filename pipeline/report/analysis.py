@@ -47,6 +47,7 @@ from pipeline.report.panels import FULL_SCALE_V, PANEL_FIELDS, Panel, absent
 from pipeline.report.paper import TableRow
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
+from pipeline.report.taxel_count import TaxelCount, taxel_counts
 from pipeline.report.trials import SearchFront, search_fronts
 from pipeline.results.decoder_energy import DecoderEnergyModel
 from pipeline.results.readout_constants import EnergyModel
@@ -67,7 +68,8 @@ class Report:
     ``mismatch_note`` sets
     Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
     (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
-    design.
+    design. ``taxel_counts`` holds accuracy against the real taxels read, per model, of every
+    sweep of ``array.taxels`` (:mod:`pipeline.report.taxel_count`).
     """
 
     grids: tuple[str, ...]
@@ -96,6 +98,7 @@ class Report:
     decoder: DecoderEnergyModel = field(default_factory=DecoderEnergyModel)
     mismatch_note: str | None = None
     yield_answers: tuple[YieldAnswer, ...] = ()
+    taxel_counts: tuple[TaxelCount, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -222,6 +225,7 @@ def build_report(
         decoder=decoder,
         mismatch_note=deployment_note(curves.get(Panel.MISMATCH, ()), evidence),
         yield_answers=yield_answers(designs, evidence, energy),
+        taxel_counts=taxel_counts(cubes, evidence),
     )
 
 

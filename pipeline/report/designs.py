@@ -49,7 +49,15 @@ from pipeline.report.cubes import (
     point_keys,
     sweep_dims,
 )
-from pipeline.report.panels import COLS, MISMATCH_SIGMA_REL, N_WINDOWS, ROWS, THRESHOLD_V, WINDOW_S
+from pipeline.report.panels import (
+    COLS,
+    MISMATCH_SIGMA_REL,
+    N_WINDOWS,
+    ROWS,
+    TAXELS,
+    THRESHOLD_V,
+    WINDOW_S,
+)
 from pipeline.report.text import label
 from pipeline.results.cube import work_seconds
 from pipeline.results.matched_area import (
@@ -114,10 +122,11 @@ class Setting:
 class Design:
     """One distinct point of the run (see the module docstring).
 
-    ``rows``/``cols`` are None when the cube does not hold them; rates and bits are NaN when the
-    point did not measure them; ``observation_s`` (s of touch per decision, ``n_windows_used *
-    window_s``) is NaN when the cube does not state the windows used; ``seconds`` and
-    ``accuracy`` hold the models the point trained.
+    ``rows``/``cols`` are None when the cube does not hold them, ``taxels`` (the real taxels
+    read of a recorded array, ``array.taxels``) when the design does not set it; rates and
+    bits are NaN when the point did not measure them; ``observation_s`` (s of touch per
+    decision, ``n_windows_used * window_s``) is NaN when the cube does not state the windows
+    used; ``seconds`` and ``accuracy`` hold the models the point trained.
     """
 
     key: str
@@ -136,6 +145,7 @@ class Design:
     threshold_v: float = math.nan
     mismatch_sigma_rel: float = math.nan
     yields: Mapping[str, ChipYield] = field(default_factory=dict)
+    taxels: int | None = None
 
     @property
     def taxel_area_m2(self) -> float:
@@ -160,7 +170,10 @@ class Design:
 
     @property
     def n_taxels(self) -> int | None:
-        """Taxels of the array, ``rows * cols`` (None when either is unknown)."""
+        """Taxels of the array: the real taxels read (``taxels``) where the design sets them,
+        else ``rows * cols`` (None when either is unknown)."""
+        if self.taxels is not None:
+            return self.taxels
         return None if self.rows is None or self.cols is None else self.rows * self.cols
 
 
@@ -283,7 +296,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
             v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
             for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
         }
-        read = (ROWS, COLS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
+        read = (ROWS, COLS, TAXELS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
         fields = {f: field_values(cube, f) for f in read}
         fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
         yields = chip_yields(cube)
@@ -316,6 +329,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 "settings": list(settings[p]),
                 "rows": _int(fields[ROWS], p),
                 "cols": _int(fields[COLS], p),
+                "taxels": _int(fields[TAXELS], p),
                 **{v: float(values[p]) for v, values in scalars.items()},
                 "window_s": math.nan if fields[WINDOW_S] is None else float(fields[WINDOW_S][p]),
                 "n_windows": "?" if fields[N_WINDOWS] is None else label(fields[N_WINDOWS][p]),
