@@ -1,8 +1,5 @@
-"""A real array end to end, in memory: a dataset whose class information sits in one taxel only.
-
-Three classes, 12 recordings each, of 4 taxels at 500 Hz: taxel 2 (the one a design reading one
-taxel of four reads, :func:`pipeline.chain.real_taxels.chosen_taxels`) vibrates at a frequency
-of its class; the other three carry noise drawn alike for every class. Tolerances: the
+"""A real array end to end, in memory: a dataset whose class information sits in one taxel only
+(:func:`tests.real_array_helpers.one_informative_taxel`). Tolerances: the
 informative taxel alone and all four are each at least 90 % accurate and within 10 points of
 each other; any other taxel alone is at most 33 % + 25 points (chance plus three binomial
 standard deviations of 36 recordings, sqrt(1/3 * 2/3 / 36) = 7.9 points).
@@ -16,43 +13,7 @@ from pipeline.recordings.recording_set import Recordings
 from pipeline.run.fit import DatasetLimits, check_scene_fits
 from pipeline.run.stages import LEVELS, RECORDINGS, RESULTS
 from pipeline.run.stopwatch import Stopwatch
-
-FS_HZ = 500.0
-N_TAXELS = 4
-INFORMATIVE = 2
-PER_CLASS = 12
-CLASS_HZ = (4.0, 12.0, 30.0)
-CHANCE = 1 / len(CLASS_HZ)
-
-
-def one_informative_taxel(seed: int = 0) -> Recordings:
-    """The dataset of the module docstring: 1 s recordings, float64 (500, 4)."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(int(FS_HZ)) / FS_HZ
-    signals, labels = [], []
-    for label, hz in enumerate(CLASS_HZ):
-        for _ in range(PER_CLASS):
-            columns = []
-            for taxel in range(N_TAXELS):
-                if taxel == INFORMATIVE:
-                    phase = rng.uniform(0, 2 * np.pi)
-                    column = np.sin(2 * np.pi * hz * t + phase)
-                else:  # every class alike: a random frequency from one range
-                    f = rng.uniform(CLASS_HZ[0], CLASS_HZ[-1])
-                    column = np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
-                columns.append(column + 0.05 * rng.standard_normal(t.size))
-            signals.append(np.stack(columns, axis=1))
-            labels.append(label)
-    return Recordings(
-        signals=tuple(signals),
-        labels=np.array(labels),
-        class_names=tuple(f"c{hz:g}Hz" for hz in CLASS_HZ),
-        fs_hz=FS_HZ,
-        names=tuple(f"c{label}/r{i:02d}.npy" for i, label in enumerate(labels)),
-        units="a.u.",
-        name="one informative taxel",
-        taxel_names=tuple(f"t{k}" for k in range(N_TAXELS)),
-    )
+from tests.real_array_helpers import CHANCE, INFORMATIVE, N_TAXELS, one_informative_taxel
 
 
 def only_taxel(recordings: Recordings, taxel: int) -> Recordings:
