@@ -141,7 +141,11 @@ def array_misfits(
     if array.taxels is not None and array.taxels > n_taxels:
         held = f"{n_taxels} taxel{'s' if n_taxels > 1 else ''}" if is_array else "one channel"
         problems.append(
-            ("array.taxels", f"{array.taxels} taxels asked of {of}, whose recordings hold {held}")
+            (
+                "array.taxels",
+                f"{array.taxels} taxels asked by array.taxels of {of}, "
+                f"whose recordings hold {held}",
+            )
         )
     if is_array and array.n_taxels > 1:
         problems.append(

@@ -69,13 +69,14 @@ def test_a_sweep_over_the_taxels_read_gives_their_accuracy_and_the_report(folder
         (
             '"array.taxels" = [1, 2, 4]',
             '"array.taxels" = [5]',
-            f"array.taxels: 5 taxels asked of dataset 'one informative taxel', whose recordings "
-            f"hold {N_TAXELS} taxels",
+            "sweeps.taxels[0]: 5 taxels asked by array.taxels of dataset "
+            f"'one informative taxel', whose recordings hold {N_TAXELS} taxels",
         ),
         (
             '"array.rows" = 1',
             '"array.rows" = 3',
-            "array: a 3x1 grid of time-shifted copies asked of dataset 'one informative taxel'",
+            "sweeps.taxels[0], sweeps.taxels[1], sweeps.taxels[2]: a 3x1 grid of time-shifted "
+            "copies asked of dataset 'one informative taxel'",
         ),
     ],
 )

@@ -191,8 +191,9 @@ def test_more_taxels_than_recorded_or_a_grid_on_a_real_array_is_refused_in_one_l
     check_scene_fits(real_array(), limits)
     with pytest.raises(SceneError) as info:
         check_scene_fits(real_array(**{"array.taxels": 5}), limits)
-    assert "array.taxels: 5 taxels asked of dataset 'array', whose recordings hold 4 taxels" in str(
-        info.value
+    assert (
+        "array.taxels: 5 taxels asked by array.taxels of dataset 'array', "
+        "whose recordings hold 4 taxels" in str(info.value)
     )
     with pytest.raises(SceneError) as info:
         check_scene_fits(real_array(**{"array.rows": 3, "array.cols": 3}), limits)
@@ -201,7 +202,7 @@ def test_more_taxels_than_recorded_or_a_grid_on_a_real_array_is_refused_in_one_l
     (problem,) = array_misfits(real_array(**{"array.taxels": 2}).array, 1, False, "one")
     assert problem == (
         "array.taxels",
-        "2 taxels asked of dataset 'one', whose recordings hold one channel",
+        "2 taxels asked by array.taxels of dataset 'one', whose recordings hold one channel",
     )
 
 
