@@ -170,8 +170,8 @@ class Design:
 
     @property
     def n_taxels(self) -> int | None:
-        """Taxels of the array: the real taxels read (``taxels``) where the design sets them,
-        else ``rows * cols`` (None when either is unknown)."""
+        """The number of taxels of the array, the real taxels read (``taxels``) where the
+        design sets them, else ``rows * cols`` (None when either is unknown)."""
         if self.taxels is not None:
             return self.taxels
         return None if self.rows is None or self.cols is None else self.rows * self.cols
