@@ -9,7 +9,9 @@ splits, exact McNemar for one repeat and a paired stratified bootstrap otherwise
 of one model (:func:`pipeline.results.stats.holm`). The fewest taxels *as accurate as* :math:`K`
 is the smallest :math:`k` whose adjusted p is not below :data:`~pipeline.report.evidence.ALPHA`
 or whose accuracy is not below that of :math:`K`; not significantly below is not as accurate,
-and the difference's interval bounds the loss. The figure is the sweep's own curve
+and the difference's interval bounds the loss. Where the cube states the taxels' positions
+(its ``taxel_positions_mm`` attribute), each count's pitch, the smallest distance between two
+taxels read, is given beside it. The figure is the sweep's own curve
 (:mod:`pipeline.report.sweeps`): accuracy with its interval against the taxels read.
 """
 
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from pipeline.chain.real_taxels import chosen_taxels, taxel_pitch_mm
 from pipeline.report.blocks import Block, Heading, Paragraph, Table
 from pipeline.report.cubes import sweep_dims
 from pipeline.report.curves import Curve, sweep_curves
@@ -50,11 +53,22 @@ class TaxelCount:
         or where a point kept no per-recording results).
     holm_p : float64 (n,)
         Holm-adjusted p of each comparison (NaN where there is none).
+    pitch_mm : float64 (n,) or None
+        The pitch of the taxels read at each count (mm; NaN for one taxel), where the cube
+        states the taxels' positions (:func:`pipeline.chain.real_taxels.taxel_pitch_mm`).
     """
 
     curve: Curve
     versus_most: tuple[PairedComparison | None, ...]
     holm_p: np.ndarray
+    pitch_mm: np.ndarray | None = None
+
+    def taxels_text(self, i: int) -> str:
+        """Count ``i`` as text, with its pitch where known: ``"4 (pitch 3 mm)"``."""
+        count = f"{self.curve.x[i]:g}"
+        if self.pitch_mm is None or not math.isfinite(self.pitch_mm[i]):
+            return count
+        return f"{count} (pitch {self.pitch_mm[i]:.3g} mm)"
 
     @property
     def most(self) -> int:
@@ -78,7 +92,7 @@ class TaxelCount:
         """What the sweep says of this model, in one sentence."""
         c, most = self.curve, self.most
         head = (
-            f"{c.model.upper()} (sweep {c.sweep}): all {c.x[most]:g} taxels read give "
+            f"{c.model.upper()} (sweep {c.sweep}): all {self.taxels_text(most)} taxels read give "
             f"{pct_interval(c.mean[most], c.low[most], c.high[most])}"
         )
         fewest = self.fewest_as_accurate
@@ -87,7 +101,7 @@ class TaxelCount:
         if fewest == most:
             return f"{head}; every fewer taxels read are significantly less accurate."
         return (
-            f"{head}; the fewest taxels not significantly below them: {c.x[fewest]:g} "
+            f"{head}; the fewest taxels not significantly below them: {self.taxels_text(fewest)} "
             f"({pct_interval(c.mean[fewest], c.low[fewest], c.high[fewest])}, "
             f"{comparison(self.versus_most[fewest], float(self.holm_p[fewest]))})."
         )
@@ -106,12 +120,21 @@ def taxel_counts(cubes: Mapping[str, xr.Dataset], evidence: Evidence) -> tuple[T
         if not is_taxel_count(cube):
             continue
         (dim,) = sweep_dims(cube)
+        positions = cube.attrs.get("taxel_positions_mm")
         for curve in sweep_curves(name, cube, cube[dim].values.astype(np.float64)):
-            found.append(_tested(curve, evidence))
+            found.append(_tested(curve, evidence, positions))
     return tuple(found)
 
 
-def _tested(curve: Curve, evidence: Evidence) -> TaxelCount:
+def _pitches(x: np.ndarray, positions: Sequence | None) -> np.ndarray | None:
+    """The pitch of the taxels read at each count ``x`` of an array at ``positions``."""
+    if positions is None:
+        return None
+    where = np.asarray(positions, dtype=np.float64)
+    return np.array([taxel_pitch_mm(where, chosen_taxels(len(where), int(k), where)) for k in x])
+
+
+def _tested(curve: Curve, evidence: Evidence, positions: Sequence | None) -> TaxelCount:
     most = int(np.argmax(curve.x))
     versus = tuple(
         None if i == most else evidence.compare(key, curve.keys[most], curve.model)
@@ -121,7 +144,7 @@ def _tested(curve: Curve, evidence: Evidence) -> TaxelCount:
     holm_p = np.full(len(versus), math.nan)
     if tested:
         holm_p[tested] = holm([versus[i].p_value for i in tested])
-    return TaxelCount(curve, versus, holm_p)
+    return TaxelCount(curve, versus, holm_p, _pitches(curve.x, positions))
 
 
 def taxel_count_blocks(counts: Sequence[TaxelCount], plots: Sequence[SweepPlot]) -> Iterator[Block]:
@@ -170,7 +193,7 @@ def _rows(count: TaxelCount) -> Iterator[tuple[str, ...]]:
         yield (
             c.model.upper(),
             c.sweep,
-            f"{c.x[i]:g}",
+            count.taxels_text(int(i)),
             pct_interval(c.mean[i], c.low[i], c.high[i]),
             versus,
         )

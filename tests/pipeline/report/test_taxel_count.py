@@ -9,8 +9,9 @@ from scipy.stats import binomtest
 from pipeline.report import build_report
 from pipeline.report.blocks import Heading, Paragraph, Table
 from pipeline.report.document import report_blocks
-from pipeline.report.taxel_count import TAXEL_COUNT_TITLE
+from pipeline.report.taxel_count import TAXEL_COUNT_TITLE, _rows
 from pipeline.results.stats import holm
+from pipeline.run.entries import RecordingsInfo
 from tests.report_helpers import N_RECORDINGS, make_cubes, n_right
 
 ACCURACY = {1: 0.4, 2: 0.55, 4: 0.78, 8: 0.8, 16: 0.8}
@@ -66,3 +67,25 @@ def test_a_run_without_a_taxel_count_sweep_has_no_such_section():
     report = build_report(make_cubes({"t": {"axes": {"readout.threshold_v": [0.05, 0.09]}}}))
     assert report.taxel_counts == ()
     assert Heading(3, TAXEL_COUNT_TITLE) not in report_blocks(report, set(), version="test")
+
+
+def test_where_the_cube_states_the_positions_each_count_has_its_pitch():
+    grid = tuple((float(x), float(y)) for y in range(4) for x in range(4))  # 4 x 4 at 1 mm
+    recordings = RecordingsInfo(
+        "array", tuple(f"c{i}" for i in range(12)), 35.0, tuple(f"t{k}" for k in range(16)), grid
+    )
+    cubes = make_cubes(
+        SWEEPS, lambda scene: ACCURACY[scene.array.taxels], recordings, models=("ffnn",)
+    )
+    (count,) = build_report(cubes).taxel_counts
+    assert np.isnan(count.pitch_mm[0])
+    np.testing.assert_allclose(count.pitch_mm[1:], [3 * np.sqrt(2), 3.0, 1.0, 1.0], rtol=1e-12)
+    rows = list(_rows(count))
+    assert [row[2] for row in rows] == [
+        "1",
+        "2 (pitch 4.24 mm)",
+        "4 (pitch 3 mm)",
+        "8 (pitch 1 mm)",
+        "16 (pitch 1 mm)",
+    ]
+    assert "all 16 (pitch 1 mm) taxels read give" in count.sentence()
