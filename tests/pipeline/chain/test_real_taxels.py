@@ -19,7 +19,7 @@ from pipeline.chain.taxels import recording_taxels
 from pipeline.design.scene import Scene
 from pipeline.errors import SceneError
 from pipeline.recordings.recording_set import Recordings
-from pipeline.run.encoding import encode_trains, spike_metrics
+from pipeline.run.encoding import encode_spikes, encode_trains, spike_metrics
 from pipeline.run.fit import DatasetLimits, check_scene_fits
 from pipeline.run.stopwatch import Stopwatch
 
@@ -214,3 +214,33 @@ def test_fewer_than_one_taxel_is_refused_by_the_field():
 def test_the_field_at_its_default_changes_no_key():
     assert "taxels" not in Scene.paper().canonical()
     assert '"taxels":4' in real_array(**{"array.taxels": 4}).canonical()
+
+
+def test_chips_of_a_real_array_draw_per_taxel_read():
+    """Every chip holds one train per taxel read; chip 0 is the scene's own REAL trains, and
+    another chip draws its own mismatch (its trains differ)."""
+    recordings = array_recordings(n_taxels=4)
+    scene = real_array(
+        **{
+            "array.taxels": 2,
+            "readout.effects": {"threshold_mismatch": {"sigma_rel": 0.3}},
+            "chips.count": 3,
+        }
+    )
+    front_end = FrontEnd(offset=0.0, gain_v_per_unit=0.1)
+    spikes = encode_spikes(
+        recordings=recordings,
+        front_end=front_end,
+        array=scene.array,
+        readout=scene.readout,
+        seed=scene.seed,
+        count=scene.chips.count,
+        deployment=scene.chips.deployment,
+        watch=Stopwatch(None),
+    )
+    chips = spikes.chips
+    assert spikes.encoded.real.count.shape == (4, 2)
+    assert chips.real.count.shape == (3 * 4, 2)
+    np.testing.assert_array_equal(chips.real.count[:4], spikes.encoded.real.count)
+    assert not np.array_equal(chips.real.count[4:8], chips.real.count[:4])
+    assert len(chips.metrics) == 3
