@@ -6,6 +6,8 @@ frequency of its class (4, 12 or 30 Hz); the other three vibrate at a frequency 
 every class from the same range; every taxel carries a little white noise.
 """
 
+import dataclasses
+
 import numpy as np
 
 from pipeline.recordings.recording_set import Recordings
@@ -59,3 +61,14 @@ def write_npy_folder(recordings: Recordings, folder) -> None:
         class_folder = folder / recordings.class_names[label]
         class_folder.mkdir(exist_ok=True)
         np.save(class_folder / f"r{i:02d}.npy", np.asarray(signal))
+
+
+def only_taxel(recordings: Recordings, taxel: int) -> Recordings:
+    """The dataset of one taxel's column of ``recordings`` alone (a one-taxel array)."""
+    return dataclasses.replace(
+        recordings,
+        signals=tuple(np.asarray(s)[:, [taxel]] for s in recordings.signals),
+        name=f"taxel {taxel}",
+        taxel_names=(recordings.taxel_names[taxel],),
+        taxel_positions_mm=None,
+    )

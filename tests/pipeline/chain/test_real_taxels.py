@@ -2,6 +2,7 @@
 columns, undelayed), the chain counting the taxels read, and the refusals of a design that does
 not fit the array."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -22,14 +23,13 @@ from pipeline.recordings.recording_set import Recordings
 from pipeline.run.encoding import encode_spikes, encode_trains, spike_metrics
 from pipeline.run.fit import DatasetLimits, check_scene_fits
 from pipeline.run.stopwatch import Stopwatch
+from tests.real_array_helpers import only_taxel
 
 #: A 4 x 4 grid at 1 mm, raster order (x along a row).
 GRID_4X4 = np.array([[x, y] for y in range(4) for x in range(4)], dtype=np.float64)
 
 
-def array_recordings(
-    n_taxels: int = 4, n_samples: int = 400, positions: np.ndarray | None = None
-) -> Recordings:
+def array_recordings(n_taxels: int = 4, n_samples: int = 400) -> Recordings:
     """Four recordings of ``n_taxels`` taxels at 1 kHz, taxel ``k`` a sine of ``k + 1`` Hz
     times ``k + 1``, so every column differs."""
     t = np.arange(n_samples) / 1000.0
@@ -44,7 +44,6 @@ def array_recordings(
         units="a.u.",
         name="array",
         taxel_names=tuple(f"t{k}" for k in range(n_taxels)),
-        taxel_positions_mm=positions,
     )
 
 
@@ -114,14 +113,11 @@ def test_a_real_array_reads_its_chosen_columns_undelayed_one_row_each():
 
 def test_one_channel_recordings_keep_their_time_shift_grid():
     recordings = array_recordings(n_taxels=1)
-    one_channel = Recordings(
+    one_channel = dataclasses.replace(
+        recordings,
         signals=tuple(np.asarray(s)[:, 0] for s in recordings.signals),
-        labels=recordings.labels,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        names=recordings.names,
-        units=recordings.units,
         name="one",
+        taxel_names=(),
     )
     scene = Scene.paper()
     assert taxels_read(one_channel, scene.array) is None
@@ -156,16 +152,7 @@ def test_the_chain_counts_the_taxels_read_not_the_grid():
     # Reading all four taxels: the TRUE train of taxel k is that of column k alone.
     one = real_array(**{"array.taxels": 1})
     for k in range(4):
-        column = Recordings(
-            signals=tuple(np.asarray(s)[:, [k]] for s in recordings.signals),
-            labels=recordings.labels,
-            class_names=recordings.class_names,
-            fs_hz=recordings.fs_hz,
-            names=recordings.names,
-            units=recordings.units,
-            name="column",
-            taxel_names=(f"t{k}",),
-        )
+        column = only_taxel(recordings, k)
         alone = encode_trains(column, front_end, one.array, one.readout, one.seed, watch)
         np.testing.assert_array_equal(alone.true.count[:, 0], encoded[4].true.count[:, k])
     # Four taxels read: the address-event word is two address bits and a polarity bit, and the

@@ -5,6 +5,8 @@ each other; any other taxel alone is at most 33 % + 25 points (chance plus three
 standard deviations of 36 recordings, sqrt(1/3 * 2/3 / 36) = 7.9 points).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -21,22 +23,13 @@ from pipeline.run.entries import (
 from pipeline.run.fit import DatasetLimits, check_scene_fits
 from pipeline.run.stages import LEVELS, RECORDINGS, RESULTS
 from pipeline.run.stopwatch import Stopwatch
-from tests.real_array_helpers import CHANCE, INFORMATIVE, N_TAXELS, one_informative_taxel
-
-
-def only_taxel(recordings: Recordings, taxel: int) -> Recordings:
-    """The dataset of one taxel's column alone."""
-    return Recordings(
-        signals=tuple(np.asarray(s)[:, [taxel]] for s in recordings.signals),
-        labels=recordings.labels,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        names=recordings.names,
-        units=recordings.units,
-        name=f"taxel {taxel}",
-        taxel_names=(recordings.taxel_names[taxel],),
-    )
-
+from tests.real_array_helpers import (
+    CHANCE,
+    INFORMATIVE,
+    N_TAXELS,
+    one_informative_taxel,
+    only_taxel,
+)
 
 SCENE = Scene.from_dict(
     {
@@ -86,17 +79,7 @@ def test_any_other_taxel_alone_is_at_chance(dataset, taxel):
 def test_a_result_states_the_recorded_taxels_and_their_positions_and_reads_them_back():
     grid = [[float(x), float(y)] for y in range(2) for x in range(2)]
     recordings = one_informative_taxel()
-    placed = Recordings(
-        signals=recordings.signals,
-        labels=recordings.labels,
-        class_names=recordings.class_names,
-        fs_hz=recordings.fs_hz,
-        names=recordings.names,
-        units=recordings.units,
-        name=recordings.name,
-        taxel_names=recordings.taxel_names,
-        taxel_positions_mm=np.array(grid),
-    )
+    placed = dataclasses.replace(recordings, taxel_positions_mm=np.array(grid))
     info = RecordingsInfo.of(placed)
     assert info.taxel_names == ("t0", "t1", "t2", "t3")
     assert info.taxel_positions_mm == ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0))
