@@ -123,10 +123,10 @@ class Design:
     """One distinct point of the run (see the module docstring).
 
     ``rows``/``cols`` are None when the cube does not hold them, ``taxels`` (the real taxels
-    read of a recorded array, ``array.taxels``) when the design does not set it; rates and
-    bits are NaN when the point did not measure them; ``observation_s`` (s of touch per
-    decision, ``n_windows_used * window_s``) is NaN when the cube does not state the windows
-    used; ``seconds`` and ``accuracy`` hold the models the point trained.
+    read of a recorded array: ``array.taxels``, else all the cube's ``taxel_names``) for one
+    channel; rates and bits are NaN when the point did not measure them; ``observation_s`` (s
+    of touch per decision, ``n_windows_used * window_s``) is NaN when the cube does not state
+    the windows used; ``seconds`` and ``accuracy`` hold the models the point trained.
     """
 
     key: str
@@ -329,7 +329,7 @@ def gather_designs(cubes: Mapping[str, xr.Dataset]) -> tuple[Design, ...]:
                 "settings": list(settings[p]),
                 "rows": _int(fields[ROWS], p),
                 "cols": _int(fields[COLS], p),
-                "taxels": _int(fields[TAXELS], p),
+                "taxels": _int(fields[TAXELS], p) or _recorded_taxels(cube),
                 **{v: float(values[p]) for v, values in scalars.items()},
                 "window_s": math.nan if fields[WINDOW_S] is None else float(fields[WINDOW_S][p]),
                 "n_windows": "?" if fields[N_WINDOWS] is None else label(fields[N_WINDOWS][p]),
@@ -376,6 +376,13 @@ def _flat(variable: xr.DataArray, dims: tuple[str, ...]) -> np.ndarray:
     values = variable.transpose(*dims, ...).values
     size = int(np.prod([variable.sizes[d] for d in dims])) if dims else 1
     return values.reshape(size, *values.shape[len(dims) :]).astype(np.float64)
+
+
+def _recorded_taxels(cube: xr.Dataset) -> int | None:
+    """The taxels of the real array a cube's recordings hold (all are read where a design does
+    not set ``array.taxels``); None for one channel."""
+    names = cube.attrs.get("taxel_names")
+    return len(names) if names else None
 
 
 def _int(values: np.ndarray | None, p: int) -> int | None:

@@ -89,3 +89,15 @@ def test_where_the_cube_states_the_positions_each_count_has_its_pitch():
         "16 (pitch 1 mm)",
     ]
     assert "all 16 (pitch 1 mm) taxels read give" in count.sentence()
+
+
+def test_a_design_that_reads_every_taxel_of_a_real_array_counts_them_all():
+    recordings = RecordingsInfo("array", ("a", "b"), 35.0, tuple(f"t{k}" for k in range(16)))
+    sweeps = {
+        "t": {"set": {"array.rows": 1, "array.cols": 1}, "axes": {"readout.threshold_v": [0.05]}}
+    }
+    report = build_report(make_cubes(sweeps, lambda scene: 0.8, recordings))
+    assert [d.n_taxels for d in report.designs] == [16]
+    assert {row.sensors for row in report.run_rows} == {
+        "16 real taxels (columns of the recorded array)"
+    }
