@@ -23,6 +23,7 @@ from benchmarks import (
     object_root,
     paid,
     planning,
+    real_array,
     scale,
     search,
     snn,
@@ -34,7 +35,18 @@ from benchmarks import (
 )
 
 #: The suites of ``--quick``, then the slow ones.
-QUICK = (encoder, coding, kernels, training, decisions, snn, planning, chips, spike_store)
+QUICK = (
+    encoder,
+    coding,
+    kernels,
+    real_array,
+    training,
+    decisions,
+    snn,
+    planning,
+    chips,
+    spike_store,
+)
 SLOW = (scale, sweep, sweep_scale, warm_rerun, object_root, search, paid)
 
 

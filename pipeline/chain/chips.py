@@ -144,7 +144,7 @@ def encode_chips(
     (:func:`pipeline.chain.taxels.recording_taxels`).
     """
     fs = recordings.fs_hz
-    n_taxels = array.n_taxels
+    n_taxels = encoded.true.n_taxels  # the taxels read: a real array's or the grid's
     per_chip: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in range(count - 1)]
     reference: list[tuple[np.ndarray, np.ndarray]] = []
     for index, taxels in recording_taxels(recordings, front_end, array, stage):

@@ -229,6 +229,43 @@ def level_crossings(
     return _run(lambda t, p: _ideal_kernel(v, inv_threshold, t, p), fs_hz, max_spikes, v)
 
 
+@kernel(error_model="numpy")
+def _ideal_rows_kernel(rows, inv_threshold, times, polarity, counts):  # pragma: no cover - compiled
+    """:func:`_ideal_kernel` on every row of ``rows``, row ``r`` into ``times[r]`` and
+    ``polarity[r]``, its full count (or ``-(i + 1)``) into ``counts[r]``."""
+    for r in range(rows.shape[0]):
+        counts[r] = _ideal_kernel(rows[r], inv_threshold, times[r], polarity[r])
+
+
+def level_crossings_rows(
+    rows: np.ndarray,
+    fs_hz: float,
+    threshold_v: float,
+    *,
+    max_spikes: int = MAX_SPIKES_PER_TRAIN,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`level_crossings` of every row of ``rows`` (float64 ``(n_rows, n)``: the taxels of
+    one recording), in one kernel call: the same trains, bit for bit, without a call per row.
+    A row whose train outgrows the typical buffer, or that holds a non-finite sample, is
+    encoded again on its own (its exact buffer, or its error)."""
+    rows = np.ascontiguousarray(rows, dtype=np.float64)
+    if rows.ndim != 2:
+        raise ValueError(f"rows must be 2-D, got shape {rows.shape}")
+    _check_positive(fs_hz=fs_hz, threshold_v=threshold_v)
+    capacity = min(max(rows.shape[1] // _TYPICAL_SAMPLES_PER_SPIKE, 1024), max_spikes)
+    times = np.empty((rows.shape[0], capacity), dtype=np.float64)
+    polarity = np.empty((rows.shape[0], capacity), dtype=np.int8)
+    counts = np.empty(rows.shape[0], dtype=np.int64)
+    _ideal_rows_kernel(rows, 1.0 / threshold_v, times, polarity, counts)
+    trains = []
+    for row, count in enumerate(counts.tolist()):
+        if not 0 <= count <= capacity:
+            trains.append(level_crossings(rows[row], fs_hz, threshold_v, max_spikes=max_spikes))
+            continue
+        trains.append((times[row, :count] / fs_hz, polarity[row, :count].copy()))
+    return trains
+
+
 def reference_level_crossings(
     v: np.ndarray, fs_hz: float, threshold_v: float
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -71,6 +71,7 @@ from pipeline.chain.readout import (
     checked_signal,
     decaying_train,
     level_crossings,
+    level_crossings_rows,
     run_noisy,
 )
 from pipeline.design.effects import (
@@ -289,6 +290,17 @@ def true_train(
     thresholds."""
     nominal = (readout.threshold_v, readout.theta_min_v)
     return _encode(v, fs_hz, readout, nominal, None, 0.0, None, max_spikes)
+
+
+def true_trains(
+    rows: np.ndarray, fs_hz: float, readout: ReadoutSpec
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`true_train` of every row of ``rows`` (float64 ``(n_rows, n)``, the taxels of one
+    recording); the fixed encoder encodes them all in one kernel call
+    (:func:`~pipeline.chain.readout.level_crossings_rows`)."""
+    if readout.encoder is Encoder.LCS:
+        return level_crossings_rows(rows, fs_hz, readout.threshold_v)
+    return [true_train(row, fs_hz, readout) for row in rows]
 
 
 def _encode(v, fs_hz, readout, up, down, floor_v, noise, max_spikes):

@@ -16,10 +16,14 @@ copy.
 
 Taxels with equal delays (e.g. the columns of a grid scanned along y) see the same signal; it is
 stored once (:class:`TaxelSignals` keeps one row per distinct delay and an index per taxel).
+
+Recordings of a real array (one column per taxel) need no delays: each taxel read is its own
+column, one row each (:mod:`pipeline.chain.real_taxels` chooses which).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
@@ -27,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.chain.frontend import FrontEnd
+from pipeline.chain.real_taxels import taxel_rows, taxels_read
 from pipeline.design.scene import ArraySpec
 from pipeline.recordings.recording_set import Recordings
 
@@ -136,9 +141,19 @@ def recording_taxels(
     """Each recording's index and the signals of every taxel of ``array`` on it, scaled by
     ``front_end``, one recording at a time (a recording's taxel signals are as large as it times
     the taxels: they are made when asked for and never kept); ``stage("taxels")`` times making
-    them."""
-    delays = taxel_delays_s(array)
+    them. The taxels are time-shifted copies of one channel, or the columns of a real array that
+    ``array`` reads (:func:`pipeline.chain.real_taxels.taxels_read`)."""
+    make = _taxel_maker(recordings, array)
     for index, signal in enumerate(recordings.signals):
         with stage("taxels"):
-            taxels = taxel_signals(front_end.apply(signal), recordings.fs_hz, delays)
+            taxels = make(front_end.apply(signal))
         yield index, taxels
+
+
+def _taxel_maker(recordings: Recordings, array: ArraySpec) -> Callable[[np.ndarray], TaxelSignals]:
+    """Taxel signals from one scaled recording: the columns read of a real array, else the
+    delayed copies of its one channel."""
+    columns = taxels_read(recordings, array)
+    if columns is not None:
+        return lambda signal: TaxelSignals(taxel_rows(signal, columns), np.arange(len(columns)))
+    return functools.partial(taxel_signals, fs_hz=recordings.fs_hz, delays_s=taxel_delays_s(array))

@@ -177,17 +177,34 @@ _SIDE = Range(1, MAX_TAXELS_PER_SIDE)
 
 @dataclass(frozen=True)
 class ArraySpec:
-    """Taxel grid ``rows x cols`` at ``pitch_mm``, scanned at ``speed_mm_s`` along ``direction``."""
+    """Taxel grid ``rows x cols`` at ``pitch_mm``, scanned at ``speed_mm_s`` along ``direction``:
+    an array made of time-shifted copies of one recorded channel.
+
+    On recordings of a real array (one column per taxel), ``taxels`` says how many of its taxels
+    the design reads (:mod:`pipeline.chain.real_taxels`) and the grid stays ``1 x 1``: time
+    shifts and real taxels are two ways of making an array, not to be mixed
+    (:mod:`pipeline.run.fit` refuses a design that asks for both, or for more taxels than the
+    recordings hold).
+    """
 
     rows: int = param(3, "1", "taxel rows of the array", within=_SIDE, cost=Cost.SIZE)
     cols: int = param(3, "1", "taxel columns of the array", within=_SIDE, cost=Cost.SIZE)
     pitch_mm: float = param(1.0, "mm", "distance between neighbouring taxels", within=POSITIVE)
     speed_mm_s: float = param(20.0, "mm/s", "scan speed across the array", within=POSITIVE)
     direction: ScanDirection = param(ScanDirection.Y, "1", "scan direction across the taxel grid")
+    taxels: int | None = param(
+        None,
+        "1",
+        "taxels of a real array read (recordings with one column per taxel; unset: all): "
+        "spread evenly over the taxel positions when the dataset gives them, else over its "
+        "declared order of taxels",
+        within=Range(1, MAX_TAXELS_PER_SIDE**2),
+    )
 
     @property
     def n_taxels(self) -> int:
-        """Number of taxels, ``rows * cols``."""
+        """Number of taxels of the time-shift grid, ``rows * cols``; the taxels of a real array
+        are :func:`pipeline.chain.real_taxels.taxels_read`."""
         return self.rows * self.cols
 
 

@@ -25,6 +25,8 @@ Stages, each a module with the frozen dataclasses it returns:
 - :mod:`~pipeline.report.decision_time`: accuracy against decision time, the earliest decision not
   significantly below the full touch, early exit and the energy per decision (decoder and
   readout), where the cubes keep decisions along the touch;
+- :mod:`~pipeline.report.taxel_count`: accuracy against the number of a real array's taxels
+  read, each count compared with the most read, where a sweep varies ``array.taxels``;
 - :mod:`~pipeline.report.analysis`: :func:`~pipeline.report.analysis.build_report`, all of the
   above from the cubes;
 - :mod:`~pipeline.report.figures`: matplotlib figures of a

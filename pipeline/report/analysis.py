@@ -49,6 +49,7 @@ from pipeline.report.paper import TableRow
 from pipeline.report.recordings_needed import RecordingsNeeded, recordings_needed
 from pipeline.report.sweeps import Heatmap, SweepPlot, heatmap, sweep_plot
 from pipeline.report.tables import run_rows
+from pipeline.report.taxel_count import TaxelCount, taxel_counts
 from pipeline.report.trials import SearchFront, search_fronts
 from pipeline.results.decoder_energy import DecoderEnergyModel
 from pipeline.results.hardware_constants import Constants
@@ -71,7 +72,9 @@ class Report:
     Fig. 10's deployments side by side over chips, ``yield_answers`` answer by yield
     (:func:`~pipeline.report.answer.yield_answers`); both only for runs of several chips per
     design. ``recordings_needed`` says, per model, how many recordings per class would tell the
-    answer's designs from the best (:mod:`pipeline.report.recordings_needed`).
+    answer's designs from the best (:mod:`pipeline.report.recordings_needed`). ``taxel_counts``
+    holds accuracy against the real taxels read, per model, of every sweep of ``array.taxels``
+    (:mod:`pipeline.report.taxel_count`).
     """
 
     grids: tuple[str, ...]
@@ -102,6 +105,7 @@ class Report:
     yield_answers: tuple[YieldAnswer, ...] = ()
     constants: Constants = field(default_factory=Constants)
     recordings_needed: tuple[RecordingsNeeded, ...] = ()
+    taxel_counts: tuple[TaxelCount, ...] = ()
 
     @property
     def panels(self) -> tuple[Panel, ...]:
@@ -238,6 +242,7 @@ def build_report(
         yield_answers=yield_answers(designs, evidence, energy),
         constants=constants,
         recordings_needed=recordings_needed(answers, evidence, classes, dataset, cost),
+        taxel_counts=taxel_counts(cubes, evidence),
     )
 
 

@@ -49,7 +49,15 @@ from pipeline.report.cubes import (
     point_keys,
     sweep_dims,
 )
-from pipeline.report.panels import COLS, MISMATCH_SIGMA_REL, N_WINDOWS, ROWS, THRESHOLD_V, WINDOW_S
+from pipeline.report.panels import (
+    COLS,
+    MISMATCH_SIGMA_REL,
+    N_WINDOWS,
+    ROWS,
+    TAXELS,
+    THRESHOLD_V,
+    WINDOW_S,
+)
 from pipeline.report.text import label
 from pipeline.results.cube import work_seconds
 from pipeline.results.hardware_constants import Constants
@@ -114,10 +122,11 @@ class Setting:
 class Design:
     """One distinct point of the run (see the module docstring).
 
-    ``rows``/``cols`` are None when the cube does not hold them; rates and bits are NaN when the
-    point did not measure them; ``observation_s`` (s of touch per decision, ``n_windows_used *
-    window_s``) is NaN when the cube does not state the windows used; ``seconds`` and
-    ``accuracy`` hold the models the point trained.
+    ``rows``/``cols`` are None when the cube does not hold them, ``taxels`` (the real taxels
+    read of a recorded array: ``array.taxels``, else all the cube's ``taxel_names``) for one
+    channel; rates and bits are NaN when the point did not measure them; ``observation_s`` (s
+    of touch per decision, ``n_windows_used * window_s``) is NaN when the cube does not state
+    the windows used; ``seconds`` and ``accuracy`` hold the models the point trained.
     """
 
     key: str
@@ -137,6 +146,7 @@ class Design:
     mismatch_sigma_rel: float = math.nan
     yields: Mapping[str, ChipYield] = field(default_factory=dict)
     a_vt_v_m: float = A_VT_V_M
+    taxels: int | None = None
 
     @property
     def taxel_area_m2(self) -> float:
@@ -163,7 +173,10 @@ class Design:
 
     @property
     def n_taxels(self) -> int | None:
-        """Taxels of the array, ``rows * cols`` (None when either is unknown)."""
+        """The number of taxels of the array, the real taxels read (``taxels``) where the
+        design sets them, else ``rows * cols`` (None when either is unknown)."""
+        if self.taxels is not None:
+            return self.taxels
         return None if self.rows is None or self.cols is None else self.rows * self.cols
 
 
@@ -293,7 +306,7 @@ def gather_designs(
             v: _flat(cube[v], dims) if v in cube else np.full(mean.shape[0], np.nan)
             for v in ("event_rate_hz", "data_rate_bps", "equivalent_bits")
         }
-        read = (ROWS, COLS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
+        read = (ROWS, COLS, TAXELS, WINDOW_S, N_WINDOWS, THRESHOLD_V, MISMATCH_SIGMA_REL)
         fields = {f: field_values(cube, f) for f in read}
         fields = {f: None if v is None else v.ravel() for f, v in fields.items()}
         yields = chip_yields(cube)
@@ -327,6 +340,7 @@ def gather_designs(
                 "settings": list(settings[p]),
                 "rows": _int(fields[ROWS], p),
                 "cols": _int(fields[COLS], p),
+                "taxels": _int(fields[TAXELS], p) or _recorded_taxels(cube),
                 **{v: float(values[p]) for v, values in scalars.items()},
                 "window_s": math.nan if fields[WINDOW_S] is None else float(fields[WINDOW_S][p]),
                 "n_windows": "?" if fields[N_WINDOWS] is None else label(fields[N_WINDOWS][p]),
@@ -373,6 +387,13 @@ def _flat(variable: xr.DataArray, dims: tuple[str, ...]) -> np.ndarray:
     values = variable.transpose(*dims, ...).values
     size = int(np.prod([variable.sizes[d] for d in dims])) if dims else 1
     return values.reshape(size, *values.shape[len(dims) :]).astype(np.float64)
+
+
+def _recorded_taxels(cube: xr.Dataset) -> int | None:
+    """The taxels of the real array a cube's recordings hold (all are read where a design does
+    not set ``array.taxels``); None for one channel."""
+    names = cube.attrs.get("taxel_names")
+    return len(names) if names else None
 
 
 def _int(values: np.ndarray | None, p: int) -> int | None:

@@ -2,7 +2,9 @@
 
 Order: the answer to the designer's question at a glance (per model, one small table of the best
 design and the cheapest designs not significantly below it, by data rate and by power, with one
-sentence on how sure that is; then the power front figure), then, once and collapsed in HTML,
+sentence on how sure that is; then the power front figure; then, for sweeps of a real array's
+taxels read, accuracy against their number: :mod:`pipeline.report.taxel_count`), then, once and
+collapsed in HTML,
 the method and every comparison with the best (:mod:`pipeline.report.answer`); the paper's
 claims judged by tests (:mod:`pipeline.report.claims`: a table of verdicts, the tests folded
 below it), Table I with the paper's rows
@@ -55,6 +57,7 @@ from pipeline.report.render import FIGURES, TITLE, render_html, render_markdown
 from pipeline.report.seeds import REPORT_SEED
 from pipeline.report.sweeps import Heatmap, SweepPlot
 from pipeline.report.tables import TABLE_COLUMNS, table_notes, table_rows
+from pipeline.report.taxel_count import taxel_count_blocks
 from pipeline.report.text import (
     NO_INTERVAL_WHY,
     area_text,
@@ -176,6 +179,7 @@ def _answer_blocks(report: Report, drawn: set[str]) -> Iterator[Block]:
             yield Paragraph(yield_sentence(by_yield[answer.model]))
     if Cost.POWER.stem in drawn and any(f.cost is Cost.POWER for f in report.fronts):
         yield Figure(Cost.POWER.stem, _power_caption(report))
+    yield from taxel_count_blocks(report.taxel_counts, report.sweep_plots)
     yield Details(
         METHOD_TITLE,
         (

@@ -14,6 +14,7 @@ from collections.abc import Iterator, Sequence
 
 from pipeline.report import paper
 from pipeline.report.answer import Candidate, ModelAnswer
+from pipeline.report.designs import Design
 from pipeline.report.paper import TableRow
 from pipeline.report.text import fold_spread, pct_interval, rate
 
@@ -65,15 +66,23 @@ def _model_rows(answer: ModelAnswer, dataset: str, n_classes: int | None) -> Ite
         yield _row(answer.best, answer.model, "best", dataset, n_classes)
 
 
+def sensors_text(d: Design) -> str:
+    """Table I's sensor cell: the real taxels read of a recorded array, or the grid of
+    time-shifted copies of one recorded channel."""
+    if d.taxels is not None:
+        return (
+            f"{d.taxels} real taxel{'' if d.taxels == 1 else 's'} (columns of the recorded array)"
+        )
+    if d.n_taxels is None:
+        return "unknown"
+    return f"{d.n_taxels} ({d.rows} x {d.cols} taxel{'' if d.n_taxels == 1 else 's'})"
+
+
 def _row(chosen: Candidate, model: str, role: str, dataset: str, n_classes: int | None) -> TableRow:
     d = chosen.design
     bits = d.equivalent_bits
     chance = f" ({100 / n_classes:.2f} %)" if n_classes else " (chance unknown)"
-    taxels = (
-        "unknown"
-        if d.n_taxels is None
-        else f"{d.n_taxels} ({d.rows} x {d.cols} taxel{'' if d.n_taxels == 1 else 's'})"
-    )
+    taxels = sensors_text(d)
     window = f"{d.window_s:g} s" if math.isfinite(d.window_s) else "? s"
     a = chosen.accuracy
     return TableRow(

@@ -103,7 +103,8 @@ Attributes: ``grid``, ``sweep``, ``title``, ``mode``, ``seed``, ``training_seed`
 scene's), ``package_version`` and the versions of Python and of the libraries that shape the results
 as ``version_<name>`` strings (:mod:`pipeline.results.provenance`); ``correlation_notes`` where a
 correlation could not be computed; and, where every point's result states the same, what the
-recordings were: ``dataset_name``, ``sampling_rate_hz``, ``class_names`` and ``n_classes``.
+recordings were: ``dataset_name``, ``sampling_rate_hz``, ``class_names`` and ``n_classes``, and
+for a real array ``taxel_names`` and ``taxel_positions_mm`` (where the dataset gives them).
 """
 
 from __future__ import annotations

@@ -4,7 +4,8 @@
 ``package_version`` and the versions of Python and of the libraries that shape the results as
 ``version_<name>`` strings (:data:`DEPENDENCY_VERSIONS`); and, where every point's result states
 the same, what the recordings were: ``dataset_name``, ``sampling_rate_hz``, ``class_names`` and
-``n_classes`` (:func:`recordings_attrs`).
+``n_classes``, and for a real array its ``taxel_names`` and ``taxel_positions_mm`` (where the
+dataset gives them) (:func:`recordings_attrs`).
 """
 
 from __future__ import annotations
@@ -54,7 +55,13 @@ def recordings_attrs(infos: Sequence[RecordingsInfo | None]) -> dict[str, Any]:
     """What every point says alike of its recordings; a fact any point lacks or contradicts is
     left out rather than guessed."""
     attrs: dict[str, Any] = {}
-    for name in ("dataset_name", "sampling_rate_hz", "class_names"):
+    for name in (
+        "dataset_name",
+        "sampling_rate_hz",
+        "class_names",
+        "taxel_names",
+        "taxel_positions_mm",
+    ):
         values = {None if info is None else getattr(info, name) for info in infos}
         if len(values) == 1 and None not in values:
             attrs[name] = values.pop()
@@ -64,4 +71,8 @@ def recordings_attrs(infos: Sequence[RecordingsInfo | None]) -> dict[str, Any]:
         # A list, not a tuple: attributes come back from Zarr as lists.
         attrs["class_names"] = [str(c) for c in attrs["class_names"]]
         attrs["n_classes"] = len(attrs["class_names"])
+    if "taxel_names" in attrs:
+        attrs["taxel_names"] = [str(t) for t in attrs["taxel_names"]]
+    if "taxel_positions_mm" in attrs:
+        attrs["taxel_positions_mm"] = [[float(x), float(y)] for x, y in attrs["taxel_positions_mm"]]
     return attrs

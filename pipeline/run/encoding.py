@@ -31,7 +31,7 @@ from pipeline.chain.metrics import (
     pooled_ssnr_db,
     ste_per_train,
 )
-from pipeline.chain.readout_effects import real_train, true_train
+from pipeline.chain.readout_effects import real_train, true_trains
 from pipeline.chain.spikes import Encoded, SpikeTrains
 from pipeline.chain.taxels import recording_taxels, taxel_signals
 from pipeline.design.scene import ArraySpec, Deployment, ReadoutSpec
@@ -79,16 +79,16 @@ def encode_trains(
     (None if it names none).
     """
     fs = recordings.fs_hz
-    true_trains, real_trains, durations = [], [], []
+    true_per_taxel, real_per_taxel, durations = [], [], []
     for index, taxels in recording_taxels(recordings, front_end, array, watch.stage):
         with watch.stage("readout"):
-            per_row = [true_train(row, fs, readout) for row in taxels.signals]
+            per_row = true_trains(taxels.signals, fs, readout)
             true = [per_row[row] for row in taxels.taxel_row]
-            true_trains.extend(true)
+            true_per_taxel.extend(true)
             durations.append((taxels.n_samples - 1) / fs)
             if readout.is_ideal:
                 continue
-            real_trains.extend(
+            real_per_taxel.extend(
                 real_train(
                     taxels.taxel(taxel),
                     fs,
@@ -99,11 +99,13 @@ def encode_trains(
                 )
                 for taxel in range(taxels.n_taxels)
             )
-    n_taxels = array.n_taxels
-    true_set = SpikeTrains.concatenate(true_trains, n_taxels, np.asarray(durations))
+    n_taxels = len(true_per_taxel) // len(
+        durations
+    )  # the taxels read: a real array's or the grid's
+    true_set = SpikeTrains.concatenate(true_per_taxel, n_taxels, np.asarray(durations))
     if readout.is_ideal:
         return Encoded(true_set, true_set)
-    return Encoded(true_set, SpikeTrains.concatenate(real_trains, n_taxels, true_set.duration_s))
+    return Encoded(true_set, SpikeTrains.concatenate(real_per_taxel, n_taxels, true_set.duration_s))
 
 
 def spike_metrics(encoded: Encoded, readout: ReadoutSpec) -> SpikeMetrics:
@@ -179,9 +181,7 @@ def _encode_tiny_signal(readout: ReadoutSpec) -> SpikeMetrics:
     signal = 0.4 * readout.full_scale_v * np.sin(2 * np.pi * _WARM_HZ * t_s)
     taxels = taxel_signals(signal, _WARM_FS_HZ, np.zeros(1))
     duration = np.array([(taxels.n_samples - 1) / _WARM_FS_HZ])
-    true = SpikeTrains.concatenate(
-        [true_train(row, _WARM_FS_HZ, readout) for row in taxels.signals], 1, duration
-    )
+    true = SpikeTrains.concatenate(true_trains(taxels.signals, _WARM_FS_HZ, readout), 1, duration)
     real = true
     if not readout.is_ideal:
         train = real_train(taxels.taxel(0), _WARM_FS_HZ, readout, seed=0, taxel=0, recording=0)

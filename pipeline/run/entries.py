@@ -33,6 +33,7 @@ import numpy as np
 from pipeline.chain.chips import ChipTrains
 from pipeline.chain.metrics import SpikeMetrics
 from pipeline.chain.spikes import Encoded
+from pipeline.recordings.recording_set import Recordings
 from pipeline.run.chips import (
     CHIP_RESULT_VARIABLES,
     CHIP_SPIKE_VARIABLES,
@@ -86,11 +87,29 @@ class RecordingsInfo:
         Class names, in label order.
     sampling_rate_hz : float or None
         Sampling rate of the recordings (Hz).
+    taxel_names : tuple[str, ...] or None
+        The recorded taxels of a real array, in the declared order; None for one channel.
+    taxel_positions_mm : tuple[tuple[float, float], ...] or None
+        Each taxel's ``[x, y]`` (mm), where the dataset gives them.
     """
 
     dataset_name: str | None = None
     class_names: tuple[str, ...] | None = None
     sampling_rate_hz: float | None = None
+    taxel_names: tuple[str, ...] | None = None
+    taxel_positions_mm: tuple[tuple[float, float], ...] | None = None
+
+    @classmethod
+    def of(cls, recordings: Recordings) -> RecordingsInfo:
+        """What a result says of ``recordings``."""
+        positions = recordings.taxel_positions_mm
+        return cls(
+            recordings.name,
+            recordings.class_names,
+            recordings.fs_hz,
+            recordings.taxel_names or None,
+            None if positions is None else tuple((float(x), float(y)) for x, y in positions),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -397,6 +416,10 @@ def _recordings_attrs(info: RecordingsInfo | None) -> Attrs:
         if not (math.isfinite(rate) and rate > 0):
             raise ValueError(f"recordings.sampling_rate_hz: {rate!r} is not a rate > 0")
         attrs["sampling_rate_hz"] = rate
+    if info.taxel_names is not None:
+        attrs["taxel_names"] = [str(name) for name in info.taxel_names]
+    if info.taxel_positions_mm is not None:
+        attrs["taxel_positions_mm"] = [[float(x), float(y)] for x, y in info.taxel_positions_mm]
     return attrs
 
 
@@ -413,8 +436,13 @@ def _read_recordings(attrs: Mapping[str, Any]) -> RecordingsInfo | None:
         raise TypeError("attribute 'class_names' is not a list of str")
     if rate is not None and (isinstance(rate, bool) or not isinstance(rate, int | float)):
         raise TypeError("attribute 'sampling_rate_hz' is not a number")
+    taxels, positions = attrs.get("taxel_names"), attrs.get("taxel_positions_mm")
     return RecordingsInfo(
         dataset_name=name,
         class_names=None if names is None else tuple(names),
         sampling_rate_hz=None if rate is None else float(rate),
+        taxel_names=None if taxels is None else tuple(str(t) for t in taxels),
+        taxel_positions_mm=None
+        if positions is None
+        else tuple((float(x), float(y)) for x, y in positions),
     )

@@ -1,6 +1,8 @@
 """Does a scene fit its recordings? The checks made before any work starts.
 
-A scene fits its recordings when the taxel delays of its array leave at least 2 samples of the
+A scene fits its recordings when its array fits them (no more taxels read than a real array
+holds, no time-shift grid on one: :func:`pipeline.chain.real_taxels.array_misfits`), the taxel
+delays of its array leave at least 2 samples of the
 shortest recording, the remaining duration ``T = (n - cut - 1) / fs`` holds at least one whole
 window of ``coding.window_s`` (and a fixed ``coding.n_windows`` of them:
 :func:`pipeline.design.windows.whole_windows`), and every class has at least ``training.folds``
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.chain.real_taxels import array_misfits
 from pipeline.chain.taxels import cut_samples, taxel_delays_s
 from pipeline.design.grid import Grid
 from pipeline.design.scene import ArraySpec, CodingSpec, DatasetKind, DatasetSpec, Scene
@@ -51,6 +54,10 @@ class DatasetLimits:
         unknown.
     smallest_class : str
         Name of the smallest class (the first of equally small ones); empty if unknown.
+    n_taxels : int
+        Taxels each recording holds (1 for one channel).
+    is_array : bool
+        Whether the recordings hold the named columns of a real array.
     """
 
     fs_hz: float
@@ -59,6 +66,8 @@ class DatasetLimits:
     shortest: str = ""
     dataset: str = ""
     smallest_class: str = ""
+    n_taxels: int = 1
+    is_array: bool = False
 
     @classmethod
     def of(cls, recordings: Recordings) -> DatasetLimits:
@@ -74,6 +83,8 @@ class DatasetLimits:
             shortest=recordings.names[shortest],
             dataset=recordings.name,
             smallest_class=recordings.class_names[smallest],
+            n_taxels=recordings.n_taxels,
+            is_array=recordings.is_array,
         )
 
     @classmethod
@@ -121,7 +132,7 @@ def _misfits(
 ) -> list[tuple[str, str]]:
     """:func:`scene_misfits` of a scene with this ``array``, ``coding`` and ``training.folds``:
     all it depends on, so that a grid checks each distinct combination once."""
-    problems: list[tuple[str, str]] = []
+    problems = array_misfits(array, limits.n_taxels, limits.is_array, limits.dataset)
     cut = cut_samples(taxel_delays_s(array), limits.fs_hz)
     remaining = limits.min_samples - cut
     if remaining < 2:

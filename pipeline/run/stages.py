@@ -365,7 +365,7 @@ def _result_entry(
         fold_accuracy={model: cv.fold_accuracy for model, cv in by_name.items()},
         seconds=seconds.work,
         metrics=made(SPIKES.name).metrics,
-        recordings=RecordingsInfo(recordings.name, recordings.class_names, recordings.fs_hz),
+        recordings=RecordingsInfo.of(recordings),
         out_of_fold=OutOfFold(
             recording_names=tuple(recordings.names),
             labels=recordings.labels,

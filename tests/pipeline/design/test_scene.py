@@ -254,7 +254,7 @@ def test_a_value_out_of_its_declared_range_is_refused_with_the_range():
     for info in scene_fields():
         if info.range.startswith("between"):
             low = float(info.range.split()[1])
-            value = int(low) - 1 if info.type == "int" else low / 2 - 1
+            value = int(low) - 1 if info.type in ("int", "int (optional)") else low / 2 - 1
             path = info.path
             with pytest.raises(SceneError, match=f"{path}: .* is out of range: must be between"):
                 Scene().replace(**{path: value})
