@@ -13,6 +13,7 @@ import pytest
 from pipeline.design.grid import Grid
 from pipeline.design.scene import Scene
 from pipeline.design.space import Space, load_space
+from pipeline.results.hardware_constants import DECLARED, Constants, read_constants
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -30,9 +31,15 @@ def block_with(page: str, marker: str) -> str:
     return block
 
 
-def load_toml_example(text: str) -> Scene | Grid | Space:
-    """A TOML example as what it shows: a design space, a grid or a scene."""
+def load_toml_example(text: str) -> Scene | Grid | Space | Constants:
+    """A TOML example as what it shows: a constants file, a design space, a grid or a scene."""
     table = tomllib.loads(text)
+    if table and set(table) <= set(DECLARED):
+        problems: list[str] = []
+        constants = read_constants(table, "a documented constants file", problems)
+        if problems:
+            raise ValueError("; ".join(problems))
+        return constants
     if "objectives" in table:
         return Space.from_dict(table)
     if "sweeps" in table:
