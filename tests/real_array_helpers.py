@@ -1,8 +1,8 @@
 """A synthetic real array whose class information sits in one taxel only.
 
 Three classes, 12 recordings each, of 4 taxels at 500 Hz, 1 s long: taxel 2 (the one a design
-reading one taxel of four reads, :func:`pipeline.chain.real_taxels.chosen_taxels`) vibrates at a
-frequency of its class (4, 12 or 30 Hz); the other three vibrate at a frequency drawn alike for
+reading one taxel of four reads, :func:`pipeline.recordings.taxel_choice.chosen_taxels`) vibrates
+at a frequency of its class (4, 12 or 30 Hz); the other three vibrate at a frequency drawn alike for
 every class from the same range; every taxel carries a little white noise.
 """
 

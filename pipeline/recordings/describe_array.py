@@ -23,8 +23,9 @@ accuracy against taxels read
     first difference times ``fs`` (units/s) and the range (max - min), stratified k-fold
     cross-validation with ``k = min(folds, fewest recordings of a class)`` (shuffled, seed 0).
     It is run on each taxel alone (the lowest, median and highest accuracy are kept with their
-    taxels), on ``1, 2, 4, ...`` taxels spread evenly over the declared order (indices
-    ``round(linspace(0, n - 1, m))``), and on all. This measures what the recordings hold,
+    taxels), on ``1, 2, 4, ...`` taxels chosen as a design's ``array.taxels`` chooses them
+    (:mod:`pipeline.recordings.taxel_choice`: over the positions when given, else over the
+    declared order), and on all. This measures what the recordings hold,
     not what a readout keeps of it: a taxel that helps here and not in a sweep loses its
     information in the readout. With fewer than 2 recordings in some class the accuracies are
     NaN.
@@ -49,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.recordings.recording_set import Recordings, listed
+from pipeline.recordings.taxel_choice import chosen_taxels
 
 __all__ = [
     "QUIET_SHARE",
@@ -58,7 +60,6 @@ __all__ = [
     "SubsetAccuracy",
     "TaxelFacts",
     "describe_array",
-    "evenly_spread",
     "taxel_mean",
 ]
 
@@ -99,8 +100,8 @@ class SubsetAccuracy:
 class ArrayDescription:
     """What :func:`describe_array` found (module docstring).
 
-    ``single`` holds each taxel alone, in the declared order; ``subsets`` the evenly spread
-    subsets of 1, 2, 4, ... taxels and all of them; ``chance`` the largest class's share;
+    ``single`` holds each taxel alone, in the declared order; ``subsets`` the subsets a design
+    reads of 1, 2, 4, ... taxels and all of them; ``chance`` the largest class's share;
     ``folds`` the cross-validation used (0 when none could be).
     """
 
@@ -158,11 +159,6 @@ def taxel_mean(recordings: Recordings) -> Recordings:
     )
 
 
-def evenly_spread(n_taxels: int, count: int) -> np.ndarray:
-    """int64 indices of ``count`` of ``n_taxels`` taxels spread evenly over the declared order."""
-    return np.unique(np.round(np.linspace(0, n_taxels - 1, count)).astype(np.int64))
-
-
 def describe_array(
     recordings: Recordings, *, span_s: float, window_s: float, folds: int
 ) -> ArrayDescription:
@@ -206,7 +202,7 @@ def describe_array(
 
     single = tuple(accuracy(np.array([j])) for j in range(n))
     sizes = sorted({*(2**p for p in range(int(math.log2(n)) + 1)), n})
-    subsets = tuple(accuracy(evenly_spread(n, m)) for m in sizes)
+    subsets = tuple(accuracy(chosen_taxels(n, m, recordings.taxel_positions_mm)) for m in sizes)
     return ArrayDescription(
         taxels=facts,
         span_s=n_span / recordings.fs_hz,

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.chain.real_taxels import chosen_taxels, taxel_pitch_mm
+from pipeline.recordings.taxel_choice import chosen_taxels, taxel_pitch_mm
 from pipeline.report.blocks import Block, Heading, Paragraph, Table
 from pipeline.report.cubes import sweep_dims
 from pipeline.report.curves import Curve, sweep_curves
@@ -55,7 +55,7 @@ class TaxelCount:
         Holm-adjusted p of each comparison (NaN where there is none).
     pitch_mm : float64 (n,) or None
         The pitch of the taxels read at each count (mm; NaN for one taxel), where the cube
-        states the taxels' positions (:func:`pipeline.chain.real_taxels.taxel_pitch_mm`).
+        states the taxels' positions (:func:`pipeline.recordings.taxel_choice.taxel_pitch_mm`).
     """
 
     curve: Curve
