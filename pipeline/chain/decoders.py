@@ -342,6 +342,7 @@ class SNNDecoder(Decoder):
             tau_mem_s=snn.tau_mem_s,
             threshold=snn.threshold,
             surrogate_slope=snn.surrogate_slope,
+            time_constants=snn.time_constants,
         )
 
     def epochs(self, training: TrainingSpec) -> int:

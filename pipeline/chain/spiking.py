@@ -60,20 +60,24 @@ from collections.abc import Sequence
 
 import numpy as np
 import torch
+from torch import nn
 
 from pipeline.chain.folded import FoldModel, two_layers
+from pipeline.design.scene import SNNTimeConstants
 from pipeline.jit import kernel
 
 
 @kernel()
-def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # pragma: no cover
+def _lif_forward(current, beta, threshold, slope, spikes, slopes, previous, rate):  # pragma: no cover
     """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
-    derivative ``ds/du``) and, unless it is empty, ``spikes`` are float32 ``(M, T, N)`` (``M``
-    independent groups, each with its ``N`` neurons contiguous); ``rate`` float32 ``(M, N)``
-    gets each neuron's mean spike count over the steps."""
+    derivative ``ds/du``) and, unless they are empty, ``spikes`` and ``previous`` (each step's
+    membrane before it, :math:`u_{t-1}`) are float32 ``(M, T, N)`` (``M`` independent groups,
+    each with its ``N`` neurons contiguous); ``beta`` float32 ``(M, N)`` is each neuron's decay;
+    ``rate`` float32 ``(M, N)`` gets each neuron's mean spike count over the steps."""
     n_groups, n_steps, n = current.shape
     keep = spikes.size > 0
-    beta, threshold, slope = np.float32(beta), np.float32(threshold), np.float32(slope)
+    keep_previous = previous.size > 0
+    threshold, slope = np.float32(threshold), np.float32(slope)
     u = np.zeros(n, dtype=np.float32)
     s = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
@@ -81,8 +85,10 @@ def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # prag
         s[:] = 0.0
         rate[m, :] = 0.0
         for t in range(n_steps):
+            if keep_previous:
+                previous[m, t, :] = u
             for i in range(n):
-                value = beta * u[i] + current[m, t, i] - threshold * s[i]
+                value = beta[m, i] * u[i] + current[m, t, i] - threshold * s[i]
                 u[i] = value
                 s[i] = np.float32(1.0) if value > threshold else np.float32(0.0)
                 rate[m, i] += s[i]
@@ -94,64 +100,88 @@ def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # prag
 
 
 @kernel()
-def _lif_backward(grad_spikes, grad_rate, slopes, beta, grad_current):  # pragma: no cover
+def _lif_backward(
+    grad_spikes, grad_rate, slopes, beta, previous, grad_current, grad_beta
+):  # pragma: no cover
     """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
-    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives."""
+    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives; and, unless
+    ``previous`` is empty, ``dL/d beta`` (``grad_beta``, ``(M, N)``): the sum over the steps of
+    :math:`g_t u_{t-1}`."""
     n_groups, n_steps, n = slopes.shape
     keep = grad_spikes.size > 0
-    beta = np.float32(beta)
+    keep_previous = previous.size > 0
     per_step = np.float32(1.0 / n_steps)
     g = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
         g[:] = 0.0
+        if keep_previous:
+            grad_beta[m, :] = 0.0
         for t in range(n_steps - 1, -1, -1):
             for i in range(n):
                 grad = grad_rate[m, i] * per_step
                 if keep:
                     grad += grad_spikes[m, t, i]
-                g[i] = grad * slopes[m, t, i] + beta * g[i]
+                g[i] = grad * slopes[m, t, i] + beta[m, i] * g[i]
                 grad_current[m, t, i] = g[i]
+                if keep_previous:
+                    grad_beta[m, i] += g[i] * previous[m, t, i]
 
 
 class LeakyLayer(torch.autograd.Function):
     """Spikes ``float32 (M, T, N)`` of ``M x N`` LIF neurons driven by ``current`` ``float32
     (M, T, N)`` over ``T`` steps (see the module docstring), and their mean over the steps
-    ``(M, N)``; differentiable in ``current`` through the surrogate. With ``keep=False`` the
-    spikes are not kept (an empty tensor): training reads only the mean, and the time loop
-    then moves a third less memory."""
+    ``(M, N)``; differentiable in ``current`` through the surrogate, and in ``beta`` when it is
+    a tensor ``(M, N)`` that requires grad (a float is one fixed decay for every neuron). With
+    ``keep=False`` the spikes are not kept (an empty tensor): training reads only the mean, and
+    the time loop then moves a third less memory."""
 
     @staticmethod
     def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
         """``(spikes, rate)`` of the layer driven by ``current`` (see the class docstring)."""
         current = current.detach().contiguous()
         n_groups, _, n = current.shape
+        learned = isinstance(beta, torch.Tensor) and ctx.needs_input_grad[1]
+        if isinstance(beta, torch.Tensor):
+            beta = beta.detach().to(torch.float32).expand(n_groups, n).contiguous()
+        else:
+            beta = torch.full((n_groups, n), float(beta), dtype=torch.float32)
         spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
         slopes = torch.empty_like(current)
+        previous = torch.empty_like(current) if learned else torch.empty((0, 0, 0))
         rate = torch.empty((n_groups, n), dtype=current.dtype)
         _lif_forward(
             current.numpy(),
-            float(beta),
+            beta.numpy(),
             float(threshold),
             float(slope),
             spikes.numpy(),
             slopes.numpy(),
+            previous.numpy(),
             rate.numpy(),
         )
-        ctx.save_for_backward(slopes)
-        ctx.beta = float(beta)
+        ctx.save_for_backward(slopes, beta, previous)
+        ctx.learned = learned
         return spikes, rate
 
     @staticmethod
     def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
-        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate)."""
-        (slopes,) = ctx.saved_tensors
+        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate),
+        and ``dL/d beta`` for a learned decay."""
+        slopes, beta, previous = ctx.saved_tensors
         grad = torch.empty_like(slopes)
+        grad_beta = torch.empty_like(beta) if ctx.learned else torch.empty((0, 0))
         grad_spikes = grad_spikes.detach().contiguous()
         grad_rate = grad_rate.detach().contiguous()
         _lif_backward(
-            grad_spikes.numpy(), grad_rate.numpy(), slopes.numpy(), ctx.beta, grad.numpy()
+            grad_spikes.numpy(),
+            grad_rate.numpy(),
+            slopes.numpy(),
+            beta.numpy(),
+            previous.numpy(),
+            grad.numpy(),
+            grad_beta.numpy(),
         )
-        return grad, None, None, None, None
+        return grad, grad_beta if ctx.learned else None, None, None, None
 
 
 class FoldSNN(FoldModel):
@@ -177,14 +207,30 @@ class FoldSNN(FoldModel):
         tau_mem_s: float,
         threshold: float,
         surrogate_slope: float,
+        time_constants: SNNTimeConstants = SNNTimeConstants.SHARED,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
         self.hidden_neurons = int(hidden_neurons)
+        self.step_s = float(step_s)
         self.beta = math.exp(-step_s / tau_mem_s)
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
+        if time_constants is SNNTimeConstants.LEARNED:
+            # After the drawn layers, and drawn from no generator: the weights stay those of
+            # a shared time constant with the same seed.
+            start = torch.full((self.n_folds, self.hidden_neurons), math.log(tau_mem_s))
+            self.log_tau_s = nn.Parameter(start)
+
+    def decays(self, batch: int) -> float | torch.Tensor:
+        """The neurons' decay :math:`\\beta`: one float for a shared time constant, else float32
+        ``(F * batch, hidden)``, :math:`\\exp(-\\Delta t / \\tau_i)` of each fold's learned
+        :math:`\\tau_i = \\exp(` ``log_tau_s`` :math:`)` repeated over its ``batch`` samples."""
+        if not hasattr(self, "log_tau_s"):
+            return self.beta
+        beta = torch.exp(-self.step_s / torch.exp(self.log_tau_s))  # (F, hidden)
+        return beta.unsqueeze(1).expand(-1, batch, -1).reshape(-1, self.hidden_neurons)
 
     def hidden_spikes(
         self, x: torch.Tensor, keep: bool = True
@@ -199,7 +245,7 @@ class FoldSNN(FoldModel):
         )  # (F, B*T, hidden): every step's input current in one product
         spikes, rate = LeakyLayer.apply(
             current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
-            self.beta,
+            self.decays(batch),
             self.threshold,
             self.surrogate_slope,
             keep,

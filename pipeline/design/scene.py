@@ -121,6 +121,13 @@ class SNNInputs(enum.StrEnum):
     STANDARDIZED = "standardized"  # per input and step, with the fold's training statistics
 
 
+class SNNTimeConstants(enum.StrEnum):
+    """The membrane time constants of the spiking decoder's neurons."""
+
+    SHARED = "shared"  # one, tau_mem_s, for every neuron, fixed
+    LEARNED = "learned"  # one per neuron, starting at tau_mem_s, trained with the weights
+
+
 class Encoder(enum.StrEnum):
     """Encoder architecture of the readout."""
 
@@ -332,6 +339,13 @@ class SNNSpec:
         "1",
         "how step counts become the spiking decoder's inputs",
         formerly=SNNInputs.COUNTS,
+    )
+    time_constants: SNNTimeConstants = param(
+        SNNTimeConstants.SHARED,
+        "1",
+        "membrane time constants of the spiking decoder: tau_mem_s for every neuron, or one per "
+        "neuron learned from it",
+        formerly=SNNTimeConstants.SHARED,
     )
     learning_rate: float | None = param(
         0.01,

@@ -72,6 +72,26 @@ def test_the_kernel_neuron_is_the_autograd_neuron():
     torch.testing.assert_close(grad_alone, expected_alone, rtol=1e-4, atol=1e-5)
 
 
+def test_a_learned_decay_has_the_autograd_gradient():
+    g = torch.Generator().manual_seed(2)
+    current = (torch.rand(3, 50, 10, generator=g) * 1.5).requires_grad_()
+    beta = (0.5 + 0.45 * torch.rand(3, 10, generator=g)).requires_grad_()
+    weight = torch.randn(3, 50, 10, generator=g)
+    spikes, rate = LeakyLayer.apply(current, beta, 1.0, 25.0)
+    loss = (spikes * weight).sum() + rate.sum()
+    grad_current, grad_beta = torch.autograd.grad(loss, (current, beta))
+    expected = torch.stack([_reference(current[m], beta[m], 1.0, 25.0) for m in range(3)])
+    expected_loss = (expected * weight).sum() + expected.mean(dim=1).sum()
+    expected_current, expected_beta = torch.autograd.grad(expected_loss, (current, beta))
+    assert torch.equal(spikes, expected)
+    assert float(grad_beta.abs().min()) > 0  # every neuron's decay gets a gradient
+    torch.testing.assert_close(grad_current, expected_current, rtol=1e-4, atol=1e-5)
+    torch.testing.assert_close(grad_beta, expected_beta, rtol=1e-4, atol=1e-4)
+    # A fixed decay given as a tensor that needs no gradient: the float's spikes.
+    fixed, _ = LeakyLayer.apply(current[:1], torch.full((1, 10), 0.9), 1.0, 25.0)
+    assert torch.equal(fixed, LeakyLayer.apply(current[:1], 0.9, 1.0, 25.0)[0])
+
+
 SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
 
 
