@@ -68,7 +68,9 @@ from pipeline.jit import kernel
 
 
 @kernel()
-def _lif_forward(current, beta, threshold, slope, spikes, slopes, previous, rate):  # pragma: no cover
+def _lif_forward(
+    current, beta, threshold, slope, spikes, slopes, previous, rate
+):  # pragma: no cover
     """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
     derivative ``ds/du``) and, unless they are empty, ``spikes`` and ``previous`` (each step's
     membrane before it, :math:`u_{t-1}`) are float32 ``(M, T, N)`` (``M`` independent groups,
