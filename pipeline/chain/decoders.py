@@ -343,6 +343,7 @@ class SNNDecoder(Decoder):
             threshold=snn.threshold,
             surrogate_slope=snn.surrogate_slope,
             time_constants=snn.time_constants,
+            readout=snn.readout,
         )
 
     def epochs(self, training: TrainingSpec) -> int:

@@ -63,7 +63,7 @@ import torch
 from torch import nn
 
 from pipeline.chain.folded import FoldModel, two_layers
-from pipeline.design.scene import SNNTimeConstants
+from pipeline.design.scene import SNNReadout, SNNTimeConstants
 from pipeline.jit import kernel
 
 
@@ -210,6 +210,7 @@ class FoldSNN(FoldModel):
         threshold: float,
         surrogate_slope: float,
         time_constants: SNNTimeConstants = SNNTimeConstants.SHARED,
+        readout: SNNReadout = SNNReadout.MEAN_CURRENT,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
@@ -218,6 +219,7 @@ class FoldSNN(FoldModel):
         self.beta = math.exp(-step_s / tau_mem_s)
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
+        self.readout = readout
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
         if time_constants is SNNTimeConstants.LEARNED:
             # After the drawn layers, and drawn from no generator: the weights stay those of
@@ -257,17 +259,30 @@ class FoldSNN(FoldModel):
         return spikes, rate.reshape(n_folds, batch, self.hidden_neurons)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step, the
-        mean output current over the whole touch: what training fits."""
+        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step: what
+        training for the full touch fits (for the mean readout, from the spike counts alone)."""
+        if self.readout is not SNNReadout.MEAN_CURRENT:
+            return self.decision_logits(x)[:, :, -1]
         _, rate = self.hidden_spikes(x, keep=False)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
 
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
-        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step: the
-        running mean of the output currents (the last step's is :meth:`forward`'s)."""
+        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step, as
+        ``readout`` says (the module docstring; the last step's is :meth:`forward`'s)."""
         spikes, _ = self.hidden_spikes(x)
         n_folds, batch, n_steps, hidden = spikes.shape
         out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
-        out = out.reshape(n_folds, batch, n_steps, self.n_classes)
-        count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
-        return out.cumsum(dim=2) / count + self.b2.reshape(n_folds, 1, 1, -1)
+        out = out.reshape(n_folds, batch, n_steps, self.n_classes) + self.b2.reshape(
+            n_folds, 1, 1, -1
+        )
+        if self.readout is SNNReadout.MEAN_CURRENT:
+            count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
+            return out.cumsum(dim=2) / count
+        lag = torch.arange(n_steps).reshape(-1, 1) - torch.arange(n_steps).reshape(1, -1)
+        weights = torch.where(
+            lag >= 0, (1 - self.beta) * self.beta ** lag.clamp(min=0).to(out.dtype), 0.0
+        )  # (T, T): row t weighs the steps up to t, as the leaky integrator does
+        membrane = torch.einsum("ts,fbsc->fbtc", weights.to(out.dtype), out)
+        if self.readout is SNNReadout.LAST_MEMBRANE:
+            return membrane
+        return torch.cummax(membrane, dim=2).values

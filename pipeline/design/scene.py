@@ -128,6 +128,14 @@ class SNNTimeConstants(enum.StrEnum):
     LEARNED = "learned"  # one per neuron, starting at tau_mem_s, trained with the weights
 
 
+class SNNReadout(enum.StrEnum):
+    """How the spiking decoder's output currents become a decision at a step."""
+
+    MEAN_CURRENT = "mean_current"  # their mean since the touch began (weighted spike counts)
+    LAST_MEMBRANE = "last_membrane"  # a leaky integrator's membrane (tau_mem_s) at that step
+    MAX_MEMBRANE = "max_membrane"  # that membrane's maximum since the touch began
+
+
 class Encoder(enum.StrEnum):
     """Encoder architecture of the readout."""
 
@@ -346,6 +354,12 @@ class SNNSpec:
         "membrane time constants of the spiking decoder: tau_mem_s for every neuron, or one per "
         "neuron learned from it",
         formerly=SNNTimeConstants.SHARED,
+    )
+    readout: SNNReadout = param(
+        SNNReadout.MEAN_CURRENT,
+        "1",
+        "how the spiking decoder's output currents become its decision at a step",
+        formerly=SNNReadout.MEAN_CURRENT,
     )
     learning_rate: float | None = param(
         0.01,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
@@ -10,7 +12,7 @@ from pipeline.chain.decoders import build_model
 from pipeline.chain.models import fold_generator
 from pipeline.chain.spiking import LeakyLayer
 from pipeline.chain.training import cross_validate
-from pipeline.design.scene import Model, SNNSpec, TrainingSpec
+from pipeline.design.scene import Model, SNNReadout, SNNSpec, SNNTimeConstants, TrainingSpec
 
 
 @pytest.fixture(autouse=True)
@@ -106,6 +108,56 @@ def test_folds_are_independent_and_the_last_decision_is_the_forward_pass():
         every = batch.decision_logits(x)
         assert every.shape == (3, 4, 20, 4)
         torch.testing.assert_close(every[:, :, -1], batch(x))
+
+
+def test_learned_time_constants_start_as_the_shared_one_and_get_a_gradient():
+    x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(4))
+    spec = dataclasses.replace(SPEC, threshold=0.3)
+    nets = [
+        build_model(
+            "snn",
+            (2, 3, 20),
+            4,
+            0,
+            2,
+            [fold_generator(0, f, "init") for f in (0, 1)],
+            dataclasses.replace(spec, time_constants=choice),
+        )
+        for choice in SNNTimeConstants
+    ]
+    shared, learned = nets
+    assert [n for n, _ in learned.named_parameters()] == ["w1", "b1", "w2", "b2", "log_tau_s"]
+    torch.testing.assert_close(learned.log_tau_s, torch.full((2, 8), np.log(0.05)))
+    torch.testing.assert_close(learned(x), shared(x))  # same draw, same decays at the start
+    (grad,) = torch.autograd.grad(learned(x).logsumexp(-1).sum(), learned.log_tau_s)
+    assert grad.shape == (2, 8) and int((grad != 0).sum()) >= 8
+
+
+@pytest.mark.parametrize("readout", list(SNNReadout))
+def test_each_readout_is_its_equation_and_the_last_decision_is_the_forward_pass(readout):
+    x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(3))
+    spec = dataclasses.replace(SPEC, readout=readout, threshold=0.3)
+    net = build_model(
+        "snn", (2, 3, 20), 4, 0, 2, [fold_generator(0, f, "init") for f in (0, 1)], spec
+    )
+    with torch.no_grad():
+        every = net.decision_logits(x)
+        spikes, _ = net.hidden_spikes(x)
+        out = spikes @ net.w2.unsqueeze(1) + net.b2.reshape(2, 1, 1, 4)  # (F, B, T, classes)
+        assert float(spikes.mean()) > 0.05  # the readout reads spikes
+        expected, membrane, peak = [], torch.zeros_like(out[:, :, 0]), None
+        for t in range(20):
+            membrane = net.beta * membrane + (1 - net.beta) * out[:, :, t]
+            peak = membrane if peak is None else torch.maximum(peak, membrane)
+            expected.append(
+                {
+                    SNNReadout.MEAN_CURRENT: out[:, :, : t + 1].mean(dim=2),
+                    SNNReadout.LAST_MEMBRANE: membrane,
+                    SNNReadout.MAX_MEMBRANE: peak,
+                }[readout]
+            )
+        torch.testing.assert_close(every, torch.stack(expected, dim=2), rtol=1e-5, atol=1e-5)
+        torch.testing.assert_close(net(x), every[:, :, -1], rtol=1e-5, atol=1e-5)
 
 
 def _two_textures(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
