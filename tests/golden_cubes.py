@@ -182,6 +182,8 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.epochs",
         "training.snn.inputs",
         "training.snn.learning_rate",
+        "training.snn.time_constants",
+        "training.snn.readout",
         # What decisions the decoders are trained for, a new scene field.
         "training.decisions",
     }

@@ -19,7 +19,12 @@ Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset b
         s_t = \Theta(u_t - \vartheta), \qquad u_0 = s_0 = 0,
 
     :math:`\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
-    gradient (snnTorch's default ``reset_delay`` with a detached reset).
+    gradient (snnTorch's default ``reset_delay`` with a detached reset). With
+    ``time_constants = "learned"`` each neuron :math:`i` of each fold has its own
+    :math:`\beta_i = \exp(-\Delta t / \tau_i)`, :math:`\tau_i = \exp(\ell_i)` with
+    :math:`\ell_i` (``log_tau_s``) a parameter starting at :math:`\log \tau_\mathrm{mem}`, so
+    that every :math:`\tau_i > 0` and :math:`\beta_i \in (0, 1)` (the parametric LIF neuron of
+    Fang et al., ICCV 2021).
 
 Surrogate gradient
     The spike's derivative is replaced by the fast sigmoid's (SuperSpike; snnTorch's
@@ -31,17 +36,26 @@ Surrogate gradient
 
     Backpropagation through time is then a linear recursion backwards in time,
     :math:`g_t = \frac{\partial L}{\partial s_t} \frac{\partial s_t}{\partial u_t}
-    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`.
+    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`, and for a learned decay
+    :math:`\partial L / \partial \beta_i = \sum_t g_{t,i} u_{t-1,i}`.
 
 Readout and decisions
-    A non-spiking integrator sums the output currents :math:`W_2^\top s_t + b_2` of every step;
-    the decision read at step :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of
-    their running mean :math:`z_t = \frac{1}{t} \sum_{t' \le t} (W_2^\top s_{t'} + b_2)`, its
-    confidence the softmax probability of that class. Training (``training.decisions``,
-    :meth:`pipeline.chain.decoders.SNNDecoder.loss`) minimizes the cross-entropy of
-    :math:`z_T`, the decision at the end of the touch (``full_touch``), or its mean over the
-    steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)` (``along_touch``: every step's
-    decision is trained, as the FFNN's and CNN's are on the windows so far).
+    Each step's output current is :math:`o_t = W_2^\top s_t + b_2`; the decision read at step
+    :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of logits :math:`z_t`, its
+    confidence the softmax probability of that class, with :math:`z_t` as ``readout`` says:
+
+    * ``mean_current``: their running mean, :math:`z_t = \frac{1}{t} \sum_{t' \le t} o_{t'}`
+      (a non-spiking integrator; at the end of the touch, linear in the spike counts);
+    * ``last_membrane``: the membrane of a non-spiking leaky integrator with the hidden
+      neurons' :math:`\beta` (``tau_mem_s``), :math:`z_t = \beta z_{t-1} + (1 - \beta) o_t`,
+      :math:`z_0 = 0`;
+    * ``max_membrane``: that membrane's maximum so far, :math:`\max_{t' \le t} z_{t'}` per class.
+
+    Training (``training.decisions``, :meth:`pipeline.chain.decoders.SNNDecoder.loss`)
+    minimizes the cross-entropy of :math:`z_T`, the decision at the end of the touch
+    (``full_touch``), or its mean over the steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)`
+    (``along_touch``: every step's decision is trained, as the FFNN's and CNN's are on the
+    windows so far).
 
 Speed
     The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
@@ -188,14 +202,15 @@ class LeakyLayer(torch.autograd.Function):
 
 class FoldSNN(FoldModel):
     """Spiking decoder batched over folds: ``Linear(C*H, hidden) -> LIF -> Linear(hidden,
-    n_classes) -> running mean over steps``.
+    n_classes) -> readout over steps`` (the module docstring).
 
     Parameters (float32): ``w1 (F, C*H, hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden,
     n_classes)``, ``b2 (F, n_classes)``, drawn per fold in that order as the FFNN's
-    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``).
+    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``), and, with learned time constants,
+    ``log_tau_s (F, hidden)`` (log seconds, drawn from no generator).
 
-    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, T, n_classes)``: the logits
-    :math:`z_t` of a decision read at every step.
+    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, n_classes)``: the logits of the
+    decision at the last step; :meth:`decision_logits` those of every step.
     """
 
     def __init__(
