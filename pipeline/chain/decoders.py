@@ -152,6 +152,11 @@ class Preparation(Enum):
     LOG_COUNTS = "log_counts"
     """``log(1 + count)`` as float32, so 0 stays 0 and a burst weighs less than its events."""
 
+    @property
+    def keeps_events(self) -> bool:
+        """Whether the inputs are the event counts (spikes to deliver, not real numbers)."""
+        return self is Preparation.COUNTS
+
     def apply(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (shapes kept)."""
         if self is Preparation.STANDARDIZED:
@@ -344,6 +349,7 @@ class SNNDecoder(Decoder):
             surrogate_slope=snn.surrogate_slope,
             time_constants=snn.time_constants,
             readout=snn.readout,
+            events_in=Preparation(snn.inputs.value).keeps_events,
         )
 
     def epochs(self, training: TrainingSpec) -> int:

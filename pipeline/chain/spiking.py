@@ -209,6 +209,9 @@ class FoldSNN(FoldModel):
     (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``), and, with learned time constants,
     ``log_tau_s (F, hidden)`` (log seconds, drawn from no generator).
 
+    ``events_in``: whether its inputs are event counts (for the operation counter,
+    :func:`pipeline.chain.operations.snn_operations`).
+
     ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, n_classes)``: the logits of the
     decision at the last step; :meth:`decision_logits` those of every step.
     """
@@ -226,6 +229,7 @@ class FoldSNN(FoldModel):
         surrogate_slope: float,
         time_constants: SNNTimeConstants = SNNTimeConstants.SHARED,
         readout: SNNReadout = SNNReadout.MEAN_CURRENT,
+        events_in: bool = True,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
@@ -235,6 +239,7 @@ class FoldSNN(FoldModel):
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
         self.readout = readout
+        self.events_in = bool(events_in)  # its inputs are event counts (else real numbers)
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
         if time_constants is SNNTimeConstants.LEARNED:
             # After the drawn layers, and drawn from no generator: the weights stay those of

@@ -78,6 +78,12 @@ def test_snn_counts_events_and_spikes_as_accumulates_and_every_neuron_update():
     assert ops.acs.tolist() == [[[7.0, 7.0, 12.0, 12.0]]]
     assert ops.macs.tolist() == [[[0.0, 0.0, 0.0, 0.0]]]
     assert ops.neuron_updates.tolist() == [[[5.0, 10.0, 15.0, 20.0]]]
+    # The same numbers as real inputs (standardized, log counts): a MAC per nonzero input.
+    net.events_in = False
+    real = count_operations("snn", net, x)
+    assert real.macs.tolist() == [[[2.0, 2.0, 4.0, 4.0]]]
+    assert real.acs.tolist() == [[[3.0, 3.0, 6.0, 6.0]]]
+    assert np.array_equal(real.neuron_updates, ops.neuron_updates)
 
 
 def test_counts_are_per_fold_and_sample():

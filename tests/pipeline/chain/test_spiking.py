@@ -12,7 +12,14 @@ from pipeline.chain.decoders import build_model
 from pipeline.chain.models import fold_generator
 from pipeline.chain.spiking import LeakyLayer
 from pipeline.chain.training import cross_validate
-from pipeline.design.scene import Model, SNNReadout, SNNSpec, SNNTimeConstants, TrainingSpec
+from pipeline.design.scene import (
+    Model,
+    SNNInputs,
+    SNNReadout,
+    SNNSpec,
+    SNNTimeConstants,
+    TrainingSpec,
+)
 
 
 @pytest.fixture(autouse=True)
@@ -131,6 +138,13 @@ def test_learned_time_constants_start_as_the_shared_one_and_get_a_gradient():
     torch.testing.assert_close(learned(x), shared(x))  # same draw, same decays at the start
     (grad,) = torch.autograd.grad(learned(x).logsumexp(-1).sum(), learned.log_tau_s)
     assert grad.shape == (2, 8) and int((grad != 0).sum()) >= 8
+
+
+@pytest.mark.parametrize("inputs", list(SNNInputs))
+def test_only_event_counts_are_counted_as_events(inputs):
+    spec = dataclasses.replace(SPEC, inputs=inputs)
+    net = build_model("snn", (2, 3, 20), 4, 0, 1, [fold_generator(0, 0, "init")], spec)
+    assert net.events_in is (inputs is SNNInputs.COUNTS)
 
 
 @pytest.mark.parametrize("readout", list(SNNReadout))
