@@ -184,6 +184,7 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.learning_rate",
         "training.snn.time_constants",
         "training.snn.readout",
+        "training.snn.hidden_layers",
         # What decisions the decoders are trained for, a new scene field.
         "training.decisions",
     }

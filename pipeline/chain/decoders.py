@@ -350,6 +350,7 @@ class SNNDecoder(Decoder):
             time_constants=snn.time_constants,
             readout=snn.readout,
             events_in=Preparation(snn.inputs.value).keeps_events,
+            hidden_layers=snn.hidden_layers,
         )
 
     def epochs(self, training: TrainingSpec) -> int:

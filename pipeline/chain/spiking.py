@@ -76,7 +76,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from pipeline.chain.folded import FoldModel, two_layers
+from pipeline.chain.folded import FoldModel, two_layers, uniform
 from pipeline.design.scene import SNNReadout, SNNTimeConstants
 from pipeline.jit import kernel
 
@@ -230,6 +230,7 @@ class FoldSNN(FoldModel):
         time_constants: SNNTimeConstants = SNNTimeConstants.SHARED,
         readout: SNNReadout = SNNReadout.MEAN_CURRENT,
         events_in: bool = True,
+        hidden_layers: int = 1,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
@@ -240,43 +241,78 @@ class FoldSNN(FoldModel):
         self.surrogate_slope = float(surrogate_slope)
         self.readout = readout
         self.events_in = bool(events_in)  # its inputs are event counts (else real numbers)
+        self.hidden_layers = int(hidden_layers)
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
+        if self.hidden_layers > 1:
+            # Drawn after the first layers, so that those stay a one-layer decoder's.
+            n, extra = self.hidden_neurons, self.hidden_layers - 1
+            draws = [
+                (uniform(g, (n, n), n), uniform(g, (n,), n))
+                for g in generators
+                for _ in range(extra)
+            ]
+            weights = torch.stack([w for w, _ in draws]).reshape(self.n_folds, extra, n, n)
+            biases = torch.stack([b for _, b in draws]).reshape(self.n_folds, extra, n)
+            self.wh, self.bh = nn.Parameter(weights), nn.Parameter(biases)
         if time_constants is SNNTimeConstants.LEARNED:
             # After the drawn layers, and drawn from no generator: the weights stay those of
             # a shared time constant with the same seed.
-            start = torch.full((self.n_folds, self.hidden_neurons), math.log(tau_mem_s))
+            start = torch.full(
+                (self.n_folds, self.hidden_layers, self.hidden_neurons), math.log(tau_mem_s)
+            )
             self.log_tau_s = nn.Parameter(start)
 
-    def decays(self, batch: int) -> float | torch.Tensor:
-        """The neurons' decay :math:`\\beta`: one float for a shared time constant, else float32
-        ``(F * batch, hidden)``, :math:`\\exp(-\\Delta t / \\tau_i)` of each fold's learned
-        :math:`\\tau_i = \\exp(` ``log_tau_s`` :math:`)` repeated over its ``batch`` samples."""
+    def decays(self, batch: int, layer: int = 0) -> float | torch.Tensor:
+        """The decay :math:`\\beta` of hidden layer ``layer``'s neurons: one float for a shared
+        time constant, else float32 ``(F * batch, hidden)``, :math:`\\exp(-\\Delta t / \\tau_i)`
+        of each fold's learned :math:`\\tau_i = \\exp(` ``log_tau_s`` :math:`)` repeated over
+        its ``batch`` samples."""
         if not hasattr(self, "log_tau_s"):
             return self.beta
-        beta = torch.exp(-self.step_s / torch.exp(self.log_tau_s))  # (F, hidden)
+        beta = torch.exp(-self.step_s / torch.exp(self.log_tau_s[:, layer]))  # (F, hidden)
         return beta.unsqueeze(1).expand(-1, batch, -1).reshape(-1, self.hidden_neurons)
 
-    def hidden_spikes(
+    def layer_spikes(
         self, x: torch.Tensor, keep: bool = True
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``
-        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
+    ) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """For each hidden LIF layer, its spikes ``float32 (F, B, T, hidden)`` for
+        ``x: (F, B, C, H, T)`` (the last layer's empty unless ``keep``) and their mean over the
+        steps ``(F, B, hidden)``; a layer after the first is driven by the current
+        :math:`W_h^\\top s_t + b_h` of the spikes of the one before."""
         self._check(x)
         n_folds, batch, c, h, n_steps = x.shape
+        n = self.hidden_neurons
         steps = x.reshape(n_folds, batch, c * h, n_steps).transpose(2, 3)  # (F, B, T, C*H)
         current = torch.baddbmm(
             self.b1.unsqueeze(1), steps.reshape(n_folds, batch * n_steps, c * h), self.w1
         )  # (F, B*T, hidden): every step's input current in one product
-        spikes, rate = LeakyLayer.apply(
-            current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
-            self.decays(batch),
-            self.threshold,
-            self.surrogate_slope,
-            keep,
-        )
-        if keep:
-            spikes = spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
-        return spikes, rate.reshape(n_folds, batch, self.hidden_neurons)
+        layers = []
+        for layer in range(self.hidden_layers):
+            last = layer == self.hidden_layers - 1
+            spikes, rate = LeakyLayer.apply(
+                current.reshape(n_folds * batch, n_steps, n),
+                self.decays(batch, layer),
+                self.threshold,
+                self.surrogate_slope,
+                keep or not last,
+            )
+            if keep or not last:
+                spikes = spikes.reshape(n_folds, batch, n_steps, n)
+            layers.append((spikes, rate.reshape(n_folds, batch, n)))
+            if not last:
+                current = torch.baddbmm(
+                    self.bh[:, layer].unsqueeze(1),
+                    spikes.reshape(n_folds, batch * n_steps, n),
+                    self.wh[:, layer],
+                )
+        return layers
+
+    def hidden_spikes(
+        self, x: torch.Tensor, keep: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Spikes ``float32 (F, B, T, hidden)`` of the last LIF layer for ``x: (F, B, C, H, T)``
+        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
+        return self.layer_spikes(x, keep)[-1]
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step: what

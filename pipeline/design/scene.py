@@ -355,6 +355,14 @@ class SNNSpec:
         "neuron learned from it",
         formerly=SNNTimeConstants.SHARED,
     )
+    hidden_layers: int = param(
+        1,
+        "1",
+        "layers of hidden_neurons leaky integrate-and-fire neurons, each driven by the spikes "
+        "of the one before",
+        within=Range(1, 4),
+        formerly=1,
+    )
     readout: SNNReadout = param(
         SNNReadout.MEAN_CURRENT,
         "1",

@@ -134,10 +134,33 @@ def test_learned_time_constants_start_as_the_shared_one_and_get_a_gradient():
     ]
     shared, learned = nets
     assert [n for n, _ in learned.named_parameters()] == ["w1", "b1", "w2", "b2", "log_tau_s"]
-    torch.testing.assert_close(learned.log_tau_s, torch.full((2, 8), np.log(0.05)))
+    torch.testing.assert_close(learned.log_tau_s, torch.full((2, 1, 8), np.log(0.05)))
     torch.testing.assert_close(learned(x), shared(x))  # same draw, same decays at the start
     (grad,) = torch.autograd.grad(learned(x).logsumexp(-1).sum(), learned.log_tau_s)
-    assert grad.shape == (2, 8) and int((grad != 0).sum()) >= 8
+    assert grad.shape == (2, 1, 8) and int((grad != 0).sum()) >= 8
+
+
+def test_a_second_layer_is_driven_by_the_first_layers_spikes():
+    x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(5))
+    spec = dataclasses.replace(SPEC, threshold=0.3)
+    generators = [fold_generator(0, f, "init") for f in (0, 1)]
+    one = build_model("snn", (2, 3, 20), 4, 0, 2, generators, spec)
+    generators = [fold_generator(0, f, "init") for f in (0, 1)]
+    two = build_model(
+        "snn", (2, 3, 20), 4, 0, 2, generators, dataclasses.replace(spec, hidden_layers=2)
+    )
+    for name in ("w1", "b1", "w2", "b2"):  # the first layers are drawn as a one-layer decoder's
+        assert torch.equal(getattr(one, name), getattr(two, name))
+    assert two.wh.shape == (2, 1, 8, 8) and two.bh.shape == (2, 1, 8)
+    with torch.no_grad():
+        (first, _), (second, rate) = two.layer_spikes(x)
+        assert torch.equal(first, one.hidden_spikes(x)[0])
+        current = first @ two.wh[:, 0].unsqueeze(1) + two.bh[:, 0].reshape(2, 1, 1, 8)
+        expected, _ = LeakyLayer.apply(current.reshape(6, 20, 8), two.beta, 0.3, 25.0)
+        assert 0 < float(second.mean()) < 1
+        assert torch.equal(second, expected.reshape(2, 3, 20, 8))
+        torch.testing.assert_close(two(x), rate @ two.w2.unsqueeze(1)[:, 0] + two.b2.unsqueeze(1))
+        torch.testing.assert_close(two.decision_logits(x)[:, :, -1], two(x))
 
 
 @pytest.mark.parametrize("inputs", list(SNNInputs))
@@ -196,7 +219,8 @@ def test_the_snn_learns_and_decides_at_every_step():
     assert np.array_equal(cv.decision_predicted[:, -1], cv.predicted)
     assert np.all((cv.decision_confidence >= 0.5) & (cv.decision_confidence <= 1))
     acs, macs, updates = cv.operations.T
-    assert np.all(np.diff(acs) >= 0) and np.all(macs == 0)
+    # Standardized inputs (the default) are real numbers: MACs in, the hidden spikes' ACs out.
+    assert np.all(np.diff(acs) >= 0) and np.all(np.diff(macs) >= 0) and macs[-1] > 0
     assert np.array_equal(updates, np.arange(1, 31) * (8 + 2))
 
 
