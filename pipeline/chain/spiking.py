@@ -328,12 +328,12 @@ class FoldSNN(FoldModel):
         spikes, _ = self.hidden_spikes(x)
         n_folds, batch, n_steps, hidden = spikes.shape
         out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
-        out = out.reshape(n_folds, batch, n_steps, self.n_classes) + self.b2.reshape(
-            n_folds, 1, 1, -1
-        )
+        out = out.reshape(n_folds, batch, n_steps, self.n_classes)
+        bias = self.b2.reshape(n_folds, 1, 1, -1)
         if self.readout is SNNReadout.MEAN_CURRENT:
             count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
-            return out.cumsum(dim=2) / count
+            return out.cumsum(dim=2) / count + bias
+        out = out + bias
         lag = torch.arange(n_steps).reshape(-1, 1) - torch.arange(n_steps).reshape(1, -1)
         weights = torch.where(
             lag >= 0, (1 - self.beta) * self.beta ** lag.clamp(min=0).to(out.dtype), 0.0
