@@ -306,8 +306,9 @@ class CodingSpec:
 @dataclass(frozen=True)
 class SNNSpec:
     """The spiking decoder (:class:`~pipeline.chain.spiking.FoldSNN`): ON and OFF spikes of each
-    taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
-    neurons, a readout read at every step; trained ``epochs`` epochs through time with a
+    taxel counted in steps of ``step_s``, ``hidden_layers`` layers of ``hidden_neurons`` leaky
+    integrate-and-fire neurons (their time constants as ``time_constants`` says), a readout read
+    at every step as ``readout`` says; trained ``epochs`` epochs through time with a
     fast-sigmoid surrogate gradient of slope ``surrogate_slope``, on its counts as ``inputs``
     says, at its own ``learning_rate`` when set."""
 
