@@ -1,4 +1,4 @@
-r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
+r"""The spiking decoder: layers of leaky integrate-and-fire neurons, batched over folds.
 
 Input
     A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
@@ -24,7 +24,9 @@ Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset b
     :math:`\beta_i = \exp(-\Delta t / \tau_i)`, :math:`\tau_i = \exp(\ell_i)` with
     :math:`\ell_i` (``log_tau_s``) a parameter starting at :math:`\log \tau_\mathrm{mem}`, so
     that every :math:`\tau_i > 0` and :math:`\beta_i \in (0, 1)` (the parametric LIF neuron of
-    Fang et al., ICCV 2021).
+    Fang et al., ICCV 2021). With ``hidden_layers`` :math:`L > 1`, layer :math:`k + 1` is driven
+    by the spikes of layer :math:`k`, :math:`I^{(k+1)}_t = W_h^{(k)\top} s^{(k)}_t + b_h^{(k)}`,
+    and the readout reads the last layer's spikes.
 
 Surrogate gradient
     The spike's derivative is replaced by the fast sigmoid's (SuperSpike; snnTorch's
@@ -265,8 +267,8 @@ class FoldSNN(FoldModel):
     def decays(self, batch: int, layer: int = 0) -> float | torch.Tensor:
         """The decay :math:`\\beta` of hidden layer ``layer``'s neurons: one float for a shared
         time constant, else float32 ``(F * batch, hidden)``, :math:`\\exp(-\\Delta t / \\tau_i)`
-        of each fold's learned :math:`\\tau_i = \\exp(` ``log_tau_s`` :math:`)` repeated over
-        its ``batch`` samples."""
+        of each fold's learned :math:`\\tau_i`, exp(``log_tau_s``), repeated over its ``batch``
+        samples."""
         if not hasattr(self, "log_tau_s"):
             return self.beta
         beta = torch.exp(-self.step_s / torch.exp(self.log_tau_s[:, layer]))  # (F, hidden)
