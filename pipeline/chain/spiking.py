@@ -79,20 +79,22 @@ import torch
 from torch import nn
 
 from pipeline.chain.folded import FoldModel, two_layers, uniform
-from pipeline.design.scene import SNNReadout, SNNTimeConstants
+from pipeline.design.scene import SNNAlongLoss, SNNReadout, SNNTimeConstants
 from pipeline.jit import kernel
 
 
 @kernel()
 def _lif_forward(
-    current, beta, threshold, slope, spikes, slopes, previous, rate
+    current, beta, threshold, slope, ends, spikes, slopes, previous, rate
 ):  # pragma: no cover
     """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
     derivative ``ds/du``) and, unless they are empty, ``spikes`` and ``previous`` (each step's
     membrane before it, :math:`u_{t-1}`) are float32 ``(M, T, N)`` (``M`` independent groups,
     each with its ``N`` neurons contiguous); ``beta`` float32 ``(M, N)`` is each neuron's decay;
-    ``rate`` float32 ``(M, N)`` gets each neuron's mean spike count over the steps."""
-    n_groups, n_steps, n = current.shape
+    ``rate`` float32 ``(M, N)`` gets each neuron's mean spike count over the steps up to
+    ``ends[m]`` (int64 ``(M,)``), the steps after which are not computed (their ``slopes``,
+    ``spikes`` and ``previous`` are left as they were)."""
+    n_groups, _, n = current.shape
     keep = spikes.size > 0
     keep_previous = previous.size > 0
     threshold, slope = np.float32(threshold), np.float32(slope)
@@ -102,7 +104,7 @@ def _lif_forward(
         u[:] = 0.0
         s[:] = 0.0
         rate[m, :] = 0.0
-        for t in range(n_steps):
+        for t in range(ends[m] + 1):
             if keep_previous:
                 previous[m, t, :] = u
             for i in range(n):
@@ -114,27 +116,28 @@ def _lif_forward(
                 slopes[m, t, i] = np.float32(1.0) / (d * d)
             if keep:
                 spikes[m, t, :] = s
-        rate[m, :] /= n_steps
+        rate[m, :] /= ends[m] + 1
 
 
 @kernel()
 def _lif_backward(
-    grad_spikes, grad_rate, slopes, beta, previous, grad_current, grad_beta
+    grad_spikes, grad_rate, slopes, beta, ends, previous, grad_current, grad_beta
 ):  # pragma: no cover
     """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
     rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives; and, unless
     ``previous`` is empty, ``dL/d beta`` (``grad_beta``, ``(M, N)``): the sum over the steps of
-    :math:`g_t u_{t-1}`."""
-    n_groups, n_steps, n = slopes.shape
+    :math:`g_t u_{t-1}`; the steps after ``ends[m]`` get no gradient."""
+    n_groups, _, n = slopes.shape
     keep = grad_spikes.size > 0
     keep_previous = previous.size > 0
-    per_step = np.float32(1.0 / n_steps)
     g = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
+        per_step = np.float32(1.0 / (ends[m] + 1))
         g[:] = 0.0
         if keep_previous:
             grad_beta[m, :] = 0.0
-        for t in range(n_steps - 1, -1, -1):
+        grad_current[m, ends[m] + 1 :, :] = 0.0
+        for t in range(ends[m], -1, -1):
             for i in range(n):
                 grad = grad_rate[m, i] * per_step
                 if keep:
@@ -151,13 +154,18 @@ class LeakyLayer(torch.autograd.Function):
     ``(M, N)``; differentiable in ``current`` through the surrogate, and in ``beta`` when it is
     a tensor ``(M, N)`` that requires grad (a float is one fixed decay for every neuron). With
     ``keep=False`` the spikes are not kept (an empty tensor): training reads only the mean, and
-    the time loop then moves a third less memory."""
+    the time loop then moves a third less memory. ``ends`` (int64 ``(M,)``, with ``keep=False``;
+    None: the last step) stops group ``m`` after step ``ends[m]``: its rate is the mean up to
+    there, the decision a training along the touch draws."""
 
     @staticmethod
-    def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
+    def forward(ctx, current, beta, threshold, slope, keep=True, ends=None):  # type: ignore[override]
         """``(spikes, rate)`` of the layer driven by ``current`` (see the class docstring)."""
         current = current.detach().contiguous()
-        n_groups, _, n = current.shape
+        n_groups, n_steps, n = current.shape
+        if ends is None:
+            ends = torch.full((n_groups,), n_steps - 1, dtype=torch.int64)
+        ends = ends.to(torch.int64).contiguous()
         learned = isinstance(beta, torch.Tensor) and ctx.needs_input_grad[1]
         if isinstance(beta, torch.Tensor):
             beta = beta.detach().to(torch.float32).expand(n_groups, n).contiguous()
@@ -172,12 +180,13 @@ class LeakyLayer(torch.autograd.Function):
             beta.numpy(),
             float(threshold),
             float(slope),
+            ends.numpy(),
             spikes.numpy(),
             slopes.numpy(),
             previous.numpy(),
             rate.numpy(),
         )
-        ctx.save_for_backward(slopes, beta, previous)
+        ctx.save_for_backward(slopes, beta, ends, previous)
         ctx.learned = learned
         return spikes, rate
 
@@ -185,7 +194,7 @@ class LeakyLayer(torch.autograd.Function):
     def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
         """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate),
         and ``dL/d beta`` for a learned decay."""
-        slopes, beta, previous = ctx.saved_tensors
+        slopes, beta, ends, previous = ctx.saved_tensors
         grad = torch.empty_like(slopes)
         grad_beta = torch.empty_like(beta) if ctx.learned else torch.empty((0, 0))
         grad_spikes = grad_spikes.detach().contiguous()
@@ -195,11 +204,12 @@ class LeakyLayer(torch.autograd.Function):
             grad_rate.numpy(),
             slopes.numpy(),
             beta.numpy(),
+            ends.numpy(),
             previous.numpy(),
             grad.numpy(),
             grad_beta.numpy(),
         )
-        return grad, grad_beta if ctx.learned else None, None, None, None
+        return grad, grad_beta if ctx.learned else None, None, None, None, None
 
 
 class FoldSNN(FoldModel):
@@ -233,6 +243,7 @@ class FoldSNN(FoldModel):
         readout: SNNReadout = SNNReadout.MEAN_CURRENT,
         events_in: bool = True,
         hidden_layers: int = 1,
+        along_touch_loss: SNNAlongLoss = SNNAlongLoss.EVERY_STEP,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
@@ -241,9 +252,10 @@ class FoldSNN(FoldModel):
         self.beta = math.exp(-step_s / tau_mem_s)
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
-        self.readout = readout
+        self.readout = SNNReadout(readout)
         self.events_in = bool(events_in)  # its inputs are event counts (else real numbers)
         self.hidden_layers = int(hidden_layers)
+        self.along_touch_loss = SNNAlongLoss(along_touch_loss)  # read by its decoder's loss
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
         if self.hidden_layers > 1:
             # Drawn after the first layers, so that those stay a one-layer decoder's.
@@ -256,7 +268,7 @@ class FoldSNN(FoldModel):
             weights = torch.stack([w for w, _ in draws]).reshape(self.n_folds, extra, n, n)
             biases = torch.stack([b for _, b in draws]).reshape(self.n_folds, extra, n)
             self.wh, self.bh = nn.Parameter(weights), nn.Parameter(biases)
-        if time_constants is SNNTimeConstants.LEARNED:
+        if SNNTimeConstants(time_constants) is SNNTimeConstants.LEARNED:
             # After the drawn layers, and drawn from no generator: the weights stay those of
             # a shared time constant with the same seed.
             start = torch.full(
@@ -275,12 +287,14 @@ class FoldSNN(FoldModel):
         return beta.unsqueeze(1).expand(-1, batch, -1).reshape(-1, self.hidden_neurons)
 
     def layer_spikes(
-        self, x: torch.Tensor, keep: bool = True
+        self, x: torch.Tensor, keep: bool = True, ends: torch.Tensor | None = None
     ) -> list[tuple[torch.Tensor, torch.Tensor]]:
         """For each hidden LIF layer, its spikes ``float32 (F, B, T, hidden)`` for
         ``x: (F, B, C, H, T)`` (the last layer's empty unless ``keep``) and their mean over the
         steps ``(F, B, hidden)``; a layer after the first is driven by the current
-        :math:`W_h^\\top s_t + b_h` of the spikes of the one before."""
+        :math:`W_h^\\top s_t + b_h` of the spikes of the one before. ``ends`` (int64
+        ``(F, B)``, with ``keep=False``): the last layer's mean is over the steps up to
+        ``ends[f, b]``."""
         self._check(x)
         n_folds, batch, c, h, n_steps = x.shape
         n = self.hidden_neurons
@@ -297,6 +311,7 @@ class FoldSNN(FoldModel):
                 self.threshold,
                 self.surrogate_slope,
                 keep or not last,
+                None if ends is None or not last else ends.reshape(-1),
             )
             if keep or not last:
                 spikes = spikes.reshape(n_folds, batch, n_steps, n)
@@ -310,11 +325,11 @@ class FoldSNN(FoldModel):
         return layers
 
     def hidden_spikes(
-        self, x: torch.Tensor, keep: bool = True
+        self, x: torch.Tensor, keep: bool = True, ends: torch.Tensor | None = None
     ) -> tuple[torch.Tensor, torch.Tensor]:
         """Spikes ``float32 (F, B, T, hidden)`` of the last LIF layer for ``x: (F, B, C, H, T)``
         (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
-        return self.layer_spikes(x, keep)[-1]
+        return self.layer_spikes(x, keep, ends)[-1]
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step: what
@@ -322,6 +337,17 @@ class FoldSNN(FoldModel):
         if self.readout is not SNNReadout.MEAN_CURRENT:
             return self.decision_logits(x)[:, :, -1]
         _, rate = self.hidden_spikes(x, keep=False)
+        return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
+    def logits_at(self, x: torch.Tensor, ends: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, n_classes)`` of each sample's decision at its step
+        ``ends[f, b]`` (int64 ``(F, B)``): for the mean readout, from the spike counts up to it
+        alone, :math:`z_k = W_2^\\top \\frac{1}{k} \\sum_{t \\le k} s_t + b_2`."""
+        if self.readout is not SNNReadout.MEAN_CURRENT:
+            every = self.decision_logits(x)  # (F, B, T, n_classes)
+            index = ends.reshape(*ends.shape, 1, 1).expand(-1, -1, 1, self.n_classes)
+            return every.gather(2, index).squeeze(2)
+        _, rate = self.hidden_spikes(x, keep=False, ends=ends)  # (F, B, hidden)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
 
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:

@@ -136,6 +136,13 @@ class SNNReadout(enum.StrEnum):
     MAX_MEMBRANE = "max_membrane"  # that membrane's maximum since the touch began
 
 
+class SNNAlongLoss(enum.StrEnum):
+    """What the spiking decoder's training along the touch minimizes."""
+
+    EVERY_STEP = "every_step"  # the mean over the steps of each step's cross-entropy
+    DRAWN_STEP = "drawn_step"  # each sample's at one step drawn per epoch, as the FFNN's and CNN's
+
+
 class Encoder(enum.StrEnum):
     """Encoder architecture of the readout."""
 
@@ -364,6 +371,13 @@ class SNNSpec:
         "of the one before",
         within=Range(1, 4),
         formerly=1,
+    )
+    along_touch_loss: SNNAlongLoss = param(
+        SNNAlongLoss.EVERY_STEP,
+        "1",
+        "what the spiking decoder's training along the touch minimizes: every step's decision, "
+        "or one drawn step's per sample and epoch",
+        formerly=SNNAlongLoss.EVERY_STEP,
     )
     readout: SNNReadout = param(
         SNNReadout.MEAN_CURRENT,

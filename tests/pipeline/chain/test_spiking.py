@@ -13,7 +13,9 @@ from pipeline.chain.models import fold_generator
 from pipeline.chain.spiking import LeakyLayer
 from pipeline.chain.training import cross_validate
 from pipeline.design.scene import (
+    DecisionTraining,
     Model,
+    SNNAlongLoss,
     SNNInputs,
     SNNReadout,
     SNNSpec,
@@ -99,6 +101,35 @@ def test_a_learned_decay_has_the_autograd_gradient():
     # A fixed decay given as a tensor that needs no gradient: the float's spikes.
     fixed, _ = LeakyLayer.apply(current[:1], torch.full((1, 10), 0.9), 1.0, 25.0)
     assert torch.equal(fixed, LeakyLayer.apply(current[:1], 0.9, 1.0, 25.0)[0])
+
+
+def test_a_layer_stopped_at_a_step_is_the_mean_and_gradient_up_to_it():
+    g = torch.Generator().manual_seed(6)
+    current = (torch.rand(3, 30, 10, generator=g) * 1.5).requires_grad_()
+    ends = torch.tensor([0, 11, 29])
+    rate_weight = torch.randn(3, 10, generator=g)
+    _, rate = LeakyLayer.apply(current, 0.9, 1.0, 25.0, False, ends)
+    (grad,) = torch.autograd.grad((rate * rate_weight).sum(), current)
+    for m, k in enumerate(ends.tolist()):
+        expected = _reference(current[m], 0.9, 1.0, 25.0)[: k + 1].mean(dim=0)
+        (expected_grad,) = torch.autograd.grad((expected * rate_weight[m]).sum(), current)
+        torch.testing.assert_close(rate[m], expected.detach())
+        torch.testing.assert_close(grad[m], expected_grad[m], rtol=1e-4, atol=1e-5)
+        assert torch.all(grad[m, k + 1 :] == 0)
+
+
+@pytest.mark.parametrize("readout", [SNNReadout.MEAN_CURRENT, SNNReadout.MAX_MEMBRANE])
+def test_the_decision_at_a_drawn_step_is_that_steps_decision(readout):
+    x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(7))
+    spec = dataclasses.replace(SPEC, threshold=0.3, readout=readout)
+    net = build_model(
+        "snn", (2, 3, 20), 4, 0, 2, [fold_generator(0, f, "init") for f in (0, 1)], spec
+    )
+    ends = torch.tensor([[0, 5, 19], [3, 19, 7]])
+    with torch.no_grad():
+        every = net.decision_logits(x)
+        expected = every[torch.arange(2).reshape(2, 1), torch.arange(3).reshape(1, 3), ends]
+        torch.testing.assert_close(net.logits_at(x, ends), expected, rtol=1e-5, atol=1e-5)
 
 
 SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
@@ -204,6 +235,22 @@ def _two_textures(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     rate[labels == 0, 0, 0] = 0.8
     rate[labels == 1, 0, 1] = 0.8
     return rng.poisson(rate), labels
+
+
+@pytest.mark.parametrize("loss", list(SNNAlongLoss))
+def test_the_snn_learns_along_the_touch_with_either_loss(loss):
+    counts, labels = _two_textures(np.random.default_rng(2))
+    spec = dataclasses.replace(SPEC, along_touch_loss=loss)
+    training = TrainingSpec(
+        models=(Model.SNN,),
+        folds=4,
+        batch_size=5,
+        learning_rate=1e-2,
+        snn=spec,
+        decisions=DecisionTraining.ALONG_TOUCH,
+    )
+    cv = cross_validate(counts, labels, Model.SNN, training, frame_s=SPEC.step_s)
+    assert cv.mean >= 0.9, cv.fold_accuracy
 
 
 def test_the_snn_learns_and_decides_at_every_step():
