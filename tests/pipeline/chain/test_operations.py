@@ -11,7 +11,7 @@ from pipeline.chain.decoders import build_model, count_operations
 from pipeline.chain.models import fold_generator
 from pipeline.chain.operations import conv3x3_fan_out
 from pipeline.chain.spiking import FoldSNN
-from pipeline.design.scene import SNNSpec
+from pipeline.design.scene import SNNInputs, SNNSpec
 
 
 def _zeroed(net: torch.nn.Module) -> None:
@@ -95,7 +95,9 @@ def test_a_second_snn_layer_counts_the_first_layers_spikes_and_its_updates():
         0,
         1,
         [fold_generator(0, 0, "init")],
-        SNNSpec(hidden_neurons=2, tau_mem_s=1e-3, step_s=0.01, hidden_layers=2, inputs="counts"),
+        SNNSpec(
+            hidden_neurons=2, tau_mem_s=1e-3, step_s=0.01, hidden_layers=2, inputs=SNNInputs.COUNTS
+        ),
     )
     _zeroed(net)
     with torch.no_grad():
