@@ -9,7 +9,9 @@ on the ``smoke`` scene, once each.
 paper scene on the built-in data, the accuracy of ``MODEL``'s decisions read at 0.5, 1, 2 and 4 s
 trained along the touch, trained for the full touch, and trained on each duration alone
 (``coding.n_windows`` 5, 10, 20: the reference a decoder trained along the touch is held to),
-the figures of docs/model.md's "Spiking decoder and decisions in time".
+and at the end of the touch (``accuracy_at_end``; a touch of other recordings may be shorter),
+the figures of docs/model.md's "Spiking decoder and decisions in time". ``--dataset`` reads
+other recordings, as ``eskin --dataset`` does (a path to a folder).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from benchmarks.training import scene_frames
 from pipeline.chain.decoders import decoder_of
 from pipeline.chain.training import cross_validate
 from pipeline.design.scene import DecisionTraining, Model, Scene
+from pipeline.recordings.sources import resolve_dataset_argument
 from pipeline.run.simulate import encode, prepare
 
 #: Decision times (s of touch) the accuracy table reads.
@@ -98,12 +101,14 @@ def accuracy_along(scene: Scene, model: Model) -> list[dict]:
             k = int(np.searchsorted(cv.decision_s, t - 1e-9))
             if k < len(cv.decision_s):
                 at[t] = float((cv.decision_predicted[:, k] == recordings.labels).mean())
+        last = cv.decision_predicted[:, -1]
         rows.append(
             {
                 "model": model.value,
                 "decisions": decisions.value,
                 "trained_s": duration_s,
                 "accuracy_at_s": at,
+                "accuracy_at_end": round(float((last == recordings.labels).mean()), 4),
                 "seconds": round(seconds, 1),
             }
         )
@@ -116,8 +121,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("model", choices=[m.value for m in Model])
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
+    parser.add_argument("--dataset", default="synthetic", help="as eskin's --dataset")
     args = parser.parse_args(argv)
     changes = {"training.models": [args.model], "training.repeats": args.repeats}
+    changes |= {f"dataset.{k}": v for k, v in resolve_dataset_argument(args.dataset).items()}
     for item in args.set:
         field, value = item.split("=", 1)
         changes[field] = json.loads(value) if value[:1] in "0123456789-[" else value

@@ -182,6 +182,10 @@ ADDED: frozenset[str] = frozenset(
         "training.snn.epochs",
         "training.snn.inputs",
         "training.snn.learning_rate",
+        "training.snn.time_constants",
+        "training.snn.readout",
+        "training.snn.hidden_layers",
+        "training.snn.along_touch_loss",
         # What decisions the decoders are trained for, a new scene field.
         "training.decisions",
     }

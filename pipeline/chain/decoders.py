@@ -152,6 +152,11 @@ class Preparation(Enum):
     LOG_COUNTS = "log_counts"
     """``log(1 + count)`` as float32, so 0 stays 0 and a burst weighs less than its events."""
 
+    @property
+    def keeps_events(self) -> bool:
+        """Whether the inputs are the event counts (spikes to deliver, not real numbers)."""
+        return self is Preparation.COUNTS
+
     def apply(self, train: np.ndarray, test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """float32 inputs of a fold's training and test frames (shapes kept)."""
         if self is Preparation.STANDARDIZED:
@@ -342,6 +347,11 @@ class SNNDecoder(Decoder):
             tau_mem_s=snn.tau_mem_s,
             threshold=snn.threshold,
             surrogate_slope=snn.surrogate_slope,
+            time_constants=snn.time_constants,
+            readout=snn.readout,
+            events_in=Preparation(snn.inputs.value).keeps_events,
+            hidden_layers=snn.hidden_layers,
+            along_touch_loss=snn.along_touch_loss,
         )
 
     def epochs(self, training: TrainingSpec) -> int:
@@ -359,12 +369,18 @@ class SNNDecoder(Decoder):
 
     def loss(self, net, x, targets, weights, ends=None):
         """The cross-entropy of its decision at the last step (``ends`` None), or, trained
-        along the touch, the mean over the steps of each step's decision's (one pass gives
-        them all, so every step is weighed, not the drawn ``ends``)."""
+        along the touch, as ``training.snn.along_touch_loss`` says (the net's
+        ``along_touch_loss``): the mean over the steps of each step's decision's (one pass
+        gives them all, so every step is weighed, not the drawn ``ends``), or that of each
+        sample's decision at its drawn step ``ends[f, b]``, as the FFNN's and CNN's (the same
+        loss in expectation over the draws, at the cost of one decision per sample)."""
         from pipeline.chain.folded import fold_loss
+        from pipeline.design.scene import SNNAlongLoss
 
         if ends is None:
             return fold_loss(net(x), targets, weights)
+        if net.along_touch_loss is SNNAlongLoss.DRAWN_STEP:
+            return fold_loss(net.logits_at(x, ends), targets, weights)
         logits = net.decision_logits(x)  # (F, B, T, n_classes)
         n_steps = logits.shape[2]
         every = targets.unsqueeze(2).expand(-1, -1, n_steps)

@@ -25,7 +25,11 @@ CNN
 SNN
     cumulative over steps :math:`1..t`: ACs :math:`= h \sum_{t' \le t} \sum x_{t'} + K
     \sum_{t' \le t} n(s_{t'})` (input events to the hidden layer, hidden spikes to the
-    readout), neuron updates :math:`= t (h + K)`.
+    readout), neuron updates :math:`= t (h + K)`; with :math:`L` hidden layers, each layer's
+    spikes after the first reach :math:`h` neurons of the next, and the updates are
+    :math:`t (L h + K)`; on inputs that are not event counts
+    (``training.snn.inputs`` standardized or ``log_counts``: real numbers), the input layer's
+    are MACs, :math:`h \sum_{t' \le t} n_{\ne 0}(x_{t'})`, and only the hidden spikes' ACs.
 
 One counter per model (:func:`ffnn_operations`, :func:`cnn_operations`, :func:`snn_operations`),
 each the one its decoder declares (:meth:`pipeline.chain.decoders.Decoder.count_operations`;
@@ -129,11 +133,16 @@ def snn_operations(model: FoldSNN, x: torch.Tensor) -> Operations:
     """The SNN's operations on its spike counts ``x`` (float32 ``(F, B, C, H, T)``, ``T``
     steps): ``(F, B, T)`` accumulates and neuron updates, cumulative over the steps."""
     hidden, n_classes = model.hidden_neurons, model.n_classes
-    events = x.to(torch.float64).sum(dim=(2, 3))  # (F, B, T) input events per step
-    spikes = model.hidden_spikes(x)[0].sum(dim=3).to(torch.float64)  # (F, B, T)
-    acs = torch.cumsum(events * hidden + spikes * n_classes, dim=2).numpy()
+    # (F, B, T) per step: input events, or nonzero real inputs (the module docstring)
+    inputs = (x if model.events_in else (x != 0)).to(torch.float64).sum(dim=(2, 3))
+    spikes = [s.sum(dim=3).to(torch.float64) for s, _ in model.layer_spikes(x)]  # (F, B, T)
+    fan_out = [hidden] * (len(spikes) - 1) + [n_classes]
+    sent = sum(s * f for s, f in zip(spikes, fan_out, strict=True))
+    acs = torch.cumsum(inputs * hidden * model.events_in + sent, dim=2).numpy()
+    macs = torch.cumsum(inputs * hidden * (not model.events_in), dim=2).numpy()
     n_steps = x.shape[-1]
+    per_step = len(spikes) * hidden + n_classes
     updates = np.broadcast_to(
-        np.arange(1, n_steps + 1, dtype=np.float64) * (hidden + n_classes), acs.shape
+        np.arange(1, n_steps + 1, dtype=np.float64) * per_step, acs.shape
     ).copy()
-    return Operations(acs, np.zeros_like(acs), updates)
+    return Operations(acs, macs, updates)

@@ -1,4 +1,4 @@
-r"""The spiking decoder: one layer of leaky integrate-and-fire neurons, batched over folds.
+r"""The spiking decoder: layers of leaky integrate-and-fire neurons, batched over folds.
 
 Input
     A recording's spike trains counted in steps of :math:`\Delta t` (``training.snn.step_s``),
@@ -19,7 +19,14 @@ Neuron (the leaky integrate-and-fire neuron of snnTorch's ``snn.Leaky``, reset b
         s_t = \Theta(u_t - \vartheta), \qquad u_0 = s_0 = 0,
 
     :math:`\Theta(v) = 1` for :math:`v > 0`, else 0. The reset term :math:`s_{t-1}` carries no
-    gradient (snnTorch's default ``reset_delay`` with a detached reset).
+    gradient (snnTorch's default ``reset_delay`` with a detached reset). With
+    ``time_constants = "learned"`` each neuron :math:`i` of each fold has its own
+    :math:`\beta_i = \exp(-\Delta t / \tau_i)`, :math:`\tau_i = \exp(\ell_i)` with
+    :math:`\ell_i` (``log_tau_s``) a parameter starting at :math:`\log \tau_\mathrm{mem}`, so
+    that every :math:`\tau_i > 0` and :math:`\beta_i \in (0, 1)` (the parametric LIF neuron of
+    Fang et al., ICCV 2021). With ``hidden_layers`` :math:`L > 1`, layer :math:`k + 1` is driven
+    by the spikes of layer :math:`k`, :math:`I^{(k+1)}_t = W_h^{(k)\top} s^{(k)}_t + b_h^{(k)}`,
+    and the readout reads the last layer's spikes.
 
 Surrogate gradient
     The spike's derivative is replaced by the fast sigmoid's (SuperSpike; snnTorch's
@@ -31,17 +38,26 @@ Surrogate gradient
 
     Backpropagation through time is then a linear recursion backwards in time,
     :math:`g_t = \frac{\partial L}{\partial s_t} \frac{\partial s_t}{\partial u_t}
-    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`.
+    + \beta g_{t+1}`, :math:`\partial L / \partial I_t = g_t`, and for a learned decay
+    :math:`\partial L / \partial \beta_i = \sum_t g_{t,i} u_{t-1,i}`.
 
 Readout and decisions
-    A non-spiking integrator sums the output currents :math:`W_2^\top s_t + b_2` of every step;
-    the decision read at step :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of
-    their running mean :math:`z_t = \frac{1}{t} \sum_{t' \le t} (W_2^\top s_{t'} + b_2)`, its
-    confidence the softmax probability of that class. Training (``training.decisions``,
-    :meth:`pipeline.chain.decoders.SNNDecoder.loss`) minimizes the cross-entropy of
-    :math:`z_T`, the decision at the end of the touch (``full_touch``), or its mean over the
-    steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)` (``along_touch``: every step's
-    decision is trained, as the FFNN's and CNN's are on the windows so far).
+    Each step's output current is :math:`o_t = W_2^\top s_t + b_2`; the decision read at step
+    :math:`t` (at :math:`t \Delta t` seconds of touch) is the argmax of logits :math:`z_t`, its
+    confidence the softmax probability of that class, with :math:`z_t` as ``readout`` says:
+
+    * ``mean_current``: their running mean, :math:`z_t = \frac{1}{t} \sum_{t' \le t} o_{t'}`
+      (a non-spiking integrator; at the end of the touch, linear in the spike counts);
+    * ``last_membrane``: the membrane of a non-spiking leaky integrator with the hidden
+      neurons' :math:`\beta` (``tau_mem_s``), :math:`z_t = \beta z_{t-1} + (1 - \beta) o_t`,
+      :math:`z_0 = 0`;
+    * ``max_membrane``: that membrane's maximum so far, :math:`\max_{t' \le t} z_{t'}` per class.
+
+    Training (``training.decisions``, :meth:`pipeline.chain.decoders.SNNDecoder.loss`)
+    minimizes the cross-entropy of :math:`z_T`, the decision at the end of the touch
+    (``full_touch``), or its mean over the steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)`
+    (``along_touch``: every step's decision is trained, as the FFNN's and CNN's are on the
+    windows so far).
 
 Speed
     The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
@@ -60,29 +76,39 @@ from collections.abc import Sequence
 
 import numpy as np
 import torch
+from torch import nn
 
-from pipeline.chain.folded import FoldModel, two_layers
+from pipeline.chain.folded import FoldModel, two_layers, uniform
+from pipeline.design.scene import SNNAlongLoss, SNNReadout, SNNTimeConstants
 from pipeline.jit import kernel
 
 
 @kernel()
-def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # pragma: no cover
+def _lif_forward(
+    current, beta, threshold, slope, ends, spikes, slopes, previous, rate
+):  # pragma: no cover
     """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
-    derivative ``ds/du``) and, unless it is empty, ``spikes`` are float32 ``(M, T, N)`` (``M``
-    independent groups, each with its ``N`` neurons contiguous); ``rate`` float32 ``(M, N)``
-    gets each neuron's mean spike count over the steps."""
-    n_groups, n_steps, n = current.shape
+    derivative ``ds/du``) and, unless they are empty, ``spikes`` and ``previous`` (each step's
+    membrane before it, :math:`u_{t-1}`) are float32 ``(M, T, N)`` (``M`` independent groups,
+    each with its ``N`` neurons contiguous); ``beta`` float32 ``(M, N)`` is each neuron's decay;
+    ``rate`` float32 ``(M, N)`` gets each neuron's mean spike count over the steps up to
+    ``ends[m]`` (int64 ``(M,)``), the steps after which are not computed (their ``slopes``,
+    ``spikes`` and ``previous`` are left as they were)."""
+    n_groups, _, n = current.shape
     keep = spikes.size > 0
-    beta, threshold, slope = np.float32(beta), np.float32(threshold), np.float32(slope)
+    keep_previous = previous.size > 0
+    threshold, slope = np.float32(threshold), np.float32(slope)
     u = np.zeros(n, dtype=np.float32)
     s = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
         u[:] = 0.0
         s[:] = 0.0
         rate[m, :] = 0.0
-        for t in range(n_steps):
+        for t in range(ends[m] + 1):
+            if keep_previous:
+                previous[m, t, :] = u
             for i in range(n):
-                value = beta * u[i] + current[m, t, i] - threshold * s[i]
+                value = beta[m, i] * u[i] + current[m, t, i] - threshold * s[i]
                 u[i] = value
                 s[i] = np.float32(1.0) if value > threshold else np.float32(0.0)
                 rate[m, i] += s[i]
@@ -90,80 +116,116 @@ def _lif_forward(current, beta, threshold, slope, spikes, slopes, rate):  # prag
                 slopes[m, t, i] = np.float32(1.0) / (d * d)
             if keep:
                 spikes[m, t, :] = s
-        rate[m, :] /= n_steps
+        rate[m, :] /= ends[m] + 1
 
 
 @kernel()
-def _lif_backward(grad_spikes, grad_rate, slopes, beta, grad_current):  # pragma: no cover
+def _lif_backward(
+    grad_spikes, grad_rate, slopes, beta, ends, previous, grad_current, grad_beta
+):  # pragma: no cover
     """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
-    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives."""
-    n_groups, n_steps, n = slopes.shape
+    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives; and, unless
+    ``previous`` is empty, ``dL/d beta`` (``grad_beta``, ``(M, N)``): the sum over the steps of
+    :math:`g_t u_{t-1}`; the steps after ``ends[m]`` get no gradient."""
+    n_groups, _, n = slopes.shape
     keep = grad_spikes.size > 0
-    beta = np.float32(beta)
-    per_step = np.float32(1.0 / n_steps)
+    keep_previous = previous.size > 0
     g = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
+        per_step = np.float32(1.0 / (ends[m] + 1))
         g[:] = 0.0
-        for t in range(n_steps - 1, -1, -1):
+        if keep_previous:
+            grad_beta[m, :] = 0.0
+        grad_current[m, ends[m] + 1 :, :] = 0.0
+        for t in range(ends[m], -1, -1):
             for i in range(n):
                 grad = grad_rate[m, i] * per_step
                 if keep:
                     grad += grad_spikes[m, t, i]
-                g[i] = grad * slopes[m, t, i] + beta * g[i]
+                g[i] = grad * slopes[m, t, i] + beta[m, i] * g[i]
                 grad_current[m, t, i] = g[i]
+                if keep_previous:
+                    grad_beta[m, i] += g[i] * previous[m, t, i]
 
 
 class LeakyLayer(torch.autograd.Function):
     """Spikes ``float32 (M, T, N)`` of ``M x N`` LIF neurons driven by ``current`` ``float32
     (M, T, N)`` over ``T`` steps (see the module docstring), and their mean over the steps
-    ``(M, N)``; differentiable in ``current`` through the surrogate. With ``keep=False`` the
-    spikes are not kept (an empty tensor): training reads only the mean, and the time loop
-    then moves a third less memory."""
+    ``(M, N)``; differentiable in ``current`` through the surrogate, and in ``beta`` when it is
+    a tensor ``(M, N)`` that requires grad (a float is one fixed decay for every neuron). With
+    ``keep=False`` the spikes are not kept (an empty tensor): training reads only the mean, and
+    the time loop then moves a third less memory. ``ends`` (int64 ``(M,)``, with ``keep=False``;
+    None: the last step) stops group ``m`` after step ``ends[m]``: its rate is the mean up to
+    there, the decision a training along the touch draws."""
 
     @staticmethod
-    def forward(ctx, current, beta, threshold, slope, keep=True):  # type: ignore[override]
+    def forward(ctx, current, beta, threshold, slope, keep=True, ends=None):  # type: ignore[override]
         """``(spikes, rate)`` of the layer driven by ``current`` (see the class docstring)."""
         current = current.detach().contiguous()
-        n_groups, _, n = current.shape
+        n_groups, n_steps, n = current.shape
+        if ends is None:
+            ends = torch.full((n_groups,), n_steps - 1, dtype=torch.int64)
+        ends = ends.to(torch.int64).contiguous()
+        learned = isinstance(beta, torch.Tensor) and ctx.needs_input_grad[1]
+        if isinstance(beta, torch.Tensor):
+            beta = beta.detach().to(torch.float32).expand(n_groups, n).contiguous()
+        else:
+            beta = torch.full((n_groups, n), float(beta), dtype=torch.float32)
         spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
         slopes = torch.empty_like(current)
+        previous = torch.empty_like(current) if learned else torch.empty((0, 0, 0))
         rate = torch.empty((n_groups, n), dtype=current.dtype)
         _lif_forward(
             current.numpy(),
-            float(beta),
+            beta.numpy(),
             float(threshold),
             float(slope),
+            ends.numpy(),
             spikes.numpy(),
             slopes.numpy(),
+            previous.numpy(),
             rate.numpy(),
         )
-        ctx.save_for_backward(slopes)
-        ctx.beta = float(beta)
+        ctx.save_for_backward(slopes, beta, ends, previous)
+        ctx.learned = learned
         return spikes, rate
 
     @staticmethod
     def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
-        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate)."""
-        (slopes,) = ctx.saved_tensors
+        """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate),
+        and ``dL/d beta`` for a learned decay."""
+        slopes, beta, ends, previous = ctx.saved_tensors
         grad = torch.empty_like(slopes)
+        grad_beta = torch.empty_like(beta) if ctx.learned else torch.empty((0, 0))
         grad_spikes = grad_spikes.detach().contiguous()
         grad_rate = grad_rate.detach().contiguous()
         _lif_backward(
-            grad_spikes.numpy(), grad_rate.numpy(), slopes.numpy(), ctx.beta, grad.numpy()
+            grad_spikes.numpy(),
+            grad_rate.numpy(),
+            slopes.numpy(),
+            beta.numpy(),
+            ends.numpy(),
+            previous.numpy(),
+            grad.numpy(),
+            grad_beta.numpy(),
         )
-        return grad, None, None, None, None
+        return grad, grad_beta if ctx.learned else None, None, None, None, None
 
 
 class FoldSNN(FoldModel):
     """Spiking decoder batched over folds: ``Linear(C*H, hidden) -> LIF -> Linear(hidden,
-    n_classes) -> running mean over steps``.
+    n_classes) -> readout over steps`` (the module docstring).
 
     Parameters (float32): ``w1 (F, C*H, hidden)``, ``b1 (F, hidden)``, ``w2 (F, hidden,
     n_classes)``, ``b2 (F, n_classes)``, drawn per fold in that order as the FFNN's
-    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``).
+    (``U(-1/sqrt(fan_in), 1/sqrt(fan_in))``), and, with learned time constants,
+    ``log_tau_s (F, hidden)`` (log seconds, drawn from no generator).
 
-    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, T, n_classes)``: the logits
-    :math:`z_t` of a decision read at every step.
+    ``events_in``: whether its inputs are event counts (for the operation counter,
+    :func:`pipeline.chain.operations.snn_operations`).
+
+    ``forward(x: float32 (F, B, C, H, T)) -> float32 (F, B, n_classes)``: the logits of the
+    decision at the last step; :meth:`decision_logits` those of every step.
     """
 
     def __init__(
@@ -177,49 +239,134 @@ class FoldSNN(FoldModel):
         tau_mem_s: float,
         threshold: float,
         surrogate_slope: float,
+        time_constants: SNNTimeConstants = SNNTimeConstants.SHARED,
+        readout: SNNReadout = SNNReadout.MEAN_CURRENT,
+        events_in: bool = True,
+        hidden_layers: int = 1,
+        along_touch_loss: SNNAlongLoss = SNNAlongLoss.EVERY_STEP,
     ):
         super().__init__(input_shape, n_classes, len(generators))
         c, h, _ = self.input_shape
         self.hidden_neurons = int(hidden_neurons)
+        self.step_s = float(step_s)
         self.beta = math.exp(-step_s / tau_mem_s)
         self.threshold = float(threshold)
         self.surrogate_slope = float(surrogate_slope)
+        self.readout = SNNReadout(readout)
+        self.events_in = bool(events_in)  # its inputs are event counts (else real numbers)
+        self.hidden_layers = int(hidden_layers)
+        self.along_touch_loss = SNNAlongLoss(along_touch_loss)  # read by its decoder's loss
         two_layers(self, c * h, self.hidden_neurons, n_classes, generators)
+        if self.hidden_layers > 1:
+            # Drawn after the first layers, so that those stay a one-layer decoder's.
+            n, extra = self.hidden_neurons, self.hidden_layers - 1
+            draws = [
+                (uniform(g, (n, n), n), uniform(g, (n,), n))
+                for g in generators
+                for _ in range(extra)
+            ]
+            weights = torch.stack([w for w, _ in draws]).reshape(self.n_folds, extra, n, n)
+            biases = torch.stack([b for _, b in draws]).reshape(self.n_folds, extra, n)
+            self.wh, self.bh = nn.Parameter(weights), nn.Parameter(biases)
+        if SNNTimeConstants(time_constants) is SNNTimeConstants.LEARNED:
+            # After the drawn layers, and drawn from no generator: the weights stay those of
+            # a shared time constant with the same seed.
+            start = torch.full(
+                (self.n_folds, self.hidden_layers, self.hidden_neurons), math.log(tau_mem_s)
+            )
+            self.log_tau_s = nn.Parameter(start)
 
-    def hidden_spikes(
-        self, x: torch.Tensor, keep: bool = True
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Spikes ``float32 (F, B, T, hidden)`` of the LIF layer for ``x: (F, B, C, H, T)``
-        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
+    def decays(self, batch: int, layer: int = 0) -> float | torch.Tensor:
+        """The decay :math:`\\beta` of hidden layer ``layer``'s neurons: one float for a shared
+        time constant, else float32 ``(F * batch, hidden)``, :math:`\\exp(-\\Delta t / \\tau_i)`
+        of each fold's learned :math:`\\tau_i`, exp(``log_tau_s``), repeated over its ``batch``
+        samples."""
+        if not hasattr(self, "log_tau_s"):
+            return self.beta
+        beta = torch.exp(-self.step_s / torch.exp(self.log_tau_s[:, layer]))  # (F, hidden)
+        return beta.unsqueeze(1).expand(-1, batch, -1).reshape(-1, self.hidden_neurons)
+
+    def layer_spikes(
+        self, x: torch.Tensor, keep: bool = True, ends: torch.Tensor | None = None
+    ) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """For each hidden LIF layer, its spikes ``float32 (F, B, T, hidden)`` for
+        ``x: (F, B, C, H, T)`` (the last layer's empty unless ``keep``) and their mean over the
+        steps ``(F, B, hidden)``; a layer after the first is driven by the current
+        :math:`W_h^\\top s_t + b_h` of the spikes of the one before. ``ends`` (int64
+        ``(F, B)``, with ``keep=False``): the last layer's mean is over the steps up to
+        ``ends[f, b]``."""
         self._check(x)
         n_folds, batch, c, h, n_steps = x.shape
+        n = self.hidden_neurons
         steps = x.reshape(n_folds, batch, c * h, n_steps).transpose(2, 3)  # (F, B, T, C*H)
         current = torch.baddbmm(
             self.b1.unsqueeze(1), steps.reshape(n_folds, batch * n_steps, c * h), self.w1
         )  # (F, B*T, hidden): every step's input current in one product
-        spikes, rate = LeakyLayer.apply(
-            current.reshape(n_folds * batch, n_steps, self.hidden_neurons),
-            self.beta,
-            self.threshold,
-            self.surrogate_slope,
-            keep,
-        )
-        if keep:
-            spikes = spikes.reshape(n_folds, batch, n_steps, self.hidden_neurons)
-        return spikes, rate.reshape(n_folds, batch, self.hidden_neurons)
+        layers = []
+        for layer in range(self.hidden_layers):
+            last = layer == self.hidden_layers - 1
+            spikes, rate = LeakyLayer.apply(
+                current.reshape(n_folds * batch, n_steps, n),
+                self.decays(batch, layer),
+                self.threshold,
+                self.surrogate_slope,
+                keep or not last,
+                None if ends is None or not last else ends.reshape(-1),
+            )
+            if keep or not last:
+                spikes = spikes.reshape(n_folds, batch, n_steps, n)
+            layers.append((spikes, rate.reshape(n_folds, batch, n)))
+            if not last:
+                current = torch.baddbmm(
+                    self.bh[:, layer].unsqueeze(1),
+                    spikes.reshape(n_folds, batch * n_steps, n),
+                    self.wh[:, layer],
+                )
+        return layers
+
+    def hidden_spikes(
+        self, x: torch.Tensor, keep: bool = True, ends: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Spikes ``float32 (F, B, T, hidden)`` of the last LIF layer for ``x: (F, B, C, H, T)``
+        (empty unless ``keep``), and their mean over the steps ``(F, B, hidden)``."""
+        return self.layer_spikes(x, keep, ends)[-1]
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step, the
-        mean output current over the whole touch: what training fits."""
+        """Logits ``float32 (F, B, n_classes)`` of the decision read at the last step: what
+        training for the full touch fits (for the mean readout, from the spike counts alone)."""
+        if self.readout is not SNNReadout.MEAN_CURRENT:
+            return self.decision_logits(x)[:, :, -1]
         _, rate = self.hidden_spikes(x, keep=False)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
 
+    def logits_at(self, x: torch.Tensor, ends: torch.Tensor) -> torch.Tensor:
+        """Logits ``float32 (F, B, n_classes)`` of each sample's decision at its step
+        ``ends[f, b]`` (int64 ``(F, B)``): for the mean readout, from the spike counts up to it
+        alone, :math:`z_k = W_2^\\top \\frac{1}{k} \\sum_{t \\le k} s_t + b_2`."""
+        if self.readout is not SNNReadout.MEAN_CURRENT:
+            every = self.decision_logits(x)  # (F, B, T, n_classes)
+            index = ends.reshape(*ends.shape, 1, 1).expand(-1, -1, 1, self.n_classes)
+            return every.gather(2, index).squeeze(2)
+        _, rate = self.hidden_spikes(x, keep=False, ends=ends)  # (F, B, hidden)
+        return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
-        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step: the
-        running mean of the output currents (the last step's is :meth:`forward`'s)."""
+        """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step, as
+        ``readout`` says (the module docstring; the last step's is :meth:`forward`'s)."""
         spikes, _ = self.hidden_spikes(x)
         n_folds, batch, n_steps, hidden = spikes.shape
         out = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
         out = out.reshape(n_folds, batch, n_steps, self.n_classes)
-        count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
-        return out.cumsum(dim=2) / count + self.b2.reshape(n_folds, 1, 1, -1)
+        bias = self.b2.reshape(n_folds, 1, 1, -1)
+        if self.readout is SNNReadout.MEAN_CURRENT:
+            count = torch.arange(1, n_steps + 1, dtype=out.dtype).reshape(1, 1, -1, 1)
+            return out.cumsum(dim=2) / count + bias
+        out = out + bias
+        lag = torch.arange(n_steps).reshape(-1, 1) - torch.arange(n_steps).reshape(1, -1)
+        weights = torch.where(
+            lag >= 0, (1 - self.beta) * self.beta ** lag.clamp(min=0).to(out.dtype), 0.0
+        )  # (T, T): row t weighs the steps up to t, as the leaky integrator does
+        membrane = torch.einsum("ts,fbsc->fbtc", weights.to(out.dtype), out)
+        if self.readout is SNNReadout.LAST_MEMBRANE:
+            return membrane
+        return torch.cummax(membrane, dim=2).values

@@ -121,6 +121,28 @@ class SNNInputs(enum.StrEnum):
     STANDARDIZED = "standardized"  # per input and step, with the fold's training statistics
 
 
+class SNNTimeConstants(enum.StrEnum):
+    """The membrane time constants of the spiking decoder's neurons."""
+
+    SHARED = "shared"  # one, tau_mem_s, for every neuron, fixed
+    LEARNED = "learned"  # one per neuron, starting at tau_mem_s, trained with the weights
+
+
+class SNNReadout(enum.StrEnum):
+    """How the spiking decoder's output currents become a decision at a step."""
+
+    MEAN_CURRENT = "mean_current"  # their mean since the touch began (weighted spike counts)
+    LAST_MEMBRANE = "last_membrane"  # a leaky integrator's membrane (tau_mem_s) at that step
+    MAX_MEMBRANE = "max_membrane"  # that membrane's maximum since the touch began
+
+
+class SNNAlongLoss(enum.StrEnum):
+    """What the spiking decoder's training along the touch minimizes."""
+
+    EVERY_STEP = "every_step"  # the mean over the steps of each step's cross-entropy
+    DRAWN_STEP = "drawn_step"  # each sample's at one step drawn per epoch, as the FFNN's and CNN's
+
+
 class Encoder(enum.StrEnum):
     """Encoder architecture of the readout."""
 
@@ -308,13 +330,15 @@ class CodingSpec:
 @dataclass(frozen=True)
 class SNNSpec:
     """The spiking decoder (:class:`~pipeline.chain.spiking.FoldSNN`): ON and OFF spikes of each
-    taxel counted in steps of ``step_s``, one layer of ``hidden_neurons`` leaky integrate-and-fire
-    neurons, a readout read at every step; trained ``epochs`` epochs through time with a
+    taxel counted in steps of ``step_s``, ``hidden_layers`` layers of ``hidden_neurons`` leaky
+    integrate-and-fire neurons (their time constants as ``time_constants`` says), a readout read
+    at every step as ``readout`` says; trained ``epochs`` epochs through time with a
     fast-sigmoid surrogate gradient of slope ``surrogate_slope``, on its counts as ``inputs``
     says, at its own ``learning_rate`` when set."""
 
+    # Its step and epochs: chosen by measurement at the paper point (docs/model.md).
     step_s: float = param(
-        0.02,
+        0.05,
         "s",
         "time step of the spiking decoder (spikes binned per step; divides coding.window_s)",
         within=Range(1e-4, 3600),
@@ -340,7 +364,7 @@ class SNNSpec:
         cost=Cost.FREE,
     )
     epochs: int = param(
-        100, "1", "training epochs of the spiking decoder", within=Range(1, 100_000)
+        200, "1", "training epochs of the spiking decoder", within=Range(1, 100_000)
     )
     # Its inputs and learning rate: chosen by measurement at the paper point (docs/model.md);
     # the counts at training.learning_rate, as it was first built, keep their keys.
@@ -349,6 +373,34 @@ class SNNSpec:
         "1",
         "how step counts become the spiking decoder's inputs",
         formerly=SNNInputs.COUNTS,
+    )
+    time_constants: SNNTimeConstants = param(
+        SNNTimeConstants.SHARED,
+        "1",
+        "membrane time constants of the spiking decoder: tau_mem_s for every neuron, or one per "
+        "neuron learned from it",
+        formerly=SNNTimeConstants.SHARED,
+    )
+    hidden_layers: int = param(
+        1,
+        "1",
+        "layers of hidden_neurons leaky integrate-and-fire neurons, each driven by the spikes "
+        "of the one before",
+        within=Range(1, 4),
+        formerly=1,
+    )
+    along_touch_loss: SNNAlongLoss = param(
+        SNNAlongLoss.EVERY_STEP,
+        "1",
+        "what the spiking decoder's training along the touch minimizes: every step's decision, "
+        "or one drawn step's per sample and epoch",
+        formerly=SNNAlongLoss.EVERY_STEP,
+    )
+    readout: SNNReadout = param(
+        SNNReadout.MEAN_CURRENT,
+        "1",
+        "how the spiking decoder's output currents become its decision at a step",
+        formerly=SNNReadout.MEAN_CURRENT,
     )
     learning_rate: float | None = param(
         0.01,

@@ -398,7 +398,7 @@ CASES.append(
         lambda t: sweeps_grid(
             t,
             '[sweeps.a]\nset = { "training.models" = ["snn"] }\n'
-            'axes = { "coding.window_s" = [0.1, 0.05] }\n',
+            'axes = { "coding.window_s" = [0.1, 0.125] }\n',
         ),
         "training.snn.step_s",
     )

@@ -9,6 +9,8 @@ import sys
 import numpy as np
 import pytest
 import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pipeline.chain.decoders import (
     DECODERS,
@@ -72,6 +74,30 @@ def test_counts_stay_counts_and_windows_are_standardized():
     prepared = Preparation.STANDARDIZED.apply(train, test)
     for got, want in zip(prepared, standardize(train, test), strict=True):
         assert np.array_equal(got, want)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.integers(0, 50), min_size=8, max_size=8),
+    st.lists(st.integers(0, 50), min_size=4, max_size=4),
+)
+def test_only_the_counts_stay_events_and_zero_stays_zero_but_standardized(train, test):
+    train = np.array(train).reshape(2, 2, 1, 2)
+    test = np.array(test).reshape(1, 2, 1, 2)
+    for preparation in Preparation:
+        got_train, got_test = preparation.apply(train, test)
+        assert got_train.shape == train.shape and got_test.shape == test.shape
+        assert got_train.dtype == got_test.dtype == np.float32
+        assert preparation.keeps_events is (preparation is Preparation.COUNTS)
+        if preparation is Preparation.STANDARDIZED:
+            continue
+        # counts and log counts: 0 stays 0 (no event, no input) and more events weigh more
+        both, prepared = np.concatenate([train, test]), np.concatenate([got_train, got_test])
+        assert np.array_equal(prepared == 0, both == 0)
+        order = np.argsort(both, axis=None, kind="stable")
+        assert np.all(np.diff(prepared.ravel()[order]) >= 0)
+        if preparation is Preparation.COUNTS:
+            assert np.array_equal(prepared, both.astype(np.float32))
 
 
 def test_the_operation_counter_asks_each_models_decoder():

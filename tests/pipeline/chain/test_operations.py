@@ -11,6 +11,7 @@ from pipeline.chain.decoders import build_model, count_operations
 from pipeline.chain.models import fold_generator
 from pipeline.chain.operations import conv3x3_fan_out
 from pipeline.chain.spiking import FoldSNN
+from pipeline.design.scene import SNNInputs, SNNSpec
 
 
 def _zeroed(net: torch.nn.Module) -> None:
@@ -78,6 +79,36 @@ def test_snn_counts_events_and_spikes_as_accumulates_and_every_neuron_update():
     assert ops.acs.tolist() == [[[7.0, 7.0, 12.0, 12.0]]]
     assert ops.macs.tolist() == [[[0.0, 0.0, 0.0, 0.0]]]
     assert ops.neuron_updates.tolist() == [[[5.0, 10.0, 15.0, 20.0]]]
+    # The same numbers as real inputs (standardized, log counts): a MAC per nonzero input.
+    net.events_in = False
+    real = count_operations("snn", net, x)
+    assert real.macs.tolist() == [[[2.0, 2.0, 4.0, 4.0]]]
+    assert real.acs.tolist() == [[[3.0, 3.0, 6.0, 6.0]]]
+    assert np.array_equal(real.neuron_updates, ops.neuron_updates)
+
+
+def test_a_second_snn_layer_counts_the_first_layers_spikes_and_its_updates():
+    net = build_model(
+        "snn",
+        (1, 1, 4),
+        3,
+        0,
+        1,
+        [fold_generator(0, 0, "init")],
+        SNNSpec(
+            hidden_neurons=2, tau_mem_s=1e-3, step_s=0.01, hidden_layers=2, inputs=SNNInputs.COUNTS
+        ),
+    )
+    _zeroed(net)
+    with torch.no_grad():
+        net.w1[0, 0, 0] = 5.0  # the input drives neuron 0 of the first layer
+        net.wh[0, 0, 0, 1] = 5.0  # which drives neuron 1 of the second
+    x = torch.tensor([2.0, 0.0, 1.0, 0.0]).reshape(1, 1, 1, 1, 4)
+    ops = count_operations("snn", net, x)
+    # Step 1: 2 events x 2 + 1 first-layer spike x 2 + 1 second-layer spike x 3;
+    # step 3: 1 x 2 + 2 + 3 more.
+    assert ops.acs.tolist() == [[[9.0, 9.0, 16.0, 16.0]]]
+    assert ops.neuron_updates.tolist() == [[[7.0, 14.0, 21.0, 28.0]]]
 
 
 def test_counts_are_per_fold_and_sample():

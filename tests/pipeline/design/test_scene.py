@@ -204,7 +204,7 @@ def test_the_snn_is_keyed_only_for_scenes_that_train_it():
     [
         ({"training.snn.step_s": 0.2}, "is longer than coding.window_s"),
         ({"training.snn.step_s": 0.03}, "does not divide coding.window_s"),
-        ({"coding.window_s": 0.05}, "does not divide coding.window_s = 0.05 s"),
+        ({"coding.window_s": 0.125}, "does not divide coding.window_s = 0.125 s"),
     ],
 )
 def test_the_snn_step_must_divide_the_window(changes, culprit):
