@@ -32,11 +32,11 @@ $(VENV)/.installed-test: pyproject.toml $(LOCK) | $(BIN)/python
 run: $(VENV)/.installed
 	$(BIN)/eskin sweep --grid paper --root runs/paper --report
 
-# The suite on TEST_WORKERS pytest-xdist workers; the slow (end-to-end) tests of a module run on
-# one worker in order (tests/conftest.py). The ten slowest tests are listed at the end.
+# The suite on TEST_WORKERS pytest-xdist workers: a module runs on one worker, in order, and the
+# modules go out longest first (tests/conftest.py). The ten slowest tests are listed at the end.
 # test-quick leaves the slow tests out.
 TEST_WORKERS ?= 2
-PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
+PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 test: $(VENV)/.installed-test
 	$(PYTEST)

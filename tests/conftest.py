@@ -4,8 +4,10 @@ whole suite runs by.
 End-to-end tests (a sweep, a search, a Prefect server or a Dask cluster started) are marked
 ``slow``: an unmarked test that starts one fails (:func:`pytest_configure`), so
 ``make test-quick`` (``-m "not slow"``) runs everything else alone. Under pytest-xdist
-(``make test`` runs ``-n 2 --dist loadgroup``) the slow tests of a module run on one worker, in
-order (one ``xdist_group`` per module), so that a module-scoped sweep is made once, and the
+(``make test`` runs ``-n 2 --dist loadfile --no-loadscope-reorder``) a module runs on one
+worker, in order, so that a module-scoped fixture (a sweep, the documentation site) is made once
+and two sweeps of one module never compete for the cores; the modules are handed out in the
+order :func:`run_order` gives, the longest first, so that no long module starts last. The
 workers share one Prefect server, one migrated database and one smoke sweep (:func:`once`).
 Every test has a time limit (pytest-timeout, ``timeout`` in pyproject.toml); slow tests get
 :data:`SLOW_TIMEOUT_S`.
@@ -46,17 +48,30 @@ END_TO_END_COMMANDS = frozenset({"sweep", "optimize", "serve", "server"})
 STARTS_NOTHING = frozenset({"--help", "-h", "--dry-run", "status", "stop"})
 
 
-@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Slow tests: :data:`SLOW_TIMEOUT_S` and, for pytest-xdist's ``loadgroup``, one group per
-    module (its module-scoped sweeps are made once, and its sweeps run one at a time)."""
+def run_order(items: list[pytest.Item]) -> list[pytest.Item]:
+    """``items`` module by module, in the order pytest-xdist hands the modules out: the modules
+    with end-to-end tests first, most of them first (each starts a sweep, a search or a server:
+    tens of seconds), then the others, most tests first, so that the shortest fill the end of
+    the run on whichever worker is free. Ties keep the collection order; a module's own tests
+    keep theirs (its fixtures rely on it)."""
+    modules: dict[str, list[pytest.Item]] = {}
     for item in items:
-        if item.get_closest_marker("slow") is None:
-            continue
-        if item.get_closest_marker("timeout") is None:
+        modules.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
+
+    def weight(tests: list[pytest.Item]) -> tuple[int, int]:
+        slow = sum(item.get_closest_marker("slow") is not None for item in tests)
+        return (-slow, 0) if slow else (1, -len(tests))
+
+    return [item for tests in sorted(modules.values(), key=weight) for item in tests]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Slow tests get :data:`SLOW_TIMEOUT_S`; the modules run in :func:`run_order`."""
+    for item in items:
+        if item.get_closest_marker("slow") and item.get_closest_marker("timeout") is None:
             item.add_marker(pytest.mark.timeout(SLOW_TIMEOUT_S))
-        if item.get_closest_marker("xdist_group") is None:
-            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
+    items[:] = run_order(items)
 
 
 #: The test running now (its set-up, call and tear-down), for :func:`_refuse_unmarked`.

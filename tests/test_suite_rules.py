@@ -44,3 +44,38 @@ def test_a_missing_vibtac12_copy_skips_here_and_fails_under_ci(monkeypatch, tmp_
     monkeypatch.setenv("CI", "true")
     with pytest.raises(pytest.fail.Exception, match="CI always has ../shared"):
         shared_data.vibtac12_copy()
+
+
+class _Item:
+    """A collected test as :func:`tests.conftest.run_order` reads it."""
+
+    def __init__(self, nodeid: str, slow: bool = False) -> None:
+        self.nodeid, self.slow = nodeid, slow
+
+    def get_closest_marker(self, name: str) -> object | None:
+        return object() if name == "slow" and self.slow else None
+
+
+def test_modules_run_whole_with_end_to_end_ones_first_most_first_and_small_ones_last():
+    from tests.conftest import run_order
+
+    items = [
+        _Item("tests/a.py::quick"),
+        _Item("tests/b.py::one", slow=True),
+        _Item("tests/c.py::first"),
+        _Item("tests/c.py::second"),
+        _Item("tests/d.py::first", slow=True),
+        _Item("tests/d.py::quick"),
+        _Item("tests/d.py::second", slow=True),
+        _Item("tests/e.py::quick"),
+    ]
+    assert [item.nodeid for item in run_order(items)] == [
+        "tests/d.py::first",
+        "tests/d.py::quick",
+        "tests/d.py::second",
+        "tests/b.py::one",
+        "tests/c.py::first",
+        "tests/c.py::second",
+        "tests/a.py::quick",
+        "tests/e.py::quick",
+    ]

@@ -95,7 +95,8 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path, migrated_server_state):
     with its auth string set as a user sets it; afterwards the API lists the run's task runs
     (one per named sweep) and its artifacts. Without the string the API answers 401."""
     state = migrated_server_state(tmp_path / "server-state")  # set up: no flow run in it yet
-    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state))
+    # The runner of `eskin serve` asks for scheduled runs every second, not Prefect's 10.
+    env = hermetic_env(tmp_path, ESKIN_SERVER_DIR=str(state), PREFECT_RUNNER_POLL_FREQUENCY="1")
     serving = None
     try:
         started = eskin("server", "start", "--json", env=env, timeout=900)
