@@ -13,7 +13,8 @@ over the median of the later points' (target <= 1.2); and the first point's ``se
 with a warm cache over that with an empty one (``NUMBA_CACHE_DIR`` a new folder: every kernel
 compiled), medians of the same processes, the compile seconds a sweep after the first saves.
 
-``run(tiny=True)`` measures one process of each kind. ``python -m benchmarks.kernels
+``run(tiny=True)`` measures one process of each kind at the ``smoke`` point, the compiling one
+filling the cache the other loads (no uncounted process). ``python -m benchmarks.kernels
 [--repeat N]`` runs this suite alone and prints its rows.
 """
 
@@ -32,14 +33,15 @@ REPEAT = 5
 TARGET = 1.2
 POINTS = 3
 
-#: One fresh process: the seconds of every step of each of POINTS points, as JSON.
+#: One fresh process: the seconds of every step of each of POINTS points of the built-in scene
+#: named by its argument, as JSON.
 _FRESH_WORKER = f"""
-import json
+import json, sys
 from pipeline.design.scene import Scene
 from pipeline.run.stages import FRONT_END, RECORDINGS, SPIKES
 from pipeline.run.stopwatch import Stopwatch
 
-scene = Scene.paper()
+scene = Scene.builtin(sys.argv[1])
 outputs = {{}}
 for level in (RECORDINGS, FRONT_END):
     outputs[level.name] = level.run(scene, outputs, Stopwatch(None))
@@ -52,28 +54,36 @@ print(json.dumps(points))
 """
 
 
-def fresh_worker(cache_dir: Path | None) -> list[dict]:
-    """The steps' seconds of each point of one fresh process; ``cache_dir``: the kernels' disk
-    cache (None: the default one)."""
+def fresh_worker(cache_dir: Path | None, scene: str = "paper") -> list[dict]:
+    """The steps' seconds of each point of the built-in ``scene`` in one fresh process;
+    ``cache_dir``: the kernels' disk cache (None: the default one)."""
     env = dict(os.environ)
     if cache_dir is not None:
         env["NUMBA_CACHE_DIR"] = str(cache_dir)
     done = subprocess.run(
-        [sys.executable, "-c", _FRESH_WORKER], capture_output=True, text=True, env=env, check=False
+        [sys.executable, "-c", _FRESH_WORKER, scene],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=False,
     )
     if done.returncode != 0:
         raise RuntimeError(f"fresh worker failed: {done.stderr[-2000:]}")
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def measure(repeat: int = REPEAT) -> dict:
+def measure(repeat: int = REPEAT, scene: str = "paper", warm_up: bool = True) -> dict:
+    """Medians over ``repeat`` pairs of fresh processes at the built-in ``scene``: one compiling
+    into an empty cache, one loading from a filled cache (filled by an uncounted process when
+    ``warm_up``, else by the first compiling one)."""
     ratios, first_s, later_s, warm_compile_s, cold_compile_s, old_first_s = [], [], [], [], [], []
     with tempfile.TemporaryDirectory(prefix="eskin-bench-compile-") as tmp:
-        warm = Path(tmp) / "warm"
-        fresh_worker(warm)  # fills the cache: not counted
+        warm = Path(tmp) / "warm" if warm_up else Path(tmp) / "cold-0"
+        if warm_up:
+            fresh_worker(warm, scene)  # fills the cache: not counted
         for i in range(repeat):
-            cold = fresh_worker(Path(tmp) / f"cold-{i}")
-            points = fresh_worker(warm)
+            cold = fresh_worker(Path(tmp) / f"cold-{i}", scene)
+            points = fresh_worker(warm, scene)
             readout = [p["work"]["readout"] for p in points]
             first_s.append(readout[0])
             later_s.append(statistics.median(readout[1:]))
@@ -91,6 +101,7 @@ def measure(repeat: int = REPEAT) -> dict:
         "cold_compile_s": statistics.median(cold_compile_s),
         "old_first_s": statistics.median(old_first_s),
         "repeat": repeat,
+        "scene": scene,
     }
 
 
@@ -101,7 +112,7 @@ def rows(result: dict) -> list[dict]:
             "ratio": result["ratio"],
             "target": f"<= {TARGET}",
             "detail": f"medians of {result['repeat']} processes: first {result['first_s']:.4f} s, "
-            f"later {result['later_s']:.4f} s (paper point)",
+            f"later {result['later_s']:.4f} s ({result['scene']} point)",
         },
         {
             "benchmark": "kernels: load from the disk cache / compile (first point's compile step)",
@@ -115,8 +126,8 @@ def rows(result: dict) -> list[dict]:
 
 
 def run(repeat: int = REPEAT, tiny: bool = False) -> list[dict]:
-    """The rows; ``tiny``: one process of each kind (the same steps)."""
-    return rows(measure(1 if tiny else repeat))
+    """The rows; ``tiny``: one process of each kind at the ``smoke`` point (the same steps)."""
+    return rows(measure(1, "smoke", warm_up=False) if tiny else measure(repeat))
 
 
 def main() -> None:

@@ -64,7 +64,9 @@ def test_a_sweep_survives_a_busy_machine_and_the_next_reuses_its_server(smoke_sw
 
         # Another root, everything cached there: it must find the running server, not start one.
         shutil.copytree(tmp_path / "a" / "store.zarr", tmp_path / "b" / "store.zarr")
-        second = eskin("sweep", "--grid", str(grid), "--root", str(tmp_path / "b"), "--json", env=env)
+        second = eskin(
+            "sweep", "--grid", str(grid), "--root", str(tmp_path / "b"), "--json", env=env
+        )
         assert second.returncode == 0, second.stderr[-3000:]
         summary = json.loads(second.stdout)
         assert summary["cache_hits"] == 2 and summary["computed"] == 0
