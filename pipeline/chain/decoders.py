@@ -381,12 +381,7 @@ class SNNDecoder(Decoder):
             return fold_loss(net(x), targets, weights)
         if net.along_touch_loss is SNNAlongLoss.DRAWN_STEP:
             return fold_loss(net.logits_at(x, ends), targets, weights)
-        logits = net.decision_logits(x)  # (F, B, T, n_classes)
-        n_steps = logits.shape[2]
-        every = targets.unsqueeze(2).expand(-1, -1, n_steps)
-        return fold_loss(
-            logits.flatten(1, 2), every.flatten(1), weights.repeat_interleave(n_steps, 1) / n_steps
-        )
+        return (net.step_losses(x, targets) * weights).sum(dim=1)
 
     def decide(self, net, x):
         """Its outputs at every step (:meth:`~pipeline.chain.spiking.FoldSNN.decision_logits`),

@@ -77,6 +77,7 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from pipeline.chain.folded import FoldModel, two_layers, uniform
 from pipeline.design.scene import SNNAlongLoss, SNNReadout, SNNTimeConstants
@@ -146,6 +147,111 @@ def _lif_backward(
                 grad_current[m, t, i] = g[i]
                 if keep_previous:
                     grad_beta[m, i] += g[i] * previous[m, t, i]
+
+
+@kernel()
+def _mean_current_loss_forward(
+    currents, b2, targets, batch, losses, grad_logits
+):  # pragma: no cover
+    """Each group's mean over its ``T`` steps of the cross-entropy of the ``mean_current``
+    decision :math:`z_t = \\frac{1}{t} \\sum_{t' \\le t} o_{t'} + b_2` (``losses``, float32
+    ``(M,)``), for the output currents without their bias ``currents`` float32 ``(M, T, C)``,
+    :math:`o_t - b_2 = W_2^\\top s_t`, of ``M = F x batch`` groups (group ``m`` is of fold
+    ``m // batch``), ``b2`` ``(F, C)`` and int64 ``targets`` ``(M,)``; ``grad_logits``
+    ``(M, T, C)`` gets each step's :math:`\\mathrm{softmax}(z_t) - \\mathrm{onehot}(y)`."""
+    n_groups, n_steps, n_classes = currents.shape
+    total = np.zeros(n_classes, dtype=np.float32)  # the currents so far
+    z = np.zeros(n_classes, dtype=np.float32)
+    for m in range(n_groups):
+        f, target = m // batch, targets[m]
+        total[:] = 0.0
+        loss = 0.0
+        for t in range(n_steps):
+            per_step = np.float32(1.0 / (t + 1))
+            top = np.float32(-np.inf)
+            for c in range(n_classes):
+                total[c] += currents[m, t, c]
+                z[c] = total[c] * per_step + b2[f, c]
+                top = max(top, z[c])
+            norm = np.float32(0.0)
+            for c in range(n_classes):
+                e = np.exp(z[c] - top)
+                grad_logits[m, t, c] = e
+                norm += e
+            loss += top + np.log(norm) - z[target]
+            for c in range(n_classes):
+                grad_logits[m, t, c] /= norm
+            grad_logits[m, t, target] -= np.float32(1.0)
+        losses[m] = loss / n_steps
+
+
+@kernel()
+def _mean_current_loss_backward(
+    grad_logits, grad_losses, batch, grad_currents, grad_b2
+):  # pragma: no cover
+    """From each group's loss gradient ``grad_losses`` (float32 ``(M,)``) and the saved
+    ``grad_logits``: ``grad_currents`` ``(M, T, C)``, :math:`\\sum_{t' \\ge t} \\frac{1}{t'}
+    \\frac{\\partial L}{\\partial z_{t'}}` (a sum backwards in time), and the gradient of ``b2``
+    summed over each fold's groups."""
+    n_groups, n_steps, n_classes = grad_logits.shape
+    grad_b2[:] = 0.0
+    sums = np.zeros(n_classes, dtype=np.float32)
+    for m in range(n_groups):
+        f = m // batch
+        scale = grad_losses[m] / np.float32(n_steps)
+        sums[:] = 0.0
+        for t in range(n_steps - 1, -1, -1):
+            per_step = np.float32(1.0 / (t + 1))
+            for c in range(n_classes):
+                grad = scale * grad_logits[m, t, c]
+                grad_b2[f, c] += grad
+                sums[c] += grad * per_step
+                grad_currents[m, t, c] = sums[c]
+
+
+class MeanCurrentLoss(torch.autograd.Function):
+    """Each sample's mean over the steps of the cross-entropy of its ``mean_current`` decision
+    at every step, float32 ``(F, B)``, from its output currents without their bias
+    ``currents`` float32 ``(F, B, T, C)`` (:math:`W_2^\\top s_t`), the bias ``b2 (F, C)`` and
+    int64 ``targets (F, B)``: the loss of :meth:`FoldSNN.decision_logits` read at every step,
+    in one pass over the steps forwards and one backwards instead of a running mean, a
+    log-softmax and a cross-entropy over every step in autograd. Differentiable in
+    ``currents`` and ``b2``."""
+
+    @staticmethod
+    def forward(ctx, currents, b2, targets):  # type: ignore[override]
+        """``(F, B)`` losses (see the class docstring)."""
+        n_folds, batch, n_steps, n_classes = currents.shape
+        currents = currents.detach().reshape(n_folds * batch, n_steps, n_classes).contiguous()
+        losses = torch.empty(n_folds * batch, dtype=torch.float32)
+        grad_logits = torch.empty_like(currents)
+        _mean_current_loss_forward(
+            currents.numpy(),
+            b2.detach().contiguous().numpy(),
+            targets.to(torch.int64).reshape(-1).contiguous().numpy(),
+            batch,
+            losses.numpy(),
+            grad_logits.numpy(),
+        )
+        ctx.save_for_backward(grad_logits)
+        ctx.shape = (n_folds, batch, n_steps, n_classes)
+        return losses.reshape(n_folds, batch)
+
+    @staticmethod
+    def backward(ctx, grad_losses):  # type: ignore[override]
+        """The gradients of ``currents`` and ``b2``."""
+        (grad_logits,) = ctx.saved_tensors
+        n_folds, batch, _, n_classes = ctx.shape
+        grad_currents = torch.empty_like(grad_logits)
+        grad_b2 = torch.empty((n_folds, n_classes), dtype=torch.float32)
+        _mean_current_loss_backward(
+            grad_logits.numpy(),
+            grad_losses.detach().to(torch.float32).reshape(-1).contiguous().numpy(),
+            batch,
+            grad_currents.numpy(),
+            grad_b2.numpy(),
+        )
+        return grad_currents.reshape(ctx.shape), grad_b2, None
 
 
 class LeakyLayer(torch.autograd.Function):
@@ -349,6 +455,25 @@ class FoldSNN(FoldModel):
             return every.gather(2, index).squeeze(2)
         _, rate = self.hidden_spikes(x, keep=False, ends=ends)  # (F, B, hidden)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
+    def step_losses(self, x: torch.Tensor, targets: torch.Tensor) -> torch.Tensor:
+        """float32 ``(F, B)``: each sample's mean over the steps of the cross-entropy of the
+        decision read at each step (:meth:`decision_logits`) for the int64 ``targets (F, B)``;
+        for the mean readout by :class:`MeanCurrentLoss`, the same loss without every step's
+        logits in autograd."""
+        if self.readout is SNNReadout.MEAN_CURRENT:
+            spikes, _ = self.hidden_spikes(x)
+            n_folds, batch, n_steps, hidden = spikes.shape
+            currents = torch.bmm(spikes.reshape(n_folds, batch * n_steps, hidden), self.w2)
+            currents = currents.reshape(n_folds, batch, n_steps, self.n_classes)
+            return MeanCurrentLoss.apply(currents, self.b2, targets)
+        logits = self.decision_logits(x)  # (F, B, T, n_classes)
+        n_steps = logits.shape[2]
+        every = targets.unsqueeze(2).expand(-1, -1, n_steps)
+        losses = F.cross_entropy(
+            logits.reshape(-1, self.n_classes), every.reshape(-1), reduction="none"
+        )
+        return losses.reshape(*targets.shape, n_steps).mean(dim=2)
 
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step, as
