@@ -135,12 +135,26 @@ def test_the_decision_at_a_drawn_step_is_that_steps_decision(readout):
 SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
 
 
-@pytest.mark.parametrize("hidden_layers", [1, 2])
+@pytest.mark.parametrize(
+    ("hidden_layers", "time_constants", "loss"),
+    [
+        (1, SNNTimeConstants.SHARED, SNNAlongLoss.EVERY_STEP),
+        (2, SNNTimeConstants.SHARED, SNNAlongLoss.EVERY_STEP),
+        (1, SNNTimeConstants.LEARNED, SNNAlongLoss.EVERY_STEP),
+        (1, SNNTimeConstants.SHARED, SNNAlongLoss.EARLY_STEPS),
+    ],
+)
 def test_every_steps_loss_of_the_mean_readout_is_the_autograd_loss_of_every_decision(
-    hidden_layers,
+    hidden_layers, time_constants, loss
 ):
     x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(8))
-    spec = dataclasses.replace(SPEC, threshold=0.3, hidden_layers=hidden_layers)
+    spec = dataclasses.replace(
+        SPEC,
+        threshold=0.3,
+        hidden_layers=hidden_layers,
+        time_constants=time_constants,
+        along_touch_loss=loss,
+    )
     net = build_model(
         "snn", (2, 3, 20), 4, 0, 2, [fold_generator(0, f, "init") for f in (0, 1)], spec
     )
@@ -152,7 +166,9 @@ def test_every_steps_loss_of_the_mean_readout_is_the_autograd_loss_of_every_deci
     every = torch.nn.functional.cross_entropy(
         logits.reshape(-1, 4), targets.unsqueeze(2).expand(-1, -1, 20).reshape(-1), reduction="none"
     )
-    expected = every.reshape(2, 3, 20).mean(dim=2)
+    step = torch.arange(1.0, 21.0)
+    weights_t = step**-0.5 if loss is SNNAlongLoss.EARLY_STEPS else torch.ones(20)
+    expected = (every.reshape(2, 3, 20) * weights_t).sum(dim=2) / weights_t.sum()
     params = list(net.parameters())
     grads = torch.autograd.grad((losses * scale).sum(), params)
     expected_grads = torch.autograd.grad((expected * scale).sum(), params)
@@ -272,7 +288,7 @@ def _two_textures(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
 
 
 @pytest.mark.parametrize("loss", list(SNNAlongLoss))
-def test_the_snn_learns_along_the_touch_with_either_loss(loss):
+def test_the_snn_learns_along_the_touch_with_each_loss(loss):
     counts, labels = _two_textures(np.random.default_rng(2))
     spec = dataclasses.replace(SPEC, along_touch_loss=loss)
     training = TrainingSpec(
