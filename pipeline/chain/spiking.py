@@ -138,12 +138,12 @@ def _lif_backward(
                 grad = grad_rate[m, i] * per_step
                 if keep:
                     grad += grad_spikes[m, t, i]
-                d = np.float32(1.0) + slope * abs(membrane[m, t, i] - threshold)
+                value = membrane[m, t, i]
+                if learned:  # g_{t+1} u_t: the term of step t + 1, read with u_t
+                    decay[i] += g[i] * value
+                d = np.float32(1.0) + slope * abs(value - threshold)
                 g[i] = grad * (np.float32(1.0) / (d * d)) + beta[m, i] * g[i]
                 grad_current[m, t, i] = g[i]
-            if learned and t > 0:
-                for i in range(n):
-                    decay[i] += g[i] * membrane[m, t - 1, i]
         if learned:
             grad_beta[m, :] = decay
 
