@@ -375,8 +375,9 @@ class SNNSpec:
         "how step counts become the spiking decoder's inputs",
         formerly=SNNInputs.COUNTS,
     )
+    # Its time constants: learned, chosen by measurement along the touch (docs/model.md).
     time_constants: SNNTimeConstants = param(
-        SNNTimeConstants.SHARED,
+        SNNTimeConstants.LEARNED,
         "1",
         "membrane time constants of the spiking decoder: tau_mem_s for every neuron, or one per "
         "neuron learned from it",
