@@ -55,18 +55,29 @@ Readout and decisions
 
     Training (``training.decisions``, :meth:`pipeline.chain.decoders.SNNDecoder.loss`)
     minimizes the cross-entropy of :math:`z_T`, the decision at the end of the touch
-    (``full_touch``), or its mean over the steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)`
+    (``full_touch``), or its weighed sum over the steps, :math:`\sum_t w_t \mathrm{CE}(z_t)`
     (``along_touch``: every step's decision is trained, as the FFNN's and CNN's are on the
-    windows so far).
+    windows so far), with :math:`w_t = 1/T` (``along_touch_loss = "every_step"``) or
+    :math:`w_t \propto t^{-1/2}`, :math:`\sum_t w_t = 1` (``"early_steps"``). For the mean
+    readout its gradient needs no decision kept: with :math:`g_t = w_t \, \partial
+    \mathrm{CE}(z_t) / \partial z_t`, :math:`G_t = \sum_{t' \ge t} g_{t'} / t'` (a sum backwards
+    in time), :math:`\partial L / \partial s_t = W_2 G_t` and :math:`\partial L / \partial W_2 =
+    \sum_t s_t G_t^\top`.
 
 Speed
     The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
-    recursion above) wrapped in one :class:`torch.autograd.Function`, so that autograd sees one
-    node per layer, not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop
-    of autograd operations over the steps costs tens of microseconds per operation and step;
-    indexing a tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward
-    pass). The kernel's gradient is tested against plain autograd on the same equations.
-    Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
+    recursion above, the surrogate derivative and :math:`u_{t-1}` read from the kept membranes)
+    wrapped in one :class:`torch.autograd.Function`, so that autograd sees one node per layer,
+    not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop of autograd
+    operations over the steps costs tens of microseconds per operation and step; indexing a
+    tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward pass).
+    Trained along the touch, the mean readout's running mean, softmax and cross-entropy of every
+    step run in one more pair of kernels (:class:`MeanCurrentLoss`, with the gradient above),
+    not as operations over every step's logits in autograd; its two products are computed with
+    the classes first, the layout a narrow product is fastest in. The kernels use numpy's error
+    model: a division checked for zero (numba's default) keeps a loop from vectorizing, and no
+    division here can be by zero. Each kernel's gradient is tested against plain autograd on the
+    same equations. Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
 """
 
 from __future__ import annotations
