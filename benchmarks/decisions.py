@@ -80,8 +80,8 @@ def run(repeat: int = 3, tiny: bool = False) -> list[dict]:
 
 def accuracy_along(scene: Scene, model: Model) -> list[dict]:
     """Rows of the accuracy table for ``model`` of ``scene``: trained along the touch and for
-    the full touch (decisions read at :data:`TIMES_S`), and, unless it is the ``snn``, for
-    each earlier duration of :data:`TIMES_S` alone (``coding.n_windows``)."""
+    the full touch (decisions read at :data:`TIMES_S`), and for each earlier duration of
+    :data:`TIMES_S` alone (``coding.n_windows``; the ``snn`` on the steps of those windows)."""
     recordings, front_end = prepare(scene.dataset, scene.readout.full_scale_v)
     real = encode(recordings, front_end, scene).real
     reads = decoder_of(model).reads
@@ -89,7 +89,7 @@ def accuracy_along(scene: Scene, model: Model) -> list[dict]:
     column_s = reads.column_s(coding, snn)
     rows = []
     plan = [(d, TIMES_S[-1]) for d in DecisionTraining]
-    plan += [] if model is Model.SNN else [(DecisionTraining.FULL_TOUCH, t) for t in TIMES_S[:-1]]
+    plan += [(DecisionTraining.FULL_TOUCH, t) for t in TIMES_S[:-1]]
     for decisions, duration_s in plan:
         frames, _ = reads.code(real, coding, snn, round(duration_s / coding.window_s))
         training = dataclasses.replace(scene.training, decisions=decisions)

@@ -370,10 +370,11 @@ class SNNDecoder(Decoder):
     def loss(self, net, x, targets, weights, ends=None):
         """The cross-entropy of its decision at the last step (``ends`` None), or, trained
         along the touch, as ``training.snn.along_touch_loss`` says (the net's
-        ``along_touch_loss``): the mean over the steps of each step's decision's (one pass
-        gives them all, so every step is weighed, not the drawn ``ends``), or that of each
-        sample's decision at its drawn step ``ends[f, b]``, as the FFNN's and CNN's (the same
-        loss in expectation over the draws, at the cost of one decision per sample)."""
+        ``along_touch_loss``): the sum over the steps of each step's decision's, weighed
+        equally or toward the early steps (:meth:`~pipeline.chain.spiking.FoldSNN.step_losses`;
+        one pass gives them all, so every step is weighed, not the drawn ``ends``), or that of
+        each sample's decision at its drawn step ``ends[f, b]``, as the FFNN's and CNN's (the
+        same loss in expectation over the draws, at the cost of one decision per sample)."""
         from pipeline.chain.folded import fold_loss
         from pipeline.design.scene import SNNAlongLoss
 
@@ -381,12 +382,7 @@ class SNNDecoder(Decoder):
             return fold_loss(net(x), targets, weights)
         if net.along_touch_loss is SNNAlongLoss.DRAWN_STEP:
             return fold_loss(net.logits_at(x, ends), targets, weights)
-        logits = net.decision_logits(x)  # (F, B, T, n_classes)
-        n_steps = logits.shape[2]
-        every = targets.unsqueeze(2).expand(-1, -1, n_steps)
-        return fold_loss(
-            logits.flatten(1, 2), every.flatten(1), weights.repeat_interleave(n_steps, 1) / n_steps
-        )
+        return (net.step_losses(x, targets) * weights).sum(dim=1)
 
     def decide(self, net, x):
         """Its outputs at every step (:meth:`~pipeline.chain.spiking.FoldSNN.decision_logits`),

@@ -55,18 +55,29 @@ Readout and decisions
 
     Training (``training.decisions``, :meth:`pipeline.chain.decoders.SNNDecoder.loss`)
     minimizes the cross-entropy of :math:`z_T`, the decision at the end of the touch
-    (``full_touch``), or its mean over the steps, :math:`\frac{1}{T} \sum_t \mathrm{CE}(z_t)`
+    (``full_touch``), or its weighed sum over the steps, :math:`\sum_t w_t \mathrm{CE}(z_t)`
     (``along_touch``: every step's decision is trained, as the FFNN's and CNN's are on the
-    windows so far).
+    windows so far), with :math:`w_t = 1/T` (``along_touch_loss = "every_step"``) or
+    :math:`w_t \propto t^{-1/2}`, :math:`\sum_t w_t = 1` (``"early_steps"``). For the mean
+    readout its gradient needs no decision kept: with :math:`g_t = w_t \, \partial
+    \mathrm{CE}(z_t) / \partial z_t`, :math:`G_t = \sum_{t' \ge t} g_{t'} / t'` (a sum backwards
+    in time), :math:`\partial L / \partial s_t = W_2 G_t` and :math:`\partial L / \partial W_2 =
+    \sum_t s_t G_t^\top`.
 
 Speed
     The time loop runs in two compiled kernels (forward: membranes and spikes; backward: the
-    recursion above) wrapped in one :class:`torch.autograd.Function`, so that autograd sees one
-    node per layer, not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop
-    of autograd operations over the steps costs tens of microseconds per operation and step;
-    indexing a tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward
-    pass). The kernel's gradient is tested against plain autograd on the same equations.
-    Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
+    recursion above, the surrogate derivative and :math:`u_{t-1}` read from the kept membranes)
+    wrapped in one :class:`torch.autograd.Function`, so that autograd sees one node per layer,
+    not :math:`T` of them, and the backward pass costs :math:`O(T)` (a Python loop of autograd
+    operations over the steps costs tens of microseconds per operation and step; indexing a
+    tensor that requires grad inside such a loop costs :math:`O(T^2)` in the backward pass).
+    Trained along the touch, the mean readout's running mean, softmax and cross-entropy of every
+    step run in one more pair of kernels (:class:`MeanCurrentLoss`, with the gradient above),
+    not as operations over every step's logits in autograd; its two products are computed with
+    the classes first, the layout a narrow product is fastest in. The kernels use numpy's error
+    model: a division checked for zero (numba's default) keeps a loop from vectorizing, and no
+    division here can be by zero. Each kernel's gradient is tested against plain autograd on the
+    same equations. Parameters carry a leading fold dimension ``F`` as the FFNN's and CNN's do.
 """
 
 from __future__ import annotations
@@ -77,27 +88,25 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from pipeline.chain.folded import FoldModel, two_layers, uniform
 from pipeline.design.scene import SNNAlongLoss, SNNReadout, SNNTimeConstants
 from pipeline.jit import kernel
 
 
-@kernel()
-def _lif_forward(
-    current, beta, threshold, slope, ends, spikes, slopes, previous, rate
-):  # pragma: no cover
-    """Step ``M x N`` neurons through ``T`` steps: ``current``, ``slopes`` (each step's surrogate
-    derivative ``ds/du``) and, unless they are empty, ``spikes`` and ``previous`` (each step's
-    membrane before it, :math:`u_{t-1}`) are float32 ``(M, T, N)`` (``M`` independent groups,
-    each with its ``N`` neurons contiguous); ``beta`` float32 ``(M, N)`` is each neuron's decay;
-    ``rate`` float32 ``(M, N)`` gets each neuron's mean spike count over the steps up to
-    ``ends[m]`` (int64 ``(M,)``), the steps after which are not computed (their ``slopes``,
-    ``spikes`` and ``previous`` are left as they were)."""
+@kernel(error_model="numpy")
+def _lif_forward(current, beta, threshold, ends, spikes, membrane, rate):  # pragma: no cover
+    """Step ``M x N`` neurons through ``T`` steps: ``current``, ``membrane`` (each step's
+    :math:`u_t`, from which the backward pass derives the surrogate derivative and, for a
+    learned decay, :math:`u_{t-1}`) and, unless it is empty, ``spikes`` are float32
+    ``(M, T, N)`` (``M`` independent groups, each with its ``N`` neurons contiguous); ``beta``
+    float32 ``(M, N)`` is each neuron's decay; ``rate`` float32 ``(M, N)`` gets each neuron's
+    mean spike count over the steps up to ``ends[m]`` (int64 ``(M,)``), the steps after which
+    are not computed (their ``membrane`` and ``spikes`` are left as they were)."""
     n_groups, _, n = current.shape
     keep = spikes.size > 0
-    keep_previous = previous.size > 0
-    threshold, slope = np.float32(threshold), np.float32(slope)
+    threshold = np.float32(threshold)
     u = np.zeros(n, dtype=np.float32)
     s = np.zeros(n, dtype=np.float32)
     for m in range(n_groups):
@@ -105,47 +114,167 @@ def _lif_forward(
         s[:] = 0.0
         rate[m, :] = 0.0
         for t in range(ends[m] + 1):
-            if keep_previous:
-                previous[m, t, :] = u
             for i in range(n):
                 value = beta[m, i] * u[i] + current[m, t, i] - threshold * s[i]
                 u[i] = value
+                membrane[m, t, i] = value
                 s[i] = np.float32(1.0) if value > threshold else np.float32(0.0)
                 rate[m, i] += s[i]
-                d = np.float32(1.0) + slope * abs(value - threshold)
-                slopes[m, t, i] = np.float32(1.0) / (d * d)
             if keep:
                 spikes[m, t, :] = s
         rate[m, :] /= ends[m] + 1
 
 
-@kernel()
+@kernel(error_model="numpy")
 def _lif_backward(
-    grad_spikes, grad_rate, slopes, beta, ends, previous, grad_current, grad_beta
+    grad_spikes, grad_rate, membrane, beta, threshold, slope, ends, grad_current, grad_beta
 ):  # pragma: no cover
     """``dL/dI`` (float32 ``(M, T, N)``) from ``dL/ds`` (``grad_spikes``, or empty when only the
-    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives; and, unless
-    ``previous`` is empty, ``dL/d beta`` (``grad_beta``, ``(M, N)``): the sum over the steps of
-    :math:`g_t u_{t-1}`; the steps after ``ends[m]`` get no gradient."""
-    n_groups, _, n = slopes.shape
+    rate was used), ``dL/d rate`` (``(M, N)``) and the surrogate derivatives of the forward
+    pass's ``membrane``; and, unless ``grad_beta`` is empty, ``dL/d beta`` (``(M, N)``): the sum
+    over the steps of :math:`g_t u_{t-1}`; the steps after ``ends[m]`` get no gradient."""
+    n_groups, _, n = membrane.shape
     keep = grad_spikes.size > 0
-    keep_previous = previous.size > 0
+    learned = grad_beta.size > 0
+    threshold, slope = np.float32(threshold), np.float32(slope)
     g = np.zeros(n, dtype=np.float32)
+    decay = np.zeros(n, dtype=np.float32)  # dL/d beta so far
     for m in range(n_groups):
         per_step = np.float32(1.0 / (ends[m] + 1))
         g[:] = 0.0
-        if keep_previous:
-            grad_beta[m, :] = 0.0
+        decay[:] = 0.0
         grad_current[m, ends[m] + 1 :, :] = 0.0
         for t in range(ends[m], -1, -1):
             for i in range(n):
                 grad = grad_rate[m, i] * per_step
                 if keep:
                     grad += grad_spikes[m, t, i]
-                g[i] = grad * slopes[m, t, i] + beta[m, i] * g[i]
+                value = membrane[m, t, i]
+                if learned:  # g_{t+1} u_t: the term of step t + 1, read with u_t
+                    decay[i] += g[i] * value
+                d = np.float32(1.0) + slope * abs(value - threshold)
+                g[i] = grad * (np.float32(1.0) / (d * d)) + beta[m, i] * g[i]
                 grad_current[m, t, i] = g[i]
-                if keep_previous:
-                    grad_beta[m, i] += g[i] * previous[m, t, i]
+        if learned:
+            grad_beta[m, :] = decay
+
+
+@kernel(error_model="numpy")
+def _mean_current_loss_forward(
+    currents, b2, targets, step_weights, batch, losses, grad_logits
+):  # pragma: no cover
+    """Each group's sum over its ``T`` steps of the cross-entropy of the ``mean_current``
+    decision :math:`z_t = \\frac{1}{t} \\sum_{t' \\le t} W_2^\\top s_{t'} + b_2`, weighed by
+    ``step_weights`` float32 ``(T,)`` (``losses``, float32 ``(M,)``), for ``M = F x batch``
+    groups (group ``m`` is sample ``m % batch`` of fold ``m // batch``), from ``currents``
+    float32 ``(F, C, batch x T)``, :math:`W_2^\\top s_t` of every sample and step (classes
+    first, the layout the product gives fastest), ``b2`` ``(F, C)`` and int64 ``targets``
+    ``(M,)``; ``grad_logits`` ``(M, T, C)`` gets each step's
+    :math:`\\mathrm{softmax}(z_t) - \\mathrm{onehot}(y)`."""
+    n_groups, n_steps, n_classes = grad_logits.shape
+    total = np.zeros(n_classes, dtype=np.float32)  # the currents so far
+    z = np.zeros(n_classes, dtype=np.float32)
+    for m in range(n_groups):
+        f, first, target = m // batch, (m % batch) * n_steps, targets[m]
+        total[:] = 0.0
+        loss = 0.0
+        for t in range(n_steps):
+            per_step = np.float32(1.0 / (t + 1))
+            top = np.float32(-np.inf)
+            for c in range(n_classes):
+                total[c] += currents[f, c, first + t]
+                z[c] = total[c] * per_step + b2[f, c]
+                top = max(top, z[c])
+            norm = np.float32(0.0)
+            for c in range(n_classes):
+                e = np.exp(z[c] - top)
+                grad_logits[m, t, c] = e
+                norm += e
+            loss += step_weights[t] * (top + np.log(norm) - z[target])
+            for c in range(n_classes):
+                grad_logits[m, t, c] /= norm
+            grad_logits[m, t, target] -= np.float32(1.0)
+        losses[m] = loss
+
+
+@kernel(error_model="numpy")
+def _mean_current_loss_backward(
+    grad_logits, grad_losses, step_weights, batch, grad_sums, grad_b2
+):  # pragma: no cover
+    """From each group's loss gradient ``grad_losses`` (float32 ``(M,)``) and the saved
+    ``grad_logits`` ``(M, T, C)`` of the steps weighed by ``step_weights`` ``(T,)``:
+    ``grad_sums`` ``(M, T, C)``, :math:`G_t = \\sum_{t' \\ge t} \\frac{1}{t'}
+    \\frac{\\partial L}{\\partial z_{t'}}` (a sum backwards in time), and the gradient of
+    ``b2`` ``(F, C)`` summed over each fold's groups."""
+    n_groups, n_steps, n_classes = grad_logits.shape
+    grad_b2[:] = 0.0
+    sums = np.zeros(n_classes, dtype=np.float32)
+    for m in range(n_groups):
+        f = m // batch
+        sums[:] = 0.0
+        for t in range(n_steps - 1, -1, -1):
+            per_step = np.float32(1.0 / (t + 1))
+            scale = grad_losses[m] * step_weights[t]
+            for c in range(n_classes):
+                grad = scale * grad_logits[m, t, c]
+                grad_b2[f, c] += grad
+                sums[c] += grad * per_step
+                grad_sums[m, t, c] = sums[c]
+
+
+class MeanCurrentLoss(torch.autograd.Function):
+    """Each sample's loss along the touch, float32 ``(F, B)``: the cross-entropy of its
+    ``mean_current`` decision at every step, summed over the steps weighed by ``step_weights``
+    float32 ``(T,)``, from the last layer's ``spikes`` float32 ``(F, B, T, N)``, the readout
+    ``w2 (F, N, C)``, ``b2 (F, C)`` and int64 ``targets (F, B)``: the loss of
+    :meth:`FoldSNN.decision_logits` read at every step, with the running mean, the softmax and
+    the cross-entropy of every step in one compiled pass forwards and their gradient in one
+    backwards, not as operations over every step's logits in autograd. Differentiable in
+    ``spikes``, ``w2`` and ``b2``: :math:`\\partial L / \\partial s_t = W_2 G_t` and
+    :math:`\\partial L / \\partial W_2 = \\sum_t s_t G_t^\\top` (the backward kernel's
+    :math:`G_t`), one matrix product each, in the layouts they are fastest in."""
+
+    @staticmethod
+    def forward(ctx, spikes, w2, b2, targets, step_weights):  # type: ignore[override]
+        """``(F, B)`` losses (see the class docstring)."""
+        n_folds, batch, n_steps, n = spikes.shape
+        spikes = spikes.detach().reshape(n_folds, batch * n_steps, n)
+        w2 = w2.detach()
+        currents = torch.bmm(w2.transpose(1, 2), spikes.transpose(1, 2))  # (F, C, B*T)
+        losses = torch.empty(n_folds * batch, dtype=torch.float32)
+        grad_logits = torch.empty((n_folds * batch, n_steps, w2.shape[2]), dtype=torch.float32)
+        _mean_current_loss_forward(
+            currents.numpy(),
+            b2.detach().contiguous().numpy(),
+            targets.to(torch.int64).reshape(-1).contiguous().numpy(),
+            step_weights.numpy(),
+            batch,
+            losses.numpy(),
+            grad_logits.numpy(),
+        )
+        ctx.save_for_backward(spikes, w2, grad_logits, step_weights)
+        return losses.reshape(n_folds, batch)
+
+    @staticmethod
+    def backward(ctx, grad_losses):  # type: ignore[override]
+        """The gradients of ``spikes``, ``w2`` and ``b2``."""
+        spikes, w2, grad_logits, step_weights = ctx.saved_tensors
+        n_folds, n, n_classes = w2.shape
+        batch = grad_losses.shape[1]
+        grad_sums = torch.empty_like(grad_logits)
+        grad_b2 = torch.empty((n_folds, n_classes), dtype=torch.float32)
+        _mean_current_loss_backward(
+            grad_logits.numpy(),
+            grad_losses.detach().to(torch.float32).reshape(-1).contiguous().numpy(),
+            step_weights.numpy(),
+            batch,
+            grad_sums.numpy(),
+            grad_b2.numpy(),
+        )
+        grad_sums = grad_sums.reshape(n_folds, -1, n_classes)  # (F, B*T, C)
+        grad_spikes = torch.bmm(grad_sums, w2.transpose(1, 2)).reshape(n_folds, batch, -1, n)
+        grad_w2 = torch.bmm(grad_sums.transpose(1, 2), spikes).transpose(1, 2)
+        return grad_spikes, grad_w2, grad_b2, None, None
 
 
 class LeakyLayer(torch.autograd.Function):
@@ -172,40 +301,38 @@ class LeakyLayer(torch.autograd.Function):
         else:
             beta = torch.full((n_groups, n), float(beta), dtype=torch.float32)
         spikes = torch.empty_like(current) if keep else torch.empty((0, 0, 0))
-        slopes = torch.empty_like(current)
-        previous = torch.empty_like(current) if learned else torch.empty((0, 0, 0))
+        membrane = torch.empty_like(current)
         rate = torch.empty((n_groups, n), dtype=current.dtype)
         _lif_forward(
             current.numpy(),
             beta.numpy(),
             float(threshold),
-            float(slope),
             ends.numpy(),
             spikes.numpy(),
-            slopes.numpy(),
-            previous.numpy(),
+            membrane.numpy(),
             rate.numpy(),
         )
-        ctx.save_for_backward(slopes, beta, ends, previous)
-        ctx.learned = learned
+        ctx.save_for_backward(membrane, beta, ends)
+        ctx.learned, ctx.threshold, ctx.slope = learned, float(threshold), float(slope)
         return spikes, rate
 
     @staticmethod
     def backward(ctx, grad_spikes, grad_rate):  # type: ignore[override]
         """``dL/d current`` from the gradients of the spikes and of the rate (the surrogate),
         and ``dL/d beta`` for a learned decay."""
-        slopes, beta, ends, previous = ctx.saved_tensors
-        grad = torch.empty_like(slopes)
+        membrane, beta, ends = ctx.saved_tensors
+        grad = torch.empty_like(membrane)
         grad_beta = torch.empty_like(beta) if ctx.learned else torch.empty((0, 0))
         grad_spikes = grad_spikes.detach().contiguous()
         grad_rate = grad_rate.detach().contiguous()
         _lif_backward(
             grad_spikes.numpy(),
             grad_rate.numpy(),
-            slopes.numpy(),
+            membrane.numpy(),
             beta.numpy(),
+            ctx.threshold,
+            ctx.slope,
             ends.numpy(),
-            previous.numpy(),
             grad.numpy(),
             grad_beta.numpy(),
         )
@@ -349,6 +476,32 @@ class FoldSNN(FoldModel):
             return every.gather(2, index).squeeze(2)
         _, rate = self.hidden_spikes(x, keep=False, ends=ends)  # (F, B, hidden)
         return torch.baddbmm(self.b2.unsqueeze(1), rate, self.w2)
+
+    def step_weights(self, n_steps: int) -> torch.Tensor:
+        """float32 ``(T,)``, summing to 1: how the loss along the touch weighs each step's
+        decision (``along_touch_loss``): equally (``every_step``), or :math:`\\propto
+        t^{-1/2}` (``early_steps``)."""
+        t = torch.arange(1, n_steps + 1, dtype=torch.float64)
+        early = self.along_touch_loss is SNNAlongLoss.EARLY_STEPS
+        weights = t**-0.5 if early else torch.ones_like(t)
+        return (weights / weights.sum()).to(torch.float32)
+
+    def step_losses(self, x: torch.Tensor, targets: torch.Tensor) -> torch.Tensor:
+        """float32 ``(F, B)``: each sample's cross-entropy of the decision read at each step
+        (:meth:`decision_logits`) for the int64 ``targets (F, B)``, summed over the steps
+        weighed by :meth:`step_weights`; for the mean readout by :class:`MeanCurrentLoss`, the
+        same loss without every step's logits in autograd."""
+        weights = self.step_weights(x.shape[-1])
+        if self.readout is SNNReadout.MEAN_CURRENT:
+            spikes, _ = self.hidden_spikes(x)
+            return MeanCurrentLoss.apply(spikes, self.w2, self.b2, targets, weights)
+        logits = self.decision_logits(x)  # (F, B, T, n_classes)
+        n_steps = logits.shape[2]
+        every = targets.unsqueeze(2).expand(-1, -1, n_steps)
+        losses = F.cross_entropy(
+            logits.reshape(-1, self.n_classes), every.reshape(-1), reduction="none"
+        )
+        return losses.reshape(*targets.shape, n_steps) @ weights
 
     def decision_logits(self, x: torch.Tensor) -> torch.Tensor:
         """Logits ``float32 (F, B, T, n_classes)`` of a decision read at every step, as

@@ -141,6 +141,7 @@ class SNNAlongLoss(enum.StrEnum):
 
     EVERY_STEP = "every_step"  # the mean over the steps of each step's cross-entropy
     DRAWN_STEP = "drawn_step"  # each sample's at one step drawn per epoch, as the FFNN's and CNN's
+    EARLY_STEPS = "early_steps"  # every step's, weighed toward the early ones (1 / sqrt(t))
 
 
 class Encoder(enum.StrEnum):
@@ -374,8 +375,9 @@ class SNNSpec:
         "how step counts become the spiking decoder's inputs",
         formerly=SNNInputs.COUNTS,
     )
+    # Its time constants: learned, chosen by measurement along the touch (docs/model.md).
     time_constants: SNNTimeConstants = param(
-        SNNTimeConstants.SHARED,
+        SNNTimeConstants.LEARNED,
         "1",
         "membrane time constants of the spiking decoder: tau_mem_s for every neuron, or one per "
         "neuron learned from it",
@@ -393,7 +395,7 @@ class SNNSpec:
         SNNAlongLoss.EVERY_STEP,
         "1",
         "what the spiking decoder's training along the touch minimizes: every step's decision, "
-        "or one drawn step's per sample and epoch",
+        "one drawn step's per sample and epoch, or every step's weighed toward the early ones",
         formerly=SNNAlongLoss.EVERY_STEP,
     )
     readout: SNNReadout = param(

@@ -18,7 +18,15 @@ from pipeline.chain.decoders import Preparation, decoder_of
 from pipeline.chain.folded import fold_loss, on_prefixes, prefix
 from pipeline.chain.models import fold_generator
 from pipeline.chain.training import _decision_columns, cross_validate, fit_folds
-from pipeline.design.scene import DecisionTraining, Model, Scene, SNNInputs, SNNSpec, TrainingSpec
+from pipeline.design.scene import (
+    DecisionTraining,
+    Model,
+    Scene,
+    SNNInputs,
+    SNNSpec,
+    SNNTimeConstants,
+    TrainingSpec,
+)
 from pipeline.run.stages import cache_key
 
 
@@ -168,7 +176,8 @@ def test_full_touch_reproduces_the_code_before_the_choice(model, request):
     request.addfinalizer(lambda: torch.set_num_threads(threads))
     torch.set_num_threads(1)  # as the digests were taken (and as the workers train)
     frames, labels = separable((2 if model is Model.SNN else 1, 3, 8))
-    # the spiking decoder as it was first built: counts, at training.learning_rate
+    # the spiking decoder as it was first built: counts, at training.learning_rate, one shared
+    # time constant
     spec = SNNSpec(
         step_s=0.01,
         hidden_neurons=6,
@@ -176,6 +185,7 @@ def test_full_touch_reproduces_the_code_before_the_choice(model, request):
         epochs=5,
         inputs=SNNInputs.COUNTS,
         learning_rate=None,
+        time_constants=SNNTimeConstants.SHARED,
     )
     common = dict(epochs=6, learning_rate=0.01, batch_size=8, folds=4, hidden_units=16, seed=3)
     training = TrainingSpec(

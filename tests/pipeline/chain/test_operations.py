@@ -11,7 +11,7 @@ from pipeline.chain.decoders import build_model, count_operations
 from pipeline.chain.models import fold_generator
 from pipeline.chain.operations import conv3x3_fan_out
 from pipeline.chain.spiking import FoldSNN
-from pipeline.design.scene import SNNInputs, SNNSpec
+from pipeline.design.scene import SNNInputs, SNNSpec, SNNTimeConstants
 
 
 def _zeroed(net: torch.nn.Module) -> None:
@@ -96,7 +96,12 @@ def test_a_second_snn_layer_counts_the_first_layers_spikes_and_its_updates():
         1,
         [fold_generator(0, 0, "init")],
         SNNSpec(
-            hidden_neurons=2, tau_mem_s=1e-3, step_s=0.01, hidden_layers=2, inputs=SNNInputs.COUNTS
+            hidden_neurons=2,
+            tau_mem_s=1e-3,
+            step_s=0.01,
+            hidden_layers=2,
+            inputs=SNNInputs.COUNTS,
+            time_constants=SNNTimeConstants.SHARED,  # the membranes forget within a step
         ),
     )
     _zeroed(net)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from pipeline.chain.decoders import build_model
+from pipeline.chain.decoders import build_model, decoder_of
 from pipeline.chain.models import fold_generator
 from pipeline.chain.spiking import LeakyLayer
 from pipeline.chain.training import cross_validate
@@ -135,6 +135,56 @@ def test_the_decision_at_a_drawn_step_is_that_steps_decision(readout):
 SPEC = SNNSpec(step_s=0.01, hidden_neurons=8, tau_mem_s=0.05, epochs=40)
 
 
+@pytest.mark.parametrize(
+    ("hidden_layers", "time_constants", "loss"),
+    [
+        (1, SNNTimeConstants.SHARED, SNNAlongLoss.EVERY_STEP),
+        (2, SNNTimeConstants.SHARED, SNNAlongLoss.EVERY_STEP),
+        (1, SNNTimeConstants.LEARNED, SNNAlongLoss.EVERY_STEP),
+        (1, SNNTimeConstants.SHARED, SNNAlongLoss.EARLY_STEPS),
+    ],
+)
+def test_every_steps_loss_of_the_mean_readout_is_the_autograd_loss_of_every_decision(
+    hidden_layers, time_constants, loss
+):
+    x = torch.poisson(torch.full((2, 3, 2, 3, 20), 0.5), generator=torch.Generator().manual_seed(8))
+    spec = dataclasses.replace(
+        SPEC,
+        threshold=0.3,
+        hidden_layers=hidden_layers,
+        time_constants=time_constants,
+        along_touch_loss=loss,
+    )
+    net = build_model(
+        "snn", (2, 3, 20), 4, 0, 2, [fold_generator(0, f, "init") for f in (0, 1)], spec
+    )
+    targets = torch.tensor([[0, 1, 3], [2, 2, 1]])
+    weights = torch.tensor([[0.5, 0.5, 0.0], [1 / 3, 1 / 3, 1 / 3]])  # padding weighs 0
+    scale = torch.tensor([[1.0, -2.0, 3.0], [0.5, 1.0, 4.0]])  # every sample its own gradient
+    losses = net.step_losses(x, targets)
+    logits = net.decision_logits(x)  # (F, B, T, classes), in plain autograd
+    every = torch.nn.functional.cross_entropy(
+        logits.reshape(-1, 4), targets.unsqueeze(2).expand(-1, -1, 20).reshape(-1), reduction="none"
+    )
+    step = torch.arange(1.0, 21.0)
+    weights_t = step**-0.5 if loss is SNNAlongLoss.EARLY_STEPS else torch.ones(20)
+    expected = (every.reshape(2, 3, 20) * weights_t).sum(dim=2) / weights_t.sum()
+    params = list(net.parameters())
+    grads = torch.autograd.grad((losses * scale).sum(), params)
+    expected_grads = torch.autograd.grad((expected * scale).sum(), params)
+    spikes, _ = net.hidden_spikes(x)
+    assert 0.05 < float(spikes.detach().mean()) < 0.95  # the loss reads spiking and silent steps
+    torch.testing.assert_close(losses, expected, rtol=1e-5, atol=1e-6)
+    for grad, want in zip(grads, expected_grads, strict=True):
+        assert float(want.abs().max()) > 0
+        torch.testing.assert_close(grad, want, rtol=1e-4, atol=1e-6)
+    decoder = decoder_of(Model.SNN)
+    ends = torch.zeros((2, 3), dtype=torch.int64)  # along the touch: every step is weighed
+    torch.testing.assert_close(
+        decoder.loss(net, x, targets, weights, ends), (expected * weights).sum(dim=1)
+    )
+
+
 def test_folds_are_independent_and_the_last_decision_is_the_forward_pass():
     x = torch.poisson(torch.full((3, 4, 2, 3, 20), 0.3), generator=torch.Generator().manual_seed(1))
     batch = build_model(
@@ -238,7 +288,7 @@ def _two_textures(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
 
 
 @pytest.mark.parametrize("loss", list(SNNAlongLoss))
-def test_the_snn_learns_along_the_touch_with_either_loss(loss):
+def test_the_snn_learns_along_the_touch_with_each_loss(loss):
     counts, labels = _two_textures(np.random.default_rng(2))
     spec = dataclasses.replace(SPEC, along_touch_loss=loss)
     training = TrainingSpec(
