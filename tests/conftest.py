@@ -4,7 +4,7 @@ whole suite runs by.
 End-to-end tests (a sweep, a search, a Prefect server or a Dask cluster started) are marked
 ``slow``: an unmarked test that starts one fails (:func:`pytest_configure`), so
 ``make test-quick`` (``-m "not slow"``) runs everything else alone. Under pytest-xdist
-(``make test`` runs ``-n 2 --dist loadfile --no-loadscope-reorder``) a module runs on one
+(``make test`` runs ``-n 3 --dist loadfile --no-loadscope-reorder``) a module runs on one
 worker, in order, so that a module-scoped fixture (a sweep, the documentation site) is made once
 and two sweeps of one module never compete for the cores; the modules are handed out in the
 order :func:`run_order` gives, the longest first, so that no long module starts last. The
