@@ -71,13 +71,14 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff format --check .
 
 # Refreshes requirements.lock: pyproject.toml resolved in a throwaway venv; refuses a CUDA torch.
+# setuptools is kept (torch requires it at run time, and the install resolves nothing).
 lock:
 	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
 	$(PYTHON) -m venv "$$tmp/venv"; \
 	"$$tmp/venv/bin/python" -m pip install --quiet --upgrade pip; \
 	"$$tmp/venv/bin/python" -m pip install --quiet '.[test,docs]'; \
-	{ grep '^#' $(LOCK) || true; "$$tmp/venv/bin/python" -m pip freeze --exclude eskin-sweep \
-		--exclude pip --exclude setuptools --exclude wheel; } > "$$tmp/lock"; \
+	{ grep '^#' $(LOCK) || true; "$$tmp/venv/bin/python" -m pip freeze --all --exclude eskin-sweep \
+		--exclude pip --exclude wheel; } > "$$tmp/lock"; \
 	if grep -qi '^nvidia-' "$$tmp/lock" || ! grep -q '^torch==.*+cpu$$' "$$tmp/lock"; then \
 		echo "make lock: torch resolved to a CUDA build; give pip the CPU wheel" >&2; exit 1; fi; \
 	mv "$$tmp/lock" $(LOCK)
