@@ -13,8 +13,9 @@ round each; the row quotes their medians and their ratio.
 What an object root costs beyond a folder is round trips: a loopback server answers in a few
 milliseconds, a remote one in tens, so the ratio here is the floor of what a user sees.
 
-``run(tiny=True)`` does the same on :data:`benchmarks.sweep.TINY_GRID`, one counted round and
-no uncounted one, on the local server ``$ESKIN_SERVER_DIR`` names if set (the test suite's).
+``run(tiny=True)`` does the same on :data:`benchmarks.sweep.TINY_GRID` (filled on one worker),
+one counted round and no uncounted one, on the local server ``$ESKIN_SERVER_DIR`` names if set
+(the test suite's).
 ``python -m benchmarks.object_root [--grid smoke] [--repeat N]`` runs this suite alone and prints
 its row.
 """
@@ -73,7 +74,8 @@ def run(grid: str = DEFAULT_GRID, repeat: int = REPEAT, tiny: bool = False) -> l
                 # An object root keeps the tool's own state in the user's cache: here, in tmp.
                 env = server_env | s3 | {"XDG_CACHE_HOME": str(tmp / "cache")}
                 for root in roots.values():
-                    local_sweep(grid, root, WORKERS, env)  # fills it
+                    # Fills it (a tiny grid on one worker: a second would add only its start-up).
+                    local_sweep(grid, root, 1 if tiny else WORKERS, env)
                     if not tiny:
                         local_sweep(grid, root, WORKERS, env)  # the uncounted warm round
                 times: dict[str, list[float]] = {kind: [] for kind in roots}

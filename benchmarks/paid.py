@@ -12,7 +12,7 @@ worker's import of torch is paid, by the first point its task computes, as share
 Row: paid seconds / busy time (1 would be all of it); the detail gives both, the shared part of
 the paid seconds and the margin ``1 - paid / busy``.
 
-``run(tiny=True)`` sweeps :data:`benchmarks.sweep.TINY_GRID` instead.
+``run(tiny=True)`` sweeps :data:`benchmarks.sweep.TINY_GRID` instead, on one worker.
 ``python -m benchmarks.paid [--grid NAME]`` runs this suite alone and prints its row.
 """
 
@@ -29,7 +29,7 @@ DEFAULT_GRID = "smoke"
 TARGET = 0.9
 
 
-def measure(grid: str = DEFAULT_GRID) -> dict:
+def measure(grid: str = DEFAULT_GRID, workers: int = WORKERS) -> dict:
     from distributed import get_task_stream
 
     from flows.cluster import dask_client
@@ -41,7 +41,7 @@ def measure(grid: str = DEFAULT_GRID) -> dict:
     with tempfile.TemporaryDirectory(prefix="eskin-bench-paid-") as tmp:
         root = Path(tmp) / "run"
         hermetic_environment(Path(tmp), prefect=False)  # Dask, matplotlib state: under tmp
-        with dask_client(WORKERS) as client, get_task_stream(client) as stream:
+        with dask_client(workers) as client, get_task_stream(client) as stream:
             summary = run_sweep(grid, root, client=client)
         busy = sum(
             part["stop"] - part["start"]
@@ -73,6 +73,7 @@ def measure(grid: str = DEFAULT_GRID) -> dict:
         "shared_s": cost.shared_s,
         "busy_s": busy,
         "wall_s": summary["seconds"],
+        "workers": workers,
         "stages": cost.stages,
     }
 
@@ -86,19 +87,21 @@ def rows(result: dict) -> list[dict]:
             "target": f">= {TARGET}",
             "detail": f"{result['points']} points: {result['paid_s']:.1f} s paid "
             f"({result['shared_s']:.1f} s shared) of {result['busy_s']:.1f} s busy, margin "
-            f"{100 * (1 - ratio):.1f} %; {result['wall_s']:.1f} s wall on {WORKERS} workers",
+            f"{100 * (1 - ratio):.1f} %; {result['wall_s']:.1f} s wall on {result['workers']} "
+            "workers",
         }
     ]
 
 
 def run(grid: str = DEFAULT_GRID, tiny: bool = False) -> list[dict]:
-    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` for ``grid``."""
+    """The row; ``tiny``: :data:`benchmarks.sweep.TINY_GRID` for ``grid``, on one worker (a
+    second would add only its start-up)."""
     if not tiny:
         return rows(measure(grid))
     from benchmarks.sweep import tiny_grid
 
     with tempfile.TemporaryDirectory(prefix="eskin-bench-paid-grid-") as folder:
-        return rows(measure(tiny_grid(Path(folder))))
+        return rows(measure(tiny_grid(Path(folder)), workers=1))
 
 
 def main() -> None:

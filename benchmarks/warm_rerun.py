@@ -13,8 +13,9 @@ The root is cached between runs, ``runs/bench/<grid>`` by default (``--root`` or
 ``$ESKIN_BENCH_WARM_ROOT`` names another): the first run computes it (a cold ``paper`` sweep, a
 few minutes on 2 cores), later runs find it complete and only re-run it.
 
-``run(tiny=True)`` fills and re-runs :data:`benchmarks.sweep.TINY_GRID` in a temporary root,
-one round (the floor not warmed up), on the local server ``$ESKIN_SERVER_DIR`` names if set.
+``run(tiny=True)`` fills (on one worker) and re-runs :data:`benchmarks.sweep.TINY_GRID` in a
+temporary root, one round (the floor not warmed up), on the local server ``$ESKIN_SERVER_DIR``
+names if set.
 
 ``python -m benchmarks.warm_rerun [--grid paper] [--root DIR] [--repeat N]`` runs this suite
 alone and prints its row.
@@ -60,8 +61,9 @@ def run(
             grid, root, repeat = tiny_grid(Path(name)), Path(name) / "root", 1
         root = Path(root) if root is not None else default_root(grid)
         with local_server(Path(name), shared=tiny) as env:
-            # Fills the root the first time; afterwards, the uncounted warm-up round.
-            filled = local_sweep(grid, root, WORKERS, env).summary()
+            # Fills the root the first time (a tiny root on one worker: a second would add only
+            # its start-up); afterwards, the uncounted warm-up round.
+            filled = local_sweep(grid, root, 1 if tiny else WORKERS, env).summary()
             if not tiny:
                 floor(env)
             floors, warms = [], []

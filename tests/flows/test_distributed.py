@@ -142,6 +142,8 @@ def test_prefect_deployment_run(smoke_sweep, tmp_path, migrated_server_state):
                 "grid=smoke",
                 "--param",
                 f"root={root}",
+                "--param",
+                "workers=1",
                 "--watch",
                 "--watch-timeout",
                 "600",

@@ -72,7 +72,7 @@ def optimize(space: Path, root: Path, env: dict[str, str], *extra: str) -> dict:
 def test_a_budget_of_6_then_8_computes_only_the_2_new_trials(space, tmp_path):
     path, env = space
     root = tmp_path / "run"
-    first = optimize(path, root, env, "--budget", "6")
+    first = optimize(path, root, env, "--budget", "6", "--workers", "1")
     assert {"root", "trials", "computed", "cache_hits", "seconds", "front"} <= set(first)
     assert first["trials"] == 6 and first["new_trials"] == 6
     assert first["sampler"] == "gp"  # auto, for a short search of ordered dimensions
@@ -101,7 +101,7 @@ def test_a_budget_of_6_then_8_computes_only_the_2_new_trials(space, tmp_path):
     assert row["objectives"]["data_rate_bps"] == pytest.approx(rate[on[0]])
 
     stored, thresholds = results(root), trials["threshold_v"].values
-    second = optimize(path, root, env, "--budget", "8", "--report")
+    second = optimize(path, root, env, "--budget", "8", "--workers", "1", "--report")
     assert second["trials"] == 8 and second["new_trials"] == 2
     # The report's answer section works on the search's designs.
     report = (Path(second["report"]).parent / "report.md").read_text()
@@ -141,7 +141,7 @@ def test_a_killed_search_resumes_without_recomputing_stored_points(space, tmp_pa
     assert 1 <= len(told) < 6, "the search was not killed mid-run"
     stored = results(root)
 
-    summary = optimize(path, root, env, "--budget", "6")
+    summary = optimize(path, root, env, "--budget", "6", "--workers", "1")
     assert summary["trials"] == 6 and summary["new_trials"] == 6 - len(told)
     after = results(root)
     assert {k: after[k] for k in stored} == stored, "a stored point was recomputed"

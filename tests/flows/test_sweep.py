@@ -190,7 +190,9 @@ def test_extending_a_grid_computes_only_new_points(smoke_sweep, tmp_path):
         'name = "extended"\nbase = "smoke"\n'
         '[sweeps.threshold]\naxes = { "readout.threshold_v" = [0.05, 0.09, 0.13] }\n'
     )
-    proc = eskin("sweep", "--grid", str(grid), "--root", str(root), "--json", env=env)
+    proc = eskin(
+        "sweep", "--grid", str(grid), "--root", str(root), "--workers", "1", "--json", env=env
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads(proc.stdout)
     assert (summary["points"], summary["cache_hits"], summary["computed"]) == (3, 2, 1)
@@ -326,6 +328,8 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
         str(data),
         "--root",
         str(root),
+        "--workers",
+        "1",
         "--report",
         "--json",
         env=env,
@@ -375,7 +379,8 @@ def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
     )
     root = tmp_path / "run"
     proc = eskin(
-        "sweep", "--grid", str(grid), "--root", str(root), "--json", env=hermetic_env(tmp_path)
+        *("sweep", "--grid", str(grid), "--root", str(root), "--workers", "1", "--json"),
+        env=hermetic_env(tmp_path),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads(proc.stdout)["computed"] == 2

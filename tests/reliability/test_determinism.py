@@ -1,8 +1,9 @@
 """Determinism: the same grid and seed give the same cubes with 1, 2 and 4 workers, and in any
 completion order. The session run (``smoke_sweep``) uses 2 workers; the external scheduler and
 the Prefect deployment are compared with it in tests/flows/test_distributed.py. One worker is
-compared with it by tests/reliability/test_busy_machine.py (a whole ``--workers 1`` sweep: all 7
-points computed, identical cubes) and test_server_gone.py, so it is not swept once more here.
+compared with it by the sweeps of tests/reliability/test_server_gone.py (a whole ``--workers 1``
+sweep: all 7 points computed, identical cubes), test_interruption.py and test_busy_machine.py,
+so it is not swept once more here.
 
 Identical means every variable and attribute but the measured wall times (``seconds``).
 """

@@ -151,7 +151,7 @@ def test_killed_sweep_resumes_with_only_unfinished_points(smoke_sweep, tmp_path)
     finished = results(root)
     assert 1 <= len(finished) < POINTS, "the sweep was not killed mid-run"
 
-    summary = finish(start_sweep(root, env))
+    summary = finish(start_sweep(root, env, "--workers", "1"))
     assert summary["cache_hits"] == len(finished)
     assert summary["computed"] == POINTS - len(finished)
     after = results(root)
@@ -165,7 +165,7 @@ def test_killed_sweep_resumes_with_only_unfinished_points(smoke_sweep, tmp_path)
 def test_sigterm_stops_the_sweep_and_everything_it_started(smoke_sweep, tmp_path):
     _, _, env = smoke_sweep
     root = tmp_path / "run"
-    sweep = start_sweep(root, env)
+    sweep = start_sweep(root, env, "--workers", "1")
     children: list[psutil.Process] = []
     try:
         children = children_after_first_point(sweep, root)
@@ -186,7 +186,7 @@ def test_sigterm_stops_the_sweep_and_everything_it_started(smoke_sweep, tmp_path
 def test_second_sweep_on_a_busy_root_is_refused(smoke_sweep, tmp_path):
     _, _, env = smoke_sweep
     root = tmp_path / "run"
-    first = start_sweep(root, env)
+    first = start_sweep(root, env, "--workers", "1")
     try:
         wait_for(lambda: (root / "store.lock").exists(), 120, "the first sweep's lock")
         wait_for(lambda: results(root), 300, "the first finished point", interval=0.01)
@@ -241,7 +241,9 @@ def test_corrupted_chunks_are_detected_and_recomputed_with_a_warning(smoke_sweep
     train = first_file(store.entry_location(SPIKES.record, spikes_key) / "true_times_s")
     train.write_bytes(train.read_bytes()[:3])
 
-    proc = eskin("sweep", "--grid", "smoke", "--root", str(root), "--json", env=env)
+    proc = eskin(
+        "sweep", "--grid", "smoke", "--root", str(root), "--workers", "1", "--json", env=env
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads(proc.stdout)
     assert summary["cache_hits"] == POINTS - 1 and summary["computed"] == 1

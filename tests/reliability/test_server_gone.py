@@ -179,7 +179,9 @@ def test_sigterm_with_the_server_gone_unwinds_within_10_s(setting, tmp_path):
         sweep.send_signal(signal.SIGTERM)
         sweep.wait(timeout=60)
 
-    sweep, _, err, children = sweep_around(env, tmp_path / "run", stop_server_then_sigterm)
+    sweep, _, err, children = sweep_around(
+        env, tmp_path / "run", stop_server_then_sigterm, "--workers", "1"
+    )
     took = time.monotonic() - sent[0]
     assert sweep.returncode == 130, err[-3000:]
     assert took < 10, f"took {took:.1f} s to unwind"
