@@ -80,7 +80,7 @@ def dask_workers(pid: int) -> list[psutil.Process]:
 
 
 def children_after_first_point(
-    sweep: subprocess.Popen, root: Path, workers: int = 2, interval: float = 0.5
+    sweep: subprocess.Popen, root: Path, workers: int, interval: float = 0.5
 ) -> list[psutil.Process]:
     """Wait for the sweep's first finished point; return the processes it started for itself.
 
@@ -168,7 +168,7 @@ def test_sigterm_stops_the_sweep_and_everything_it_started(smoke_sweep, tmp_path
     sweep = start_sweep(root, env, "--workers", "1")
     children: list[psutil.Process] = []
     try:
-        children = children_after_first_point(sweep, root)
+        children = children_after_first_point(sweep, root, workers=1)
         sent = time.monotonic()
         sweep.send_signal(signal.SIGTERM)
         _, err = sweep.communicate(timeout=120)
