@@ -23,8 +23,9 @@ from tests.flows.helpers import assert_same_cubes, eskin, hermetic_env, stop
 
 pytestmark = pytest.mark.slow
 
-#: Busy-loop processes: one per core, and one more.
-BURNERS = (os.cpu_count() or 1) + 1
+#: Busy-loop processes: one per core, so that every core is busy while the server starts (in the
+#: suite, the other tests' processes load the cores beyond that).
+BURNERS = os.cpu_count() or 1
 #: Seconds a busy loop runs before it ends by itself (should the test die before it stops them).
 BURN_S = 900
 BURN = f"import time\nend = time.monotonic() + {BURN_S}\nwhile time.monotonic() < end:\n    pass\n"
