@@ -29,6 +29,9 @@ from pipeline.design.windows import MAX_AUTO_WINDOWS, whole_windows
 from pipeline.errors import SimulationError
 from pipeline.jit import kernel
 
+#: The last window edge, in ticks, below which every edge is a whole tick exactly in float64.
+MAX_EXACT_TICKS = 2**53
+
 
 def window_edges_s(window_s: float, n_windows: int) -> np.ndarray:
     """float64 (n_windows + 1,): the explicit edges ``k * window_s``, each the nearest whole
@@ -157,12 +160,22 @@ def frames(
     Raises
     ------
     ValueError
-        ``window_s`` is not a finite number > 0 or ``n_windows`` is < 1.
+        ``window_s`` is not a finite number of at least one tick, ``n_windows`` is < 1, or the
+        last edge lies past :data:`MAX_EXACT_TICKS` ticks.
     """
-    if not (math.isfinite(window_s) and window_s > 0):
-        raise ValueError(f"window_s must be a finite number > 0, got {window_s!r}")
+    if not (math.isfinite(window_s) and window_s >= TIME_RESOLUTION_S):
+        raise ValueError(
+            f"window_s must be a finite number of at least one tick ({TIME_RESOLUTION_S:g} s), "
+            f"got {window_s!r}"
+        )
     if n_windows < 1:
         raise ValueError(f"n_windows must be >= 1, got {n_windows!r}")
+    if n_windows * window_s / TIME_RESOLUTION_S > MAX_EXACT_TICKS:
+        # Past 2**53 ticks an edge is no longer a whole tick in float64 (and soon not finite).
+        raise ValueError(
+            f"{n_windows} windows of {window_s!r} s end past {MAX_EXACT_TICKS:.3g} ticks of "
+            f"{TIME_RESOLUTION_S:g} s, where float64 edges are no longer whole ticks"
+        )
     channels = 2 if polarity == Polarity.SPLIT else 1
     n_rec, n_tax = trains.count.shape
     out = np.zeros((n_rec * n_tax * channels, n_windows), dtype=np.int64)

@@ -73,9 +73,15 @@ def in_process_client(threads: int = 1) -> Iterator[Any]:
     """A Dask client on an in-process cluster of one worker with ``threads`` threads."""
     from distributed import Client, LocalCluster
 
+    # No dashboard; the scheduler's HTTP routes (health, metrics) on a free loopback port, not on
+    # 8787, which another pytest-xdist worker's cluster may hold.
     with (
         LocalCluster(
-            n_workers=1, threads_per_worker=threads, processes=False, dashboard_address=None
+            n_workers=1,
+            threads_per_worker=threads,
+            processes=False,
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
         ) as cluster,
         Client(cluster) as client,
     ):

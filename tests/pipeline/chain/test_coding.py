@@ -43,6 +43,27 @@ def test_negative_times_are_dropped_and_nan_is_refused():
         rate_code(np.array([np.nan]), 1.0, 1)
 
 
+@pytest.mark.parametrize(
+    ("window_s", "n_windows", "message"),
+    [
+        (0.0, 4, "at least one tick"),
+        (1e-7, 4, "at least one tick"),  # every edge would round to 0
+        (float("inf"), 4, "at least one tick"),
+        (0.1, 0, "n_windows must be >= 1"),
+        (1e300, 4, "no longer whole ticks"),  # the edges would overflow to inf
+        (3600.0, 2**33, "no longer whole ticks"),
+    ],
+)
+def test_windows_whose_edges_are_not_whole_ticks_are_refused(window_s, n_windows, message):
+    with pytest.raises(ValueError, match=message):
+        rate_code(np.array([0.5]), window_s, n_windows)
+
+
+def test_the_longest_exact_windows_are_accepted():
+    counts, dropped = rate_code(np.array([0.5, 3e9]), 3600.0, 2**53 // 3_600_000_000)
+    assert int(counts.sum()) == 2 and dropped == 0
+
+
 def test_counts_do_not_overflow():
     times = np.zeros(40_000_000)
     counts, _ = rate_code(times, 1.0, 1)
