@@ -27,12 +27,15 @@ from pathlib import Path
 import pytest
 
 from flows import server
+from flows.environment import restored_environment
 from tests.flows.helpers import (
     BIN,
     eskin,
     hermetic_env,
     in_process_client,
     server_state_with_db,
+    start_cluster,
+    stop_pids,
 )
 from tests.shared_data import vibtac12_copy
 
@@ -168,34 +171,75 @@ def once(tmp_path_factory, name: str, make: Callable[[Path], None]) -> Path:
     return folder
 
 
+@contextlib.contextmanager
+def _shared_service(
+    tmp_path_factory, name: str, start: Callable[[Path], None], stop: Callable[[Path], None]
+) -> Iterator[Path]:
+    """``shared_folder()/name`` for the ``with`` block, made by ``start(folder)`` when no
+    pytest-xdist worker of the run uses it, and ended by ``stop(folder)`` when the last one that
+    does leaves (a count of users beside it, under a lock)."""
+    folder = shared_folder(tmp_path_factory) / name
+    users, lock = folder.with_name(f"{name}.users"), folder.with_name(f"{name}.lock")
+    with _locked(lock):
+        count = int(users.read_text()) if users.exists() else 0
+        if count == 0:
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            start(folder)
+        users.write_text(f"{count + 1}\n")
+    try:
+        yield folder
+    finally:
+        with _locked(lock):
+            count = int(users.read_text()) - 1
+            users.write_text(f"{count}\n")
+            if count == 0:
+                stop(folder)
+
+
 @pytest.fixture(scope="session", autouse=True)
 def suite_prefect_server(tmp_path_factory):
-    """One local Prefect server state for the whole suite, stopped at its end (the end of the
-    last pytest-xdist worker that uses it).
+    """One local Prefect server state for the whole suite (:func:`_shared_service`), its server
+    stopped at the end of the last pytest-xdist worker that uses it.
 
     Every sweep the tests start (in a subprocess or in this process) finds the folder through
     ``ESKIN_SERVER_DIR``: the first starts the server, the others reuse it, as a user's do.
     """
-    state = shared_folder(tmp_path_factory) / "prefect-server"
-    users = state.with_name("prefect-server.users")
-    with _locked(users.with_suffix(".lock")):
-        state.mkdir(mode=0o700, exist_ok=True)
-        count = int(users.read_text()) if users.exists() else 0
-        users.write_text(f"{count + 1}\n")
-    saved = {k: os.environ.get(k) for k in (server.SERVER_DIR_ENV, server.IDLE_ENV)}
-    os.environ[server.SERVER_DIR_ENV] = str(state)
-    os.environ[server.IDLE_ENV] = SUITE_SERVER_IDLE_S
-    yield state
-    with _locked(users.with_suffix(".lock")):
-        count = int(users.read_text()) - 1
-        users.write_text(f"{count}\n")
-        if count == 0:
-            server.stop(state)
-    for name, value in saved.items():
-        if value is None:
-            os.environ.pop(name, None)
-        else:
-            os.environ[name] = value
+    with (
+        _shared_service(
+            tmp_path_factory, "prefect-server", lambda state: state.chmod(0o700), server.stop
+        ) as state,
+        restored_environment((server.SERVER_DIR_ENV, server.IDLE_ENV)),
+    ):
+        os.environ[server.SERVER_DIR_ENV] = str(state)
+        os.environ[server.IDLE_ENV] = SUITE_SERVER_IDLE_S
+        yield state
+
+
+def _start_suite_cluster(folder: Path) -> None:
+    arguments, pids = start_cluster(folder, hermetic_env(folder))
+    (folder / "cluster.json").write_text(json.dumps({"arguments": arguments, "pids": pids}))
+
+
+def _stop_suite_cluster(folder: Path) -> None:
+    stop_pids(json.loads((folder / "cluster.json").read_text())["pids"])
+
+
+@pytest.fixture(scope="session")
+def suite_cluster(tmp_path_factory) -> Iterator[list[str]]:
+    """The ``eskin sweep`` arguments (``--address`` and the ``--tls-*`` files) of one Dask
+    cluster for the run (:func:`tests.flows.helpers.start_cluster`: a scheduler and two
+    single-thread workers), started by the first pytest-xdist worker that asks, stopped by the
+    last to leave.
+
+    For end-to-end tests whose subject is not the cluster: a sweep on it skips a local cluster's
+    start, whose workers each import the numerical stack again (seconds of CPU). Tests of the
+    local cluster, of a killed sweep's or worker's processes, or of what a worker logs on the
+    sweep's stderr keep a cluster of their own."""
+    with _shared_service(
+        tmp_path_factory, "dask-cluster", _start_suite_cluster, _stop_suite_cluster
+    ) as folder:
+        yield json.loads((folder / "cluster.json").read_text())["arguments"]
 
 
 @pytest.fixture(scope="session")

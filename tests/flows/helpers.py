@@ -2,6 +2,7 @@
 
 import base64
 import contextlib
+import json
 import math
 import os
 import shutil
@@ -86,6 +87,110 @@ def in_process_client(threads: int = 1) -> Iterator[Any]:
         Client(cluster) as client,
     ):
         yield client
+
+
+#: Seconds a cluster started by :func:`start_cluster` waits without a client before its
+#: scheduler stops, and its workers without a scheduler before they stop: a backstop should the
+#: suite die before stopping it.
+CLUSTER_IDLE_S = 900
+
+
+def write_credentials(folder: Path, security: Any) -> dict[str, str]:
+    """A Dask ``Security``'s in-memory CA, certificate and key as files only their owner
+    reads, by the ``eskin sweep`` option that takes each (``folder`` is made)."""
+    folder.mkdir()
+    files = {}
+    for option, pem in (
+        ("--tls-ca-file", security.tls_ca_file),
+        ("--tls-cert", security.tls_client_cert),
+        ("--tls-key", security.tls_client_key),
+    ):
+        path = folder / option.removeprefix("--")
+        path.touch(mode=0o600)
+        path.write_text(pem)
+        files[option] = str(path)
+    return files
+
+
+def start_cluster(
+    folder: Path, env: dict[str, str], workers: int = 2
+) -> tuple[list[str], list[int]]:
+    """A ``dask scheduler`` and ``workers`` single-thread ``dask worker`` processes on
+    127.0.0.1, speaking TLS with credentials made for them (in ``folder/credentials``); each
+    process runs in a scratch folder of its own under ``folder`` (made). Returns the arguments
+    that send an ``eskin sweep`` or ``eskin optimize`` there (``--address`` and the ``--tls-*``
+    files) and the processes' PIDs, the scheduler's first (:func:`stop_pids` stops them)."""
+    from distributed.security import Security
+
+    folder.mkdir(parents=True, exist_ok=True)
+    files = write_credentials(folder / "credentials", Security.temporary())
+    tls = [*("--tls-ca-file", files["--tls-ca-file"]), *("--tls-cert", files["--tls-cert"])]
+    tls += ["--tls-key", files["--tls-key"]]
+    scheduler_file = folder / "scheduler" / "scheduler.json"
+    scheduler_file.parent.mkdir()
+    pids = []
+
+    def started(command: list[str | Path], scratch: Path) -> None:
+        pids.append(
+            subprocess.Popen(
+                command,
+                env={**env, "DASK_TEMPORARY_DIRECTORY": str(scratch)},
+                cwd=scratch,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,  # stopped by PID, not by a signal to the test's group
+            ).pid
+        )
+
+    started(
+        [
+            *(BIN / "dask", "scheduler", "--protocol", "tls", "--host", "127.0.0.1", "--port", "0"),
+            *("--no-dashboard", "--scheduler-file", str(scheduler_file), *tls),
+            *("--idle-timeout", f"{CLUSTER_IDLE_S}s"),
+        ],
+        scheduler_file.parent,
+    )
+    try:
+        wait_for(lambda: scheduler_file.exists() and scheduler_file.read_text(), 120, "a scheduler")
+        address = json.loads(scheduler_file.read_text())["address"]
+        for i in range(workers):
+            scratch = folder / f"worker-{i}"
+            scratch.mkdir()
+            command = [BIN / "dask", "worker", address, "--nthreads", "1", "--host", "127.0.0.1"]
+            command += ["--no-dashboard", "--local-directory", str(scratch), *tls]
+            started([*command, "--death-timeout", f"{CLUSTER_IDLE_S}s"], scratch)
+    except BaseException:
+        stop_pids(pids)
+        raise
+    return ["--address", address, *tls], pids
+
+
+def stop_pids(pids: Collection[int]) -> None:
+    """Stop processes started by any process of the suite, by PID (:func:`stop`'s rule: SIGTERM,
+    then SIGKILL after 20 s); a process that is gone, or only a zombie, counts as stopped."""
+    import psutil
+
+    processes = []
+    for pid in pids:
+        with contextlib.suppress(psutil.NoSuchProcess):
+            process = psutil.Process(pid)
+            process.terminate()
+            processes.append(process)
+
+    def gone(process: psutil.Process) -> bool:
+        try:
+            return process.status() == psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return True
+
+    deadline = time.monotonic() + 20
+    while not all(map(gone, processes)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    for process in processes:
+        with contextlib.suppress(psutil.NoSuchProcess):
+            if not gone(process):
+                process.kill()
 
 
 def hermetic_env(base: Path, **extra: str) -> dict[str, str]:

@@ -5,7 +5,7 @@ system, and the coordinator and the workers share none."""
 import json
 import os
 import subprocess
-from pathlib import Path
+import time
 
 import pytest
 
@@ -14,46 +14,19 @@ from flows.run import run_sweep
 from storage import SweepStore
 from storage.locking import LOCK_NAME
 from storage.runlog import read_sweep_records
-from tests.flows.helpers import BIN, assert_same_cubes, eskin, hermetic_env, stop, wait_for
+from tests.flows.helpers import (
+    BIN,
+    assert_same_cubes,
+    eskin,
+    hermetic_env,
+    start_cluster,
+    stop,
+    stop_pids,
+    wait_for,
+)
 from tests.object_store import bucket, s3_env, s3_server  # noqa: F401  (fixtures)
 
 POINTS = 7  # the smoke grid's distinct points
-
-
-def start_cluster(tmp_path: Path, env: dict[str, str]) -> tuple[str, list[subprocess.Popen]]:
-    """A scheduler and two single-thread workers, each worker in its own scratch folder."""
-    scheduler_file = tmp_path / "scheduler" / "scheduler.json"
-    scheduler_file.parent.mkdir()
-    processes = [
-        subprocess.Popen(
-            [
-                *(BIN / "dask", "scheduler", "--host", "127.0.0.1", "--port", "0"),
-                *("--no-dashboard", "--scheduler-file", str(scheduler_file)),
-            ],
-            env=env,
-            cwd=scheduler_file.parent,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-    ]
-    wait_for(lambda: scheduler_file.exists() and scheduler_file.read_text(), 60, "the scheduler")
-    address = json.loads(scheduler_file.read_text())["address"]
-    for i in range(2):
-        scratch = tmp_path / f"worker-{i}"
-        scratch.mkdir()
-        processes.append(
-            subprocess.Popen(
-                [
-                    *(BIN / "dask", "worker", address, "--nthreads", "1", "--host", "127.0.0.1"),
-                    *("--no-dashboard", "--local-directory", str(scratch)),
-                ],
-                env={**env, "DASK_TEMPORARY_DIRECTORY": str(scratch)},
-                cwd=scratch,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-            )
-        )
-    return address, processes
 
 
 def test_tool_state_of_an_object_root_is_in_the_users_cache(tmp_path, monkeypatch):
@@ -81,9 +54,10 @@ def test_a_sweep_on_an_object_root(smoke_sweep, bucket, s3_server, tmp_path):  #
     env = hermetic_env(tmp_path, **s3_env(s3_server), XDG_CACHE_HOME=str(tmp_path / "cache"))
     root = f"{bucket}/runs/smoke"
     store = SweepStore.open_or_create(root)
-    address, cluster = start_cluster(tmp_path, env)
+    # The workers write to the bucket: they need its endpoint and keys, in their environment.
+    cluster, pids = start_cluster(tmp_path / "cluster", env)
     try:
-        sweep = ["sweep", "--grid", "smoke", "--root", root, "--address", address, "--json"]
+        sweep = ["sweep", "--grid", "smoke", "--root", root, *cluster, "--json"]
         # A second sweep is refused while another process holds the root's lease.
         with store.lock():
             refused = eskin(*sweep, env=env)
@@ -106,8 +80,10 @@ def test_a_sweep_on_an_object_root(smoke_sweep, bucket, s3_server, tmp_path):  #
             first.wait()
         finally:
             stop(first)
-        holder = json.loads(store._objects.objects.get(LOCK_NAME)[0])["holder"]
-        assert holder.startswith(f"PID {first.pid} on")  # left behind by the killed sweep
+        lease = json.loads(store._objects.objects.get(LOCK_NAME)[0])
+        assert lease["holder"].startswith(f"PID {first.pid} on")  # left by the killed sweep
+        # Try again once it has expired (each try is a command's start-up).
+        time.sleep(max(0.0, lease["expires_s"] - time.time()))
 
         def resumed() -> subprocess.CompletedProcess | None:
             proc = eskin(*sweep, env=env)
@@ -123,7 +99,7 @@ def test_a_sweep_on_an_object_root(smoke_sweep, bucket, s3_server, tmp_path):  #
         assert again.returncode == 0, again.stderr[-3000:]
         assert json.loads(again.stdout)["computed"] == 0
     finally:
-        stop(*reversed(cluster))
+        stop_pids(pids)
     assert_same_cubes(smoke_sweep[0], root)
     in_process = run_sweep("smoke", root)  # all cached: no cluster
     assert (in_process["cache_hits"], in_process["computed"]) == (POINTS, 0)

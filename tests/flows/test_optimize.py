@@ -69,10 +69,10 @@ def optimize(space: Path, root: Path, env: dict[str, str], *extra: str) -> dict:
     return json.loads(proc.stdout)
 
 
-def test_a_budget_of_6_then_8_computes_only_the_2_new_trials(space, tmp_path):
+def test_a_budget_of_6_then_8_computes_only_the_2_new_trials(space, suite_cluster, tmp_path):
     path, env = space
     root = tmp_path / "run"
-    first = optimize(path, root, env, "--budget", "6", "--workers", "1")
+    first = optimize(path, root, env, "--budget", "6", *suite_cluster)
     assert {"root", "trials", "computed", "cache_hits", "seconds", "front"} <= set(first)
     assert first["trials"] == 6 and first["new_trials"] == 6
     assert first["sampler"] == "gp"  # auto, for a short search of ordered dimensions
@@ -101,7 +101,7 @@ def test_a_budget_of_6_then_8_computes_only_the_2_new_trials(space, tmp_path):
     assert row["objectives"]["data_rate_bps"] == pytest.approx(rate[on[0]])
 
     stored, thresholds = results(root), trials["threshold_v"].values
-    second = optimize(path, root, env, "--budget", "8", "--workers", "1", "--report")
+    second = optimize(path, root, env, "--budget", "8", *suite_cluster, "--report")
     assert second["trials"] == 8 and second["new_trials"] == 2
     # The report's answer section works on the search's designs.
     report = (Path(second["report"]).parent / "report.md").read_text()

@@ -38,12 +38,14 @@ def folder(tmp_path_factory):
     return data
 
 
-def test_a_sweep_over_the_taxels_read_gives_their_accuracy_and_the_report(folder, tmp_path):
+def test_a_sweep_over_the_taxels_read_gives_their_accuracy_and_the_report(
+    folder, suite_cluster, tmp_path
+):
     grid = tmp_path / "grid.toml"
     grid.write_text(GRID)
     root = tmp_path / "run"
     args = ("--grid", str(grid), "--dataset", str(folder), "--root", str(root))
-    proc = eskin("sweep", *args, "--workers", "1", "--report", "--json", env=hermetic_env(tmp_path))
+    proc = eskin("sweep", *args, *suite_cluster, "--report", "--json", env=hermetic_env(tmp_path))
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads(proc.stdout)["computed"] == 3
     cube = open_results(root)["taxels"]

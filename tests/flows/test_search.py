@@ -18,11 +18,11 @@ def test_a_budget_in_seconds_is_spent_batch_by_batch(client, tmp_path):
     first = run_optimize(space, root, budget_s=1e-6, client=client)
     assert (first["trials"], first["computed"]) == (1, 1)
     assert first["search_seconds"] > 1e-6
-    # Continued to twice what it spent: at least one more trial, and no more than that budget
-    # before its last batch.
-    budget = 2 * first["search_seconds"]
+    # Continued to a microsecond more than it spent: one more batch of one trial, which spends
+    # the budget, and no batch after it.
+    budget = first["search_seconds"] + 1e-6
     second = run_optimize(space, root, budget_s=budget, client=client)
-    assert second["trials"] >= 2 and second["new_trials"] == second["trials"] - 1
+    assert (second["trials"], second["new_trials"]) == (2, 1)
     assert second["search_seconds"] >= budget
     # Spent already: no trial, no cluster needed.
     third = run_optimize(space, root, budget_s=budget, workers=1)

@@ -180,7 +180,7 @@ def test_warm_rerun_recomputes_nothing_and_gives_identical_cubes(smoke_sweep, tm
 
 
 @pytest.mark.slow
-def test_extending_a_grid_computes_only_new_points(smoke_sweep, tmp_path):
+def test_extending_a_grid_computes_only_new_points(smoke_sweep, suite_cluster, tmp_path):
     # A copy: the extended grid rewrites the "threshold" cube, which other tests compare.
     root = tmp_path / "run"
     shutil.copytree(smoke_sweep[0], root)
@@ -191,7 +191,7 @@ def test_extending_a_grid_computes_only_new_points(smoke_sweep, tmp_path):
         '[sweeps.threshold]\naxes = { "readout.threshold_v" = [0.05, 0.09, 0.13] }\n'
     )
     proc = eskin(
-        "sweep", "--grid", str(grid), "--root", str(root), "--workers", "1", "--json", env=env
+        "sweep", "--grid", str(grid), "--root", str(root), *suite_cluster, "--json", env=env
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads(proc.stdout)
@@ -296,7 +296,7 @@ def test_the_cube_guide_queries_run_on_a_sweep(smoke_sweep):
 
 
 @pytest.mark.slow
-def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
+def test_a_grid_swept_on_a_folder_dataset_with_its_report(suite_cluster, tmp_path):
     """``--dataset`` puts any grid on other recordings; ``--report`` ends with the report, and
     the flow run links to it in the Prefect UI."""
     import urllib.request
@@ -328,8 +328,7 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
         str(data),
         "--root",
         str(root),
-        "--workers",
-        "1",
+        *suite_cluster,
         "--report",
         "--json",
         env=env,
@@ -366,7 +365,7 @@ def test_a_grid_swept_on_a_folder_dataset_with_its_report(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
+def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(suite_cluster, tmp_path):
     """A sweep of ``ffnn`` and ``snn`` deployed ``shared`` on several chips runs end to end: every
     chip's accuracy for both models, and the yield over the chips (few chips, few epochs)."""
     grid = tmp_path / "grid.toml"
@@ -379,7 +378,7 @@ def test_the_spiking_decoder_beside_the_ffnn_on_shared_chips(tmp_path):
     )
     root = tmp_path / "run"
     proc = eskin(
-        *("sweep", "--grid", str(grid), "--root", str(root), "--workers", "1", "--json"),
+        *("sweep", "--grid", str(grid), "--root", str(root), *suite_cluster, "--json"),
         env=hermetic_env(tmp_path),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -40,11 +40,11 @@ def small_disk(tmp_path):
 
 
 def test_a_full_disk_stops_the_sweep_with_one_line_and_a_rerun_resumes(
-    smoke_sweep, small_disk, tmp_path
+    smoke_sweep, suite_cluster, small_disk, tmp_path
 ):
     _, _, env = smoke_sweep
     root = small_disk / "run"
-    args = ("sweep", "--grid", "smoke", "--root", str(root), "--workers", "1", "--json")
+    args = ("sweep", "--grid", "smoke", "--root", str(root), *suite_cluster, "--json")
 
     stopped = eskin(*args, env=env, timeout=600)
     assert stopped.returncode == 1 and stopped.stdout == ""

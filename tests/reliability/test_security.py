@@ -123,23 +123,6 @@ def test_the_local_cluster_and_its_dashboard_listen_on_loopback_only(tmp_path, m
     assert addresses and set(addresses) == {"127.0.0.1"}, addresses
 
 
-def write_credentials(folder: Path, security) -> dict[str, str]:
-    """A Dask ``Security``'s in-memory CA, certificate and key as files only their owner
-    reads, by the ``eskin sweep`` option that takes each."""
-    folder.mkdir()
-    files = {}
-    for option, pem in (
-        ("--tls-ca-file", security.tls_ca_file),
-        ("--tls-cert", security.tls_client_cert),
-        ("--tls-key", security.tls_client_key),
-    ):
-        path = folder / option.removeprefix("--")
-        path.touch(mode=0o600)
-        path.write_text(pem)
-        files[option] = str(path)
-    return files
-
-
 @pytest.mark.slow
 def test_a_running_sweeps_scheduler_refuses_clients_without_its_credentials(tmp_path, monkeypatch):
     """Another user who reaches the port cannot connect a client (and run code as the sweep's
@@ -189,7 +172,7 @@ def test_an_external_tls_scheduler_needs_matching_credentials(tmp_path):
     from distributed.security import Security
 
     from flows.cluster import probe_scheduler, tls_config
-    from tests.flows.helpers import eskin, hermetic_env
+    from tests.flows.helpers import eskin, hermetic_env, write_credentials
 
     security = Security.temporary()
     with LocalCluster(
