@@ -34,6 +34,13 @@ INSTALL := $(call HALF,0) && $(call HALF,1) \
 	&& $(BIN)/python -m pip check --quiet \
 	&& { $(BIN)/python -m compileall -q -q -j 0 -x '/tests?/' "$(SITE)" || true; }
 
+# The project's own modules are compiled before every run and test run (a fraction of a second;
+# only what changed), as the packages are at install: where PYTHONDONTWRITEBYTECODE is set, each
+# of the hundreds of processes a sweep or the suite starts (commands, Dask workers) would compile
+# them again. (Letting every process write what it compiles, instead of compiling at install,
+# cost the suite more: its first processes all compiled the same packages at once.)
+COMPILE := $(BIN)/python -m compileall -q -q flows pipeline storage benchmarks
+
 $(VENV)/.installed: pyproject.toml $(LOCK) | $(BIN)/python
 	$(INSTALL)
 	touch $@
@@ -46,6 +53,7 @@ $(VENV)/.installed-test: pyproject.toml $(LOCK) | $(BIN)/python
 # it starts keeps the run's history for the UI and stops by itself after 30 idle minutes
 # (`.venv/bin/eskin server stop` stops it now).
 run: $(VENV)/.installed
+	$(COMPILE)
 	$(BIN)/eskin sweep --grid paper --root runs/paper --report
 
 # The suite on TEST_WORKERS pytest-xdist workers: a module runs on one worker, in order, and the
@@ -57,12 +65,15 @@ TEST_WORKERS ?= 3
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 test: $(VENV)/.installed-test
+	$(COMPILE)
 	$(PYTEST)
 
 test-quick: $(VENV)/.installed-test
+	$(COMPILE)
 	$(PYTEST) -m "not slow"
 
 bench: $(VENV)/.installed-test
+	$(COMPILE)
 	$(BIN)/python -m benchmarks
 
 # The documentation site: docs/_build/html/index.html. Warnings (a broken reference, a notebook

@@ -167,16 +167,19 @@ def start_cluster(
 
 
 def stop_pids(pids: Collection[int]) -> None:
-    """Stop processes started by any process of the suite, by PID (:func:`stop`'s rule: SIGTERM,
-    then SIGKILL after 20 s); a process that is gone, or only a zombie, counts as stopped."""
+    """Stop processes started by any process of the suite, by PID, with every process they
+    started (a nanny's worker: stopped alone, a nanny waits seconds for it): SIGTERM to all at
+    once, then SIGKILL after 20 s. A process that is gone, or only a zombie, counts as stopped."""
     import psutil
 
     processes = []
     for pid in pids:
         with contextlib.suppress(psutil.NoSuchProcess):
             process = psutil.Process(pid)
+            processes += [process, *process.children(recursive=True)]
+    for process in processes:
+        with contextlib.suppress(psutil.NoSuchProcess):
             process.terminate()
-            processes.append(process)
 
     def gone(process: psutil.Process) -> bool:
         try:
