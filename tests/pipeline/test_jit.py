@@ -7,6 +7,9 @@ import sys
 import numpy as np
 import pytest
 
+from pipeline.design.effects import Effect
+from pipeline.design.scene import Encoder
+
 
 def test_planning_a_sweep_imports_no_numba_and_a_kernel_call_does():
     code = (
@@ -52,24 +55,21 @@ def test_a_kernel_calling_a_kernel_runs_compiled_from_any_reference():
 
 
 # A second process finds the kernels in the disk cache: numba's own dispatcher statistics say
-# whether each signature was loaded (a cache hit) or compiled (a miss); no timing.
+# whether each signature was loaded (a cache hit) or compiled (a miss); no timing. The process
+# fills the cache as ``make test`` does before the suite (every readout kind and the rate coder).
 _WARM_AND_COUNT = (
     "import json\n"
     "import numba\n"
-    "from pipeline.chain import metrics, readout\n"
-    "from pipeline.design.scene import Scene\n"
-    "from pipeline.run.encoding import warm_kernels\n"
-    "scene = Scene.builtin('smoke')\n"
-    "warm_kernels(scene.readout)\n"
-    "warm_kernels(scene.replace(**{'readout.effects': {'comparator_noise': {'sigma_v': 0.01}}})"
-    ".readout)\n"
+    "from pipeline.chain import coding, metrics, readout, readout_effects\n"
+    "from pipeline.run.kernel_cache import fill\n"
+    "kinds = fill()\n"
     "hits = misses = 0\n"
-    "for module in (readout, metrics):\n"
+    "for module in (readout, readout_effects, metrics, coding):\n"
     "    for kernel in vars(module).values():\n"
     "        if isinstance(kernel, numba.core.registry.CPUDispatcher):\n"
     "            hits += sum(kernel.stats.cache_hits.values())\n"
     "            misses += sum(kernel.stats.cache_misses.values())\n"
-    "print(json.dumps({'hits': hits, 'misses': misses}))\n"
+    "print(json.dumps({'kinds': kinds, 'hits': hits, 'misses': misses}))\n"
 )
 
 
@@ -88,6 +88,8 @@ def _warm_in_a_new_process(cache_dir):
 def test_a_second_process_finds_the_kernels_cached(tmp_path):
     cache = tmp_path / "numba"
     first = _warm_in_a_new_process(cache)
+    # Every encoder: ideal, with each effect alone, with all of them.
+    assert first["kinds"] == len(Encoder) * (1 + len(Effect) + 1)
     assert first["misses"] > 0 and first["hits"] == 0  # an empty cache: compiled
     assert list(cache.rglob("*.nbi")) and list(cache.rglob("*.nbc"))  # index and code files
     second = _warm_in_a_new_process(cache)
