@@ -5,8 +5,10 @@ it, several CPU-seconds for a module's kernels (:mod:`pipeline.jit`). Processes 
 empty cache at the same moment each compile the same kernels: on a fresh checkout, the first
 ``make test`` starts its test workers and dozens of sweep workers within a minute, and paid
 about 50 s of its wall time for that (610 s against 560 s on a warm cache, 2 cores).
-:func:`fill` compiles them once, ahead of such a start (``make test`` runs ``python -m
-pipeline.run.kernel_cache``); on a warm cache it only loads them (about 2 s, mostly imports).
+:func:`fill` compiles them once, ahead of such a start: the install runs ``python -m
+pipeline.run.kernel_cache`` beside its bytecode compilation, and ``make test`` again before the
+suite (a kernel whose source changed since is compiled there once); on a full cache it only
+loads them (about 1 s, mostly imports).
 
 What it calls: :func:`pipeline.run.encoding.warm_kernels`, the readout warm-up every point
 runs, for each encoder (:class:`pipeline.design.scene.Encoder`) ideal, with each effect
