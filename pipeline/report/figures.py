@@ -111,10 +111,18 @@ def draw_report(report: Report) -> dict[str, Figure]:
 
 
 def figure_images(figure: Figure) -> tuple[bytes, str]:
-    """``figure`` as PNG bytes (:data:`PNG_DPI`) and as an SVG document (text, no date in it)."""
+    """``figure`` as PNG bytes (:data:`PNG_DPI`) and as an SVG document (text, no date in it).
+
+    The SVG keeps the layout the PNG's rendering computed: a layout engine lays the figure out
+    again, in a draw of its own, at every save, the larger part of a save's time."""
     png, svg = io.BytesIO(), io.BytesIO()
     figure.savefig(png, format="png", dpi=PNG_DPI)
-    figure.savefig(svg, format="svg", metadata={"Date": None})
+    engine = figure.get_layout_engine()
+    figure.set_layout_engine("none")
+    try:
+        figure.savefig(svg, format="svg", metadata={"Date": None})
+    finally:
+        figure.set_layout_engine(engine)
     return png.getvalue(), svg.getvalue().decode("utf-8")
 
 

@@ -203,3 +203,17 @@ def test_deployments_are_panels_in_their_declared_order_whatever_the_curves_orde
     figure = grouped_figure("t", shuffled, "x", None)
     assert [ax.get_title() for ax in figure.axes] == ["per_chip", "shared", "robust"]
     assert legend_texts(figure.axes[0])[:2] == ["FFNN", "CNN"]
+
+
+def test_the_svg_keeps_the_pngs_layout_and_the_figure_its_layout_engine(figures, monkeypatch):
+    from pipeline.report.figures import figure_images
+
+    figure = next(iter(figures.values()))
+    engine = figure.get_layout_engine()
+    layouts = []
+    execute = engine.execute
+    monkeypatch.setattr(engine, "execute", lambda fig: layouts.append(fig) or execute(fig))
+    png, svg = figure_images(figure)
+    assert png.startswith(b"\x89PNG") and svg.lstrip().startswith("<?xml")
+    assert layouts == [figure]  # laid out for the PNG only: the SVG keeps that layout
+    assert figure.get_layout_engine() is engine  # and the next save lays it out again
