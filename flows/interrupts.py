@@ -20,8 +20,10 @@ from typing import Any
 
 #: Exit status of an interrupted command (128 + SIGINT, as a shell reports Ctrl-C).
 EXIT_INTERRUPTED = 130
-#: Seconds from an interrupt (Ctrl-C, SIGTERM) to the hard stop of what the command started.
-UNWIND_S = 8.0
+#: Seconds from an interrupt (Ctrl-C, SIGTERM) to the hard stop of what the command started. The
+#: promise is an exit within 10 s: the hard stop itself (killing, reaping, exiting) took 2.2 s on
+#: 2 cores under a load average of 6, so 3 s are left for it.
+UNWIND_S = 7.0
 #: Seconds a command that is done has to exit before it exits at once.
 EXIT_GRACE_S = 5.0
 
